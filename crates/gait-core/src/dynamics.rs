@@ -1,0 +1,189 @@
+//! Lagrangian dynamics of the 5-link chain in absolute angles
+//! (paper section III-A, eq. (solution)–(sol2), with the corrected `p_ij`).
+//!
+//! T_Φ = D(Φ) Φ̈ + H(Φ, Φ̇) Φ̇ + G(Φ), with
+//! D_ij = p_ij cos(φ_i − φ_j), H_ij = p_ij sin(φ_i − φ_j) φ̇_j, G_i = −g_i sin φ_i.
+//!
+//! Only five sine/cosine pairs are evaluated per call; the pairwise
+//! differences use cos(a−b) = cos a cos b + sin a sin b and
+//! sin(a−b) = sin a cos b − cos a sin b.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::kinematics::{Phi, joint_torques};
+use crate::model::{BodyModel, LINKS};
+use crate::scalar::Real;
+
+/// Generalised forces conjugate to the absolute angles, N·m.
+pub type TPhi<T> = [T; LINKS];
+
+/// Why forward dynamics could not produce accelerations.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DynamicsError {
+    /// An input was NaN or infinite.
+    NonFinite,
+    /// The mass matrix was not positive definite (cannot happen for a valid
+    /// model and finite angles; reported rather than assumed).
+    SingularMassMatrix,
+}
+
+/// The terms of the equation of motion at one state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DynamicsTerms<T: Real> {
+    /// Mass matrix D(Φ).
+    pub d: SMatrix<T, LINKS, LINKS>,
+    /// Velocity product H(Φ, Φ̇) Φ̇.
+    pub h_dphi: SVector<T, LINKS>,
+    /// Gravity vector G(Φ).
+    pub g: SVector<T, LINKS>,
+}
+
+/// Evaluates D(Φ), H(Φ, Φ̇)Φ̇ and G(Φ) (eq. (sol1)).
+pub fn terms<T: Real>(model: &BodyModel<T>, phi: &Phi<T>, dphi: &Phi<T>) -> DynamicsTerms<T> {
+    let sc = phi.map(|x| x.sin_cos_fast());
+    let p = model.p();
+    let gc = model.g();
+    let mut d = SMatrix::<T, LINKS, LINKS>::zeros();
+    let mut h = SVector::<T, LINKS>::zeros();
+    let mut g = SVector::<T, LINKS>::zeros();
+    // D is symmetric, so filling its column-major storage row by row is the
+    // same as filling it column by column.
+    let mut d_cells = d.iter_mut();
+    for ((((&(si, ci), prow), hi), gi), &g_coef) in
+        sc.iter().zip(p).zip(h.iter_mut()).zip(g.iter_mut()).zip(gc)
+    {
+        let mut acc = T::zero();
+        for ((&(sj, cj), &pij), &wj) in sc.iter().zip(prow).zip(dphi) {
+            let cos_ij = ci * cj + si * sj;
+            let sin_ij = si * cj - ci * sj;
+            if let Some(cell) = d_cells.next() {
+                *cell = pij * cos_ij;
+            }
+            acc += pij * sin_ij * wj * wj;
+        }
+        *hi = acc;
+        *gi = -g_coef * si;
+    }
+    DynamicsTerms { d, h_dphi: h, g }
+}
+
+/// Eq. (solution): inverse dynamics T_Φ = D Φ̈ + H Φ̇ + G.
+pub fn inverse_dynamics<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> TPhi<T> {
+    let t = terms(model, phi, dphi);
+    let dd = SVector::<T, LINKS>::from(*ddphi);
+    let out = t.d * dd + t.h_dphi + t.g;
+    out.into()
+}
+
+/// Eq. (solution) then eq. (hehe): joint torques T_Θ = Aᵀ T_Φ.
+pub fn inverse_dynamics_joint<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> [T; LINKS] {
+    joint_torques(&inverse_dynamics(model, phi, dphi, ddphi))
+}
+
+/// The stance-ankle torque T_θ1 = −Σ_i T_φi, the quantity the paper minimises.
+pub fn ankle_torque<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> T {
+    let t = inverse_dynamics(model, phi, dphi, ddphi);
+    -t.iter().fold(T::zero(), |acc, &x| acc + x)
+}
+
+/// Forward dynamics Φ̈ = D⁻¹ (T_Φ − H Φ̇ − G), by Cholesky (D is symmetric
+/// positive definite for any valid model).
+pub fn forward_dynamics<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    t_phi: &TPhi<T>,
+) -> Result<Phi<T>, DynamicsError> {
+    let all_finite = phi
+        .iter()
+        .chain(dphi.iter())
+        .chain(t_phi.iter())
+        .all(|x| x.finite());
+    if !all_finite {
+        return Err(DynamicsError::NonFinite);
+    }
+    let t = terms(model, phi, dphi);
+    let rhs = SVector::<T, LINKS>::from(*t_phi) - t.h_dphi - t.g;
+    let chol = t.d.cholesky().ok_or(DynamicsError::SingularMassMatrix)?;
+    let acc = chol.solve(&rhs);
+    if acc.iter().all(|x| x.finite()) {
+        Ok(acc.into())
+    } else {
+        Err(DynamicsError::NonFinite)
+    }
+}
+
+/// Total mechanical energy K + P (P = Σ g_i cos φ_i, zero at the ankle's
+/// height), J. Used to check that the free dynamics conserve it.
+pub fn energy<T: Real>(model: &BodyModel<T>, phi: &Phi<T>, dphi: &Phi<T>) -> T {
+    let t = terms(model, phi, dphi);
+    let w = SVector::<T, LINKS>::from(*dphi);
+    let k = w.dot(&(t.d * w)) * T::lit(0.5);
+    let p = phi
+        .iter()
+        .zip(model.g())
+        .fold(T::zero(), |acc, (&x, &gi)| acc + gi * x.sin_cos_fast().1);
+    k + p
+}
+
+/// One classical Runge–Kutta (RK4) step of the chain under constant
+/// generalised forces `t_phi` over `h` seconds; returns the new (Φ, Φ̇).
+///
+/// Used by the simulator's plant and by the energy-conservation checks.
+pub fn rk4_step<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    t_phi: &TPhi<T>,
+    h: T,
+) -> Result<(Phi<T>, Phi<T>), DynamicsError> {
+    let half = h * T::lit(0.5);
+    let k1w = forward_dynamics(model, phi, dphi, t_phi)?;
+    let k1q = *dphi;
+    let k2q = axpy(dphi, &k1w, half);
+    let k2w = forward_dynamics(model, &axpy(phi, &k1q, half), &k2q, t_phi)?;
+    let k3q = axpy(dphi, &k2w, half);
+    let k3w = forward_dynamics(model, &axpy(phi, &k2q, half), &k3q, t_phi)?;
+    let k4q = axpy(dphi, &k3w, h);
+    let k4w = forward_dynamics(model, &axpy(phi, &k3q, h), &k4q, t_phi)?;
+    let sixth = h / T::lit(6.0);
+    let two = T::lit(2.0);
+    let mut q = *phi;
+    let mut w = *dphi;
+    for i in 0..LINKS {
+        // `i < LINKS` for every array here, so `get` never misses.
+        let pick = |a: &Phi<T>| a.get(i).copied().unwrap_or(T::zero());
+        if let Some(qi) = q.get_mut(i) {
+            *qi += sixth * (pick(&k1q) + two * pick(&k2q) + two * pick(&k3q) + pick(&k4q));
+        }
+        if let Some(wi) = w.get_mut(i) {
+            *wi += sixth * (pick(&k1w) + two * pick(&k2w) + two * pick(&k3w) + pick(&k4w));
+        }
+    }
+    Ok((q, w))
+}
+
+/// `a + s·b`, element-wise.
+fn axpy<T: Real>(a: &Phi<T>, b: &Phi<T>, s: T) -> Phi<T> {
+    let mut o = *a;
+    for (oi, &bi) in o.iter_mut().zip(b) {
+        *oi += s * bi;
+    }
+    o
+}

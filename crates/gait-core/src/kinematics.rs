@@ -1,0 +1,199 @@
+//! Angle systems and forward kinematics (paper section III-A, eq. (lin_trans)).
+//!
+//! Frame: stance ankle at the origin, x forward, y up. Absolute angles `φ_i`
+//! are measured clockwise from vertical-up; relative angles `θ_i` are between
+//! link *i* and link *i−1* (ground for *i* = 1), anticlockwise positive.
+//! Links 1–3 form a chain ankle → knee → hip → torso top; links 4 and 5 hang
+//! from the hip `p2` (not from the torso's end `p3`).
+
+use crate::model::{BodyModel, LINKS};
+use crate::scalar::Real;
+
+/// A point in the sagittal plane, m.
+pub type Point<T> = [T; 2];
+
+/// Absolute link angles Φ, rad.
+pub type Phi<T> = [T; LINKS];
+
+/// Relative joint angles Θ, rad.
+pub type Theta<T> = [T; LINKS];
+
+/// The constant part `b` of Φ = AΘ + b.
+pub fn b_vector<T: Real>() -> [T; LINKS] {
+    let h = T::frac_pi_2();
+    let t = T::lit(1.5 * core::f64::consts::PI);
+    [h, h, h, t, t]
+}
+
+/// Eq. (lin_trans): the matrix A of Φ = AΘ + b (−1 on and below the diagonal).
+pub fn a_matrix<T: Real>() -> [[T; LINKS]; LINKS] {
+    let mut a = [[T::zero(); LINKS]; LINKS];
+    for (i, row) in a.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            if j <= i {
+                *x = -T::one();
+            }
+        }
+    }
+    a
+}
+
+/// Eq. (lin_trans): Φ = AΘ + b (φ_i = b_i − Σ_{j≤i} θ_j).
+pub fn phi_from_theta<T: Real>(theta: &Theta<T>) -> Phi<T> {
+    let b = b_vector::<T>();
+    let mut acc = T::zero();
+    let mut phi = [T::zero(); LINKS];
+    for ((p, &t), &bi) in phi.iter_mut().zip(theta).zip(&b) {
+        acc += t;
+        *p = bi - acc;
+    }
+    phi
+}
+
+/// The inverse of eq. (lin_trans): Θ = A⁻¹(Φ − b).
+///
+/// A⁻¹ is −1 on the diagonal and +1 just below it, so
+/// θ_1 = b_1 − φ_1 and θ_i = (b_i − φ_i) − (b_{i−1} − φ_{i−1}).
+pub fn theta_from_phi<T: Real>(phi: &Phi<T>) -> Theta<T> {
+    let b = b_vector::<T>();
+    let mut prev = T::zero();
+    let mut theta = [T::zero(); LINKS];
+    for ((t, &p), &bi) in theta.iter_mut().zip(phi).zip(&b) {
+        let s = bi - p;
+        *t = s - prev;
+        prev = s;
+    }
+    theta
+}
+
+/// Eq. (hehe): joint torques from the generalised forces of the absolute
+/// angles, T_Θ = Aᵀ T_Φ, i.e. T_θj = −Σ_{i≥j} T_φi.
+///
+/// So the stance-ankle torque T_θ1 is minus the sum of all five.
+pub fn joint_torques<T: Real>(t_phi: &[T; LINKS]) -> [T; LINKS] {
+    let mut out = [T::zero(); LINKS];
+    let mut acc = T::zero();
+    for (o, &t) in out.iter_mut().zip(t_phi).rev() {
+        acc += t;
+        *o = -acc;
+    }
+    out
+}
+
+/// The unit vector of a link at absolute angle φ: (sin φ, cos φ).
+#[inline]
+fn dir<T: Real>(phi: T) -> Point<T> {
+    let (s, c) = phi.sin_cos_fast();
+    [s, c]
+}
+
+/// Forward kinematics: the joint points p1…p5 (stance knee, hip, torso top,
+/// swing knee, swing ankle) with the stance ankle p0 at the origin:
+/// p_i = p_{i−1} + l_i (sin φ_i, cos φ_i), except that link 4 starts at p2.
+pub fn forward_kinematics<T: Real>(model: &BodyModel<T>, phi: &Phi<T>) -> [Point<T>; LINKS] {
+    let [l1, l2, l3, l4, l5] = model.lengths();
+    let [u1, u2, u3, u4, u5] = phi.map(dir);
+    let p1 = [l1 * u1[0], l1 * u1[1]];
+    let p2 = [p1[0] + l2 * u2[0], p1[1] + l2 * u2[1]];
+    let p3 = [p2[0] + l3 * u3[0], p2[1] + l3 * u3[1]];
+    let p4 = [p2[0] + l4 * u4[0], p2[1] + l4 * u4[1]];
+    let p5 = [p4[0] + l5 * u5[0], p4[1] + l5 * u5[1]];
+    [p1, p2, p3, p4, p5]
+}
+
+/// The centre of mass of each link: its proximal joint plus `d_i` along it.
+pub fn link_com<T: Real>(model: &BodyModel<T>, phi: &Phi<T>) -> [Point<T>; LINKS] {
+    let [p1, p2, _, p4, _] = forward_kinematics(model, phi);
+    let origin = [T::zero(); 2];
+    let proximal = [origin, p1, p2, p2, p4];
+    let mut out = [origin; LINKS];
+    for (((o, base), link), &angle) in out.iter_mut().zip(proximal).zip(model.links()).zip(phi) {
+        let u = dir(angle);
+        *o = [base[0] + link.com_m * u[0], base[1] + link.com_m * u[1]];
+    }
+    out
+}
+
+/// Anatomical joint angles (rad), positive in the direction named:
+/// `[stance ankle dorsiflexion, stance knee flexion, stance hip flexion,
+///   swing hip flexion, swing knee flexion]`.
+///
+/// From Θ: ankle dorsiflexion = φ1 = π/2 − θ1 (shank tilted forward, foot flat);
+/// stance knee flexion = θ2; stance hip flexion = −θ3 (the stance thigh rises
+/// from the knee, so flexion turns it anticlockwise relative to the torso);
+/// swing hip flexion = θ4; swing knee flexion = −θ5.
+pub fn anatomical_angles<T: Real>(theta: &Theta<T>) -> [T; LINKS] {
+    let [t1, t2, t3, t4, t5] = *theta;
+    [T::frac_pi_2() - t1, t2, -t3, t4, -t5]
+}
+
+/// Wraps an angle to (−π, π].
+pub fn wrap_pi<T: Real>(x: T) -> T {
+    let two_pi = T::two_pi();
+    let mut y = x % two_pi;
+    if y > T::pi() {
+        y -= two_pi;
+    } else if y <= -T::pi() {
+        y += two_pi;
+    }
+    y
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn theta_phi_round_trip_and_matrix_form() {
+        let theta = [1.2, 0.3, -0.4, 0.5, -0.6];
+        let phi = phi_from_theta(&theta);
+        let a = a_matrix::<f64>();
+        let b = b_vector::<f64>();
+        for i in 0..LINKS {
+            let mut s = b[i];
+            for j in 0..LINKS {
+                s += a[i][j] * theta[j];
+            }
+            assert!((s - phi[i]).abs() < 1e-15);
+        }
+        let back = theta_from_phi(&phi);
+        for i in 0..LINKS {
+            assert!((back[i] - theta[i]).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn standing_posture() {
+        let m = BodyModel::<f64>::paper_table_iii();
+        let pi = core::f64::consts::PI;
+        let phi = [0.0, 0.0, 0.0, pi, pi];
+        let p = forward_kinematics(&m, &phi);
+        assert!((p[1][1] - (0.441 + 0.395)).abs() < 1e-12);
+        assert!(p[4][1].abs() < 1e-12 && p[4][0].abs() < 1e-12);
+        let theta = theta_from_phi(&phi);
+        let anat = anatomical_angles(&theta);
+        for a in anat {
+            assert!(a.abs() < 1e-12, "{anat:?}");
+        }
+    }
+
+    #[test]
+    fn anatomical_signs() {
+        let pi = core::f64::consts::PI;
+        // Swing hip flexed 30°: the swing thigh points down and forward.
+        let phi = [0.0, 0.0, 0.0, pi - 0.5236, pi - 0.5236];
+        let a = anatomical_angles(&theta_from_phi(&phi));
+        assert!((a[3] - 0.5236).abs() < 1e-12);
+        // Swing knee flexed: the shank points down and back.
+        let phi = [0.0, 0.0, 0.0, pi, pi + 0.7];
+        let a = anatomical_angles(&theta_from_phi(&phi));
+        assert!((a[4] - 0.7).abs() < 1e-12);
+        // Stance knee flexed: shank forward, thigh back.
+        let phi = [0.2, -0.2, 0.0, pi, pi];
+        let a = anatomical_angles(&theta_from_phi(&phi));
+        assert!((a[0] - 0.2).abs() < 1e-12);
+        assert!((a[1] - 0.4).abs() < 1e-12);
+        // Stance hip flexed: torso upright, thigh rising backward from the knee.
+        assert!((a[2] - 0.2).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,136 @@
+//! QEMU `mps2-an386` (Cortex-M4F) image: runs the power-on self-test and the
+//! on-target benchmarks, prints them over semihosting and reports the result
+//! through QEMU's exit status (0 = every check passed).
+//!
+//! Instruction counts: run QEMU with `-icount shift=0` so every instruction
+//! advances the virtual clock by 1 ns; SysTick on the core clock (25 MHz on
+//! this machine) then ticks once per 40 instructions.
+#![no_std]
+#![no_main]
+// cortex-m-rt's `#[entry]`/`#[exception]` expand to `#[export_name]`, which
+// the unsafe_code lint counts; this file contains no unsafe block of its own.
+#![allow(unsafe_code)]
+
+use core::hint::black_box;
+
+use cortex_m::peripheral::{SYST, syst::SystClkSource};
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use firmware::selftest;
+use gait_core::BodyModel;
+use gait_core::dynamics::inverse_dynamics;
+use gait_core::scalar::sin_cos_f32;
+
+/// Instructions per core-clock SysTick tick under `-icount shift=0`
+/// (1 ns per instruction, 25 MHz core clock).
+const INSTR_PER_TICK: u32 = 40;
+const SYST_MAX: u32 = 0x00FF_FFFF;
+
+/// Counts instructions with SysTick; intervals must stay below 2^24 ticks.
+struct InstrCounter {
+    syst: SYST,
+}
+
+impl InstrCounter {
+    fn new(mut syst: SYST) -> Self {
+        syst.disable_counter();
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(SYST_MAX);
+        syst.clear_current();
+        syst.enable_counter();
+        Self { syst }
+    }
+
+    /// Average instructions per call of `f` over `n` calls (loop included).
+    fn per_call(&mut self, n: u32, mut f: impl FnMut(u32)) -> u32 {
+        self.syst.clear_current();
+        let start = SYST::get_current();
+        for i in 0..n {
+            f(black_box(i));
+        }
+        let end = SYST::get_current();
+        let ticks = start.wrapping_sub(end) & SYST_MAX;
+        ticks.saturating_mul(INSTR_PER_TICK) / n.max(1)
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let failed = run();
+    debug::exit(if failed == 0 {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    #[allow(clippy::empty_loop)]
+    loop {}
+}
+
+fn run() -> usize {
+    hprintln!("exogait self-test (mps2-an386, Cortex-M4F)");
+    let checks = selftest::run();
+    let mut failed = 0;
+    for c in &checks {
+        let verdict = if c.passed() { "ok  " } else { "FAIL" };
+        if !c.passed() {
+            failed += 1;
+        }
+        hprintln!(
+            "  {} {:<28} {:.3e} (bound {:.1e})",
+            verdict,
+            c.name,
+            c.value,
+            c.bound
+        );
+    }
+    hprintln!(
+        "selftest: {} passed, {} failed",
+        checks.len() - failed,
+        failed
+    );
+
+    match cortex_m::Peripherals::take() {
+        Some(p) => bench(InstrCounter::new(p.SYST)),
+        None => {
+            hprintln!("bench: SysTick unavailable");
+            failed += 1;
+        }
+    }
+    failed
+}
+
+/// On-target instruction counts (see README, "Performance").
+fn bench(mut ctr: InstrCounter) {
+    let base = ctr.per_call(1000, |i| {
+        black_box(i);
+    });
+    let sinf = ctr.per_call(1000, |i| {
+        black_box(libm::sinf(i as f32 * 0.01));
+    });
+    let fast = ctr.per_call(1000, |i| {
+        black_box(sin_cos_f32(i as f32 * 0.01));
+    });
+    let m: BodyModel<f32> = BodyModel::<f64>::paper_table_iii().cast();
+    let id = ctr.per_call(1000, |i| {
+        let a = i as f32 * 1e-3;
+        let phi = [0.2 + a, -0.1, 0.05, 2.7 - a, 3.5];
+        let w = [0.4, -0.9, 0.2, -2.1, 3.3];
+        let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
+        black_box(inverse_dynamics(&m, &phi, &w, &dd));
+    });
+    hprintln!("bench: loop_overhead instr={}", base);
+    hprintln!("bench: libm_sinf instr={}", sinf.saturating_sub(base));
+    hprintln!("bench: sin_cos_f32 instr={}", fast.saturating_sub(base));
+    hprintln!(
+        "bench: inverse_dynamics_f32 instr={}",
+        id.saturating_sub(base)
+    );
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("panic: {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    #[allow(clippy::empty_loop)]
+    loop {}
+}
