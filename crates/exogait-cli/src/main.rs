@@ -1,0 +1,2 @@
+//! `exogait`: the project's command-line tool.
+fn main() {}
