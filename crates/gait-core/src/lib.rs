@@ -14,9 +14,14 @@
 #![no_std]
 #![cfg_attr(test, allow(clippy::needless_range_loop, clippy::approx_constant))]
 
+pub mod anthropometry;
+pub mod bezier;
 pub mod dynamics;
+pub mod gait;
+pub mod ik;
 pub mod kinematics;
 pub mod model;
+pub mod problem;
 pub mod scalar;
 
 pub use model::{BodyModel, JointLimits, LINKS, Link, ModelError};

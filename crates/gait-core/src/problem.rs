@@ -1,0 +1,397 @@
+//! The paper's optimisation problem (section IV-B, eq. (dground)–(argcost)),
+//! pinned down as "paper mode": every constant the paper leaves open is fixed
+//! here, so that a J computed anywhere can be recomputed and compared.
+//!
+//! - P in the paper's row order, SI units; bounds B ≼ P ≼ U of eq. (cons)
+//!   with the millimetre values converted (+300 mm → +0.3 m, 600 → 0.6 m);
+//!   interior time control points non-decreasing.
+//! - Sampling: Δt = 0.01 s, N = round(ts/Δt), 2,001-point u grid, linear
+//!   interpolation in t; (x5, y5) is the path evaluated at z(t_k).
+//! - Derivatives by eq. (ee2) backward differences, so τ_k exists for k ≥ 2.
+//! - J = (1/(N−1)) Σ_{k=2…N} c_k τ_k² + v_p max_{k=1…N} ‖p5(k) − p5(k−1)‖/Δt,
+//!   v_p = 1000 N²·m² per (m/s), τ = T_θ1, c_k of eq. (dground) with 2 mm.
+//!
+//! Lives in gait-core (no_std, generic scalar) so that the board can one day
+//! re-plan a step from the ankle angle it measures; only the search is on
+//! the host (crates/gait-opt).
+
+use crate::gait::{
+    CONTACT_THRESHOLD_M, CONTROL_ROWS, ControlPoints, Differences, GaitError, Sampling,
+    StanceAnkleProfile, Step, StepEvent, contact_weight, evaluate_step,
+};
+use crate::model::BodyModel;
+use crate::scalar::Real;
+
+/// The paper's velocity weight v_p, N²·m² per (m/s).
+pub const PAPER_VELOCITY_WEIGHT: f64 = 1000.0;
+
+/// The two cases of the paper's experiments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PaperCase {
+    /// Level walking: 600 mm stride, 2.24 s step.
+    Walk,
+    /// Stair ascent: 93.5 mm rise, 275 mm tread, 2.28 s step.
+    StairUp,
+}
+
+/// One swing step's boundary conditions and assumptions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepCase<T> {
+    /// Swing-ankle start (x5(0), y5(0)), m.
+    pub start_m: [T; 2],
+    /// Swing-ankle landing (x5(ts), y5(ts)), m.
+    pub landing_m: [T; 2],
+    /// Step time ts, s.
+    pub step_time_s: T,
+    /// Assumed stance-ankle profile φ1(t).
+    pub stance: StanceAnkleProfile<T>,
+    /// r2 at the start of the swing.
+    pub r2_start: T,
+    /// Torso angle φ3 at the start of the swing, rad.
+    pub phi3_start_rad: T,
+}
+
+impl<T: Real> StepCase<T> {
+    /// The paper-mode case definitions.
+    ///
+    /// Walk: (−0.3, 0) → (0.3, 0) m, ts = 2.24 s, φ1 logistic
+    /// (a, b, k, t_c) = (−0.3335 rad, 0.7564 rad, 0.5638 1/s, 2.24 s)
+    /// (fitted to the walking baseline's stance shank), r2(0) = 0.94.
+    /// Stair-up: (−0.275, −0.0935) → (0.275, 0.0935) m (stance foot on the
+    /// first step), ts = 2.28 s, φ1 (0, 0.16 rad, 4.0 1/s, 1.14 s), r2(0) = 0.5.
+    /// φ3(0) = 0 in both.
+    pub fn paper(case: PaperCase) -> Self {
+        let l = T::lit;
+        match case {
+            PaperCase::Walk => Self {
+                start_m: [l(-0.3), l(0.0)],
+                landing_m: [l(0.3), l(0.0)],
+                step_time_s: l(2.24),
+                stance: StanceAnkleProfile {
+                    a_rad: l(-0.3335),
+                    b_rad: l(0.7564),
+                    k_per_s: l(0.5638),
+                    t_c_s: l(2.24),
+                },
+                r2_start: l(0.94),
+                phi3_start_rad: l(0.0),
+            },
+            PaperCase::StairUp => Self {
+                start_m: [l(-0.275), l(-0.0935)],
+                landing_m: [l(0.275), l(0.0935)],
+                step_time_s: l(2.28),
+                stance: StanceAnkleProfile {
+                    a_rad: l(0.0),
+                    b_rad: l(0.16),
+                    k_per_s: l(4.0),
+                    t_c_s: l(1.14),
+                },
+                r2_start: l(0.5),
+                phi3_start_rad: l(0.0),
+            },
+        }
+    }
+}
+
+/// The value of J and its parts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Cost<T> {
+    /// J = torque + velocity.
+    pub j: T,
+    /// (1/(N−1)) Σ c_k τ_k², N²·m².
+    pub torque: T,
+    /// v_p · max ‖Δp5‖/Δt.
+    pub velocity: T,
+    /// max_k ‖p5(k) − p5(k−1)‖/Δt, m/s.
+    pub peak_ankle_speed_m_s: T,
+    /// RMS of τ over the swing samples (c_k = 1), N·m.
+    pub tau_rms_nm: T,
+    /// Peak |τ| over the swing samples (c_k = 1), N·m.
+    pub tau_peak_nm: T,
+    /// Number of samples with c_k = 1.
+    pub swing_samples: usize,
+}
+
+/// Why P is outside the feasible set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Infeasible {
+    /// Entry (row, column) of P violates B ≼ P ≼ U.
+    Bound {
+        /// Row of P.
+        row: usize,
+        /// Column of P (0 = time or x, 1 = value or y).
+        col: usize,
+    },
+    /// The interior time control points of a curve decrease (row of the
+    /// second point of the offending pair).
+    TimeOrder {
+        /// Row of P.
+        row: usize,
+    },
+    /// Sampling or IK failed (see [`GaitError`]).
+    Gait(GaitError),
+}
+
+impl From<GaitError> for Infeasible {
+    fn from(e: GaitError) -> Self {
+        Self::Gait(e)
+    }
+}
+
+impl core::fmt::Display for Infeasible {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Bound { row, col } => write!(f, "P[{row}][{col}] is outside its bounds"),
+            Self::TimeOrder { row } => write!(f, "time control points decrease at row {row}"),
+            Self::Gait(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// The reference problem: a case, the model, the sampling and v_p.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PaperProblem<T> {
+    /// Boundary conditions and assumptions of the step.
+    pub case: StepCase<T>,
+    /// Body model.
+    pub model: BodyModel<T>,
+    /// Time sampling.
+    pub sampling: Sampling<T>,
+    /// Velocity weight v_p.
+    pub velocity_weight: T,
+    /// Derivative scheme (paper: backward, eq. (ee2)).
+    pub differences: Differences,
+}
+
+/// Rows of P whose time column must be non-decreasing, per curve
+/// (r2: 0–4, φ3: 5–9, z: 15–18).
+const TIME_CURVES: [(usize, usize); 3] = [(0, 5), (5, 10), (15, 19)];
+
+impl<T: Real> PaperProblem<T> {
+    /// Paper mode for a case with Table III.
+    pub fn paper(case: PaperCase) -> Self {
+        Self::new(StepCase::paper(case), BodyModel::paper_table_iii())
+    }
+
+    /// Paper-mode definitions for any step case and model.
+    pub fn new(case: StepCase<T>, model: BodyModel<T>) -> Self {
+        Self {
+            case,
+            sampling: Sampling::paper(case.step_time_s),
+            model,
+            velocity_weight: T::lit(PAPER_VELOCITY_WEIGHT),
+            differences: Differences::Backward,
+        }
+    }
+
+    /// Eq. (cons): the lower and upper bound matrices (B, U), SI units.
+    pub fn bounds(&self) -> (ControlPoints<T>, ControlPoints<T>) {
+        let c = &self.case;
+        let ts = c.step_time_s;
+        let (z, one) = (T::zero(), T::one());
+        let [x0, y0] = c.start_m;
+        let [xs, ys] = c.landing_m;
+        let lift = T::lit(0.3);
+        let top = T::lit(0.6);
+        let tilt = T::lit(core::f64::consts::PI / 12.0);
+        let lo: ControlPoints<T> = [
+            [z, c.r2_start],
+            [z, z],
+            [z, z],
+            [z, z],
+            [ts, z],
+            [z, c.phi3_start_rad],
+            [z, -tilt],
+            [z, -tilt],
+            [z, -tilt],
+            [ts, -tilt],
+            [x0, y0],
+            [x0, y0 + lift],
+            [x0, y0.min(ys)],
+            [xs, ys + lift],
+            [xs, ys],
+            [z, z],
+            [z, z],
+            [z, z],
+            [ts, one],
+        ];
+        let hi: ControlPoints<T> = [
+            [z, c.r2_start],
+            [ts, one],
+            [ts, one],
+            [ts, one],
+            [ts, one],
+            [z, c.phi3_start_rad],
+            [ts, tilt],
+            [ts, tilt],
+            [ts, tilt],
+            [ts, tilt],
+            [x0, y0],
+            [x0, top],
+            [xs, top],
+            [xs, top],
+            [xs, ys],
+            [z, z],
+            [ts, one],
+            [ts, one],
+            [ts, one],
+        ];
+        (lo, hi)
+    }
+
+    /// Checks B ≼ P ≼ U (with a relative slack for rounding) and that each
+    /// curve's time control points are non-decreasing.
+    pub fn check_feasible(&self, p: &ControlPoints<T>) -> Result<(), Infeasible> {
+        let (lo, hi) = self.bounds();
+        let slack = T::lit(1e-9);
+        for (row, ((pr, lr), hr)) in p.iter().zip(&lo).zip(&hi).enumerate() {
+            for (col, ((&v, &l), &h)) in pr.iter().zip(lr).zip(hr).enumerate() {
+                let tol = slack * (T::one() + l.abs().max(h.abs()));
+                if !v.finite() || v < l - tol || v > h + tol {
+                    return Err(Infeasible::Bound { row, col });
+                }
+            }
+        }
+        for (start, end) in TIME_CURVES {
+            for row in start + 1..end {
+                let (Some(a), Some(b)) = (p.get(row - 1), p.get(row)) else {
+                    continue;
+                };
+                if b[0] < a[0] {
+                    return Err(Infeasible::TimeOrder { row });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The step that P describes under this problem's assumptions.
+    pub fn step(&self, p: &ControlPoints<T>) -> Step<T> {
+        Step {
+            control: *p,
+            stance: self.case.stance,
+            sampling: self.sampling,
+        }
+    }
+
+    /// Eq. (cost): J(P) and its parts, after checking feasibility.
+    pub fn cost(&self, p: &ControlPoints<T>) -> Result<Cost<T>, Infeasible> {
+        self.check_feasible(p)?;
+        self.cost_unchecked(p)
+    }
+
+    /// J(P) without the bound checks (sampling and IK are still checked).
+    /// For evaluating human-data baselines, which need not respect eq. (cons).
+    pub fn cost_unchecked(&self, p: &ControlPoints<T>) -> Result<Cost<T>, Infeasible> {
+        let step = self.step(p);
+        let n = self.sampling.intervals;
+        if n + 1 > MAX_SAMPLES {
+            return Err(Infeasible::Gait(GaitError::BadSampling));
+        }
+        let dt = self.sampling.dt_s;
+        // One pass: the path's speed from every sample, and (p5, τ) of every
+        // dynamics sample kept until p5(N) is known for c_k.
+        let mut first: Option<[T; 2]> = None;
+        let mut prev: Option<[T; 2]> = None;
+        let mut peak_speed = T::zero();
+        let mut taus: heapless::Vec<([T; 2], T), MAX_SAMPLES> = heapless::Vec::new();
+        evaluate_step::<T, Infeasible>(&self.model, &step, self.differences, |ev| {
+            match ev {
+                StepEvent::Sample(s) => {
+                    if first.is_none() {
+                        first = Some(s.p5);
+                    }
+                    if let Some(q) = prev {
+                        let dx = s.p5[0] - q[0];
+                        let dy = s.p5[1] - q[1];
+                        peak_speed = peak_speed.max((dx * dx + dy * dy).sqrt() / dt);
+                    }
+                    prev = Some(s.p5);
+                }
+                StepEvent::Dynamics(d) => {
+                    // Capacity was checked against N above.
+                    let _ = taus.push((d.gait.p5, d.torque[0]));
+                }
+            }
+            Ok(())
+        })?;
+        let (Some(start), Some(landing)) = (first, prev) else {
+            return Err(Infeasible::Gait(GaitError::BadSampling));
+        };
+        let threshold = T::lit(CONTACT_THRESHOLD_M);
+        let mut sum_sq = T::zero();
+        let mut peak_tau = T::zero();
+        let mut swing = 0usize;
+        for &(p5, tau) in &taus {
+            if contact_weight(p5, start, landing, threshold) > T::zero() {
+                sum_sq += tau * tau;
+                peak_tau = peak_tau.max(tau.abs());
+                swing += 1;
+            }
+        }
+        let denom = T::lit(n.saturating_sub(1).max(1) as f64);
+        let torque = sum_sq / denom;
+        let velocity = self.velocity_weight * peak_speed;
+        let tau_rms = if swing > 0 {
+            (sum_sq / T::lit(swing as f64)).sqrt()
+        } else {
+            T::zero()
+        };
+        Ok(Cost {
+            j: torque + velocity,
+            torque,
+            velocity,
+            peak_ankle_speed_m_s: peak_speed,
+            tau_rms_nm: tau_rms,
+            tau_peak_nm: peak_tau,
+            swing_samples: swing,
+        })
+    }
+}
+
+/// Most samples one step may have (N + 1): 5.11 s at Δt = 0.01 s.
+pub const MAX_SAMPLES: usize = 512;
+
+/// Number of rows of P (re-exported for callers that flatten it).
+pub const ROWS: usize = CONTROL_ROWS;
+
+impl<T: Real> PaperProblem<T> {
+    /// A simple feasible P: evenly spaced times, constant r2 and φ3, a path
+    /// lifted by the bounds' minimum clearance and a linear pace. A starting
+    /// point for searches and a fixture for tests, not a good gait.
+    pub fn initial_guess(&self) -> ControlPoints<T> {
+        let c = &self.case;
+        let ts = c.step_time_s;
+        let q = |i: f64, n: f64| T::lit(i / n) * ts;
+        let [x0, y0] = c.start_m;
+        let [xs, ys] = c.landing_m;
+        let lift = T::lit(0.3);
+        let half = T::lit(0.5);
+        let r2 = c.r2_start;
+        let p3 = c.phi3_start_rad;
+        [
+            [q(0.0, 4.0), r2],
+            [q(1.0, 4.0), r2],
+            [q(2.0, 4.0), r2],
+            [q(3.0, 4.0), r2],
+            [ts, r2],
+            [q(0.0, 4.0), p3],
+            [q(1.0, 4.0), p3],
+            [q(2.0, 4.0), p3],
+            [q(3.0, 4.0), p3],
+            [ts, p3],
+            [x0, y0],
+            [x0, y0 + lift],
+            [(x0 + xs) * half, (y0 + ys) * half + lift],
+            [xs, ys + lift],
+            [xs, ys],
+            [T::zero(), T::zero()],
+            [q(1.0, 3.0), T::lit(1.0 / 3.0)],
+            [q(2.0, 3.0), T::lit(2.0 / 3.0)],
+            [ts, T::one()],
+        ]
+    }
+}
