@@ -19,6 +19,7 @@ use cortex_m_semihosting::{debug, hprintln};
 use firmware::selftest;
 use gait_core::BodyModel;
 use gait_core::dynamics::inverse_dynamics;
+use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::scalar::sin_cos_f32;
 
 /// Instructions per core-clock SysTick tick under `-icount shift=0`
@@ -118,7 +119,39 @@ fn bench(mut ctr: InstrCounter) {
         let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
         black_box(inverse_dynamics(&m, &phi, &w, &dd));
     });
+    let ik = IkSolver::new(&m);
+    let ik_only = ctr.per_call(1000, |i| {
+        let a = i as f32 * 1e-4;
+        let t = IkTarget {
+            x5: -0.2 + a,
+            y5: 0.1,
+            phi1: 0.1,
+            phi3: 0.05,
+            r2: 0.7,
+        };
+        black_box(ik.solve(&t).ok());
+    });
+    let ik_id = ctr.per_call(1000, |i| {
+        let a = i as f32 * 1e-4;
+        let t = IkTarget {
+            x5: -0.2 + a,
+            y5: 0.1,
+            phi1: 0.1,
+            phi3: 0.05,
+            r2: 0.7,
+        };
+        if let Ok(sol) = ik.solve(&t) {
+            let w = [0.4, -0.9, 0.2, -2.1, 3.3];
+            let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
+            black_box(inverse_dynamics(&m, &sol.phi, &w, &dd));
+        }
+    });
     hprintln!("bench: loop_overhead instr={}", base);
+    hprintln!("bench: ik_f32 instr={}", ik_only.saturating_sub(base));
+    hprintln!(
+        "bench: ik_plus_inverse_dynamics_f32 instr={}",
+        ik_id.saturating_sub(base)
+    );
     hprintln!("bench: libm_sinf instr={}", sinf.saturating_sub(base));
     hprintln!("bench: sin_cos_f32 instr={}", fast.saturating_sub(base));
     hprintln!(

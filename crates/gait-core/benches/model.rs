@@ -1,0 +1,51 @@
+//! Host benchmarks of the per-sample work: IK, inverse dynamics, both
+//! together, in f32 and f64; and one paper-mode cost evaluation (the
+//! optimiser's inner loop). `cargo bench -p gait-core`.
+#![allow(missing_docs, clippy::unwrap_used)]
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use gait_core::dynamics::inverse_dynamics;
+use gait_core::ik::{IkSolver, IkTarget};
+use gait_core::problem::{PaperCase, PaperProblem};
+use gait_core::{BodyModel, Real};
+
+fn per_sample<T: Real>(c: &mut Criterion, name: &str) {
+    let m: BodyModel<T> = BodyModel::<f64>::paper_table_iii().cast();
+    let ik = IkSolver::new(&m);
+    let l = T::lit;
+    let target = IkTarget {
+        x5: l(-0.12),
+        y5: l(0.1),
+        phi1: l(0.1),
+        phi3: l(0.05),
+        r2: l(0.7),
+    };
+    let w = [0.4, -0.9, 0.2, -2.1, 3.3].map(l);
+    let a = [1.5, -2.0, 0.7, 6.0, -9.0].map(l);
+    let phi = ik.solve(&target).unwrap().phi;
+    c.bench_function(&format!("ik_{name}"), |b| {
+        b.iter(|| ik.solve(black_box(&target)))
+    });
+    c.bench_function(&format!("inverse_dynamics_{name}"), |b| {
+        b.iter(|| inverse_dynamics(&m, black_box(&phi), black_box(&w), black_box(&a)))
+    });
+    c.bench_function(&format!("ik_plus_inverse_dynamics_{name}"), |b| {
+        b.iter(|| {
+            let sol = ik.solve(black_box(&target)).unwrap();
+            inverse_dynamics(&m, &sol.phi, black_box(&w), black_box(&a))
+        })
+    });
+}
+
+fn benches(c: &mut Criterion) {
+    per_sample::<f32>(c, "f32");
+    per_sample::<f64>(c, "f64");
+    let pb = PaperProblem::<f64>::paper(PaperCase::Walk);
+    let p = pb.initial_guess();
+    c.bench_function("paper_cost_walk_f64", |b| b.iter(|| pb.cost(black_box(&p))));
+}
+
+criterion_group!(model, benches);
+criterion_main!(model);
