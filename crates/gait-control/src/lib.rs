@@ -1,3 +1,11 @@
 //! gait-control: the real-time controller, generic over embedded-hal 1.0 so
 //! the same code runs on the motor board, under QEMU and in host tests.
+//!
+//! - [`drivers`]: one module per part (AS5048A encoders, MCP3208 force
+//!   ADC), the motor output, buttons and status indicators;
+//! - [`operator`]: the clinician's MODE/GO button scheme as a pure state
+//!   machine (described for clinicians in `docs/operation.md`).
 #![no_std]
+
+pub mod drivers;
+pub mod operator;
