@@ -7,5 +7,9 @@
 //!   machine (described for clinicians in `docs/operation.md`).
 #![no_std]
 
+pub mod crutch_load;
 pub mod drivers;
 pub mod operator;
+pub mod position_loop;
+pub mod posture;
+pub mod sequencer;

@@ -23,6 +23,7 @@ pub mod kinematics;
 pub mod model;
 pub mod problem;
 pub mod scalar;
+pub mod tables;
 
 pub use model::{BodyModel, JointLimits, LINKS, Link, ModelError};
 pub use scalar::Real;

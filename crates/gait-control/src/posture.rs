@@ -1,0 +1,152 @@
+//! Between the paper's 5-link description (links 1–2 = stance leg, 4–5 =
+//! swing leg) and the device's joints (left/right hip and knee, left/right
+//! ankle), which depends on which leg stands.
+//!
+//! Joint order everywhere in gait-control: 0 left hip, 1 left knee,
+//! 2 right hip, 3 right knee; anatomical angles, flexion positive (rad);
+//! torques on those coordinates (N·m). Ankles: 0 left, 1 right,
+//! dorsiflexion positive.
+
+use gait_core::LINKS;
+use gait_core::kinematics::{Phi, anatomical_angles, theta_from_phi};
+
+/// Actuated joints.
+pub const JOINTS: usize = 4;
+
+/// Which leg carries the body during a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Side {
+    /// Left leg.
+    Left,
+    /// Right leg.
+    Right,
+}
+
+impl Side {
+    /// The other leg.
+    pub fn other(self) -> Self {
+        match self {
+            Self::Left => Self::Right,
+            Self::Right => Self::Left,
+        }
+    }
+
+    /// Index of this side's hip in the joint order (knee is +1); ankle index.
+    fn hip(self) -> usize {
+        match self {
+            Self::Left => 0,
+            Self::Right => 2,
+        }
+    }
+
+    /// Index of this side's ankle.
+    pub fn ankle(self) -> usize {
+        match self {
+            Self::Left => 0,
+            Self::Right => 1,
+        }
+    }
+
+    /// Index of this side's foot force sensor (0 left foot, 1 right foot).
+    pub fn foot(self) -> usize {
+        self.ankle()
+    }
+}
+
+/// Puts stance/swing values (hip, knee each) into the joint order.
+fn place(
+    stance: Side,
+    stance_hip: f32,
+    stance_knee: f32,
+    swing_hip: f32,
+    swing_knee: f32,
+) -> [f32; JOINTS] {
+    let mut j = [0.0; JOINTS];
+    let (s, w) = (stance.hip(), stance.other().hip());
+    if let Some(x) = j.get_mut(s) {
+        *x = stance_hip;
+    }
+    if let Some(x) = j.get_mut(s + 1) {
+        *x = stance_knee;
+    }
+    if let Some(x) = j.get_mut(w) {
+        *x = swing_hip;
+    }
+    if let Some(x) = j.get_mut(w + 1) {
+        *x = swing_knee;
+    }
+    j
+}
+
+/// Joint angles (anatomical, joint order) of a 5-link posture Φ with the
+/// given stance leg.
+pub fn joints_from_phi(phi: &Phi<f32>, stance: Side) -> [f32; JOINTS] {
+    let a = anatomical_angles(&theta_from_phi(phi));
+    place(stance, a[2], a[1], a[3], a[4])
+}
+
+/// Anatomical joint torques (joint order) from the 5-link joint torques T_Θ.
+///
+/// A torque on an anatomical coordinate q = s·θ is s·T_θ: stance knee +T_θ2,
+/// stance hip −T_θ3, swing hip +T_θ4, swing knee −T_θ5. T_θ1 (the stance
+/// ankle) has no motor: the pilot supplies it through the crutches.
+pub fn joint_torques_from_theta_torques(t_theta: &[f32; LINKS], stance: Side) -> [f32; JOINTS] {
+    let [_, t2, t3, t4, t5] = *t_theta;
+    place(stance, -t3, t2, t4, -t5)
+}
+
+/// The 5-link posture Φ from measured joint angles and the stance ankle
+/// (foot flat): φ1 = dorsiflexion, φ2 = φ1 − stance knee flexion,
+/// φ3 = φ2 + stance hip flexion, φ4 = π + φ3 − swing hip flexion,
+/// φ5 = φ4 + swing knee flexion.
+pub fn phi_from_joints(joints: &[f32; JOINTS], stance_ankle_rad: f32, stance: Side) -> Phi<f32> {
+    let get = |i: usize| joints.get(i).copied().unwrap_or(0.0);
+    let (s, w) = (stance.hip(), stance.other().hip());
+    let phi1 = stance_ankle_rad;
+    let phi2 = phi1 - get(s + 1);
+    let phi3 = phi2 + get(s);
+    let phi4 = core::f32::consts::PI + phi3 - get(w);
+    let phi5 = phi4 + get(w + 1);
+    [phi1, phi2, phi3, phi4, phi5]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn phi_joint_round_trip_both_sides() {
+        let phi = [0.12, -0.2, 0.05, 2.7, 3.4];
+        for side in [Side::Left, Side::Right] {
+            let j = joints_from_phi(&phi, side);
+            let back = phi_from_joints(&j, phi[0], side);
+            for i in 0..LINKS {
+                assert!((back[i] - phi[i]).abs() < 1e-5, "{side:?} {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn standing_is_all_zero() {
+        let pi = core::f32::consts::PI;
+        let j = joints_from_phi(&[0.0, 0.0, 0.0, pi, pi], Side::Left);
+        assert!(j.iter().all(|v| v.abs() < 1e-6));
+    }
+
+    #[test]
+    fn sides_swap_stance_and_swing() {
+        let phi = [0.1, -0.3, 0.0, 2.6, 3.5];
+        let l = joints_from_phi(&phi, Side::Left);
+        let r = joints_from_phi(&phi, Side::Right);
+        assert_eq!(l[0], r[2]);
+        assert_eq!(l[1], r[3]);
+        assert_eq!(l[2], r[0]);
+        assert_eq!(l[3], r[1]);
+        // Stance hip flexion 0.3 rad (thigh back, torso upright), swing hip
+        // flexion π − 2.6, swing knee flexion 0.9.
+        assert!((l[0] - 0.3).abs() < 1e-6);
+        assert!((l[2] - (core::f32::consts::PI - 2.6)).abs() < 1e-6);
+        assert!((l[3] - 0.9).abs() < 1e-6);
+    }
+}

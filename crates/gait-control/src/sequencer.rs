@@ -1,0 +1,469 @@
+//! Gait execution: which reference the joints follow, tick by tick.
+//!
+//! Phases: **Standing** (hold a posture) → **WaitingReady** (at the table's
+//! start posture, waiting for the pilot: both crutches loaded and weight on
+//! the stance foot) → **Swing** (play the table) → landing detected by the
+//! swing foot's sensor → **Transfer** (the legs swap roles; the reference
+//! blends to the next step's start posture) → WaitingReady again, or
+//! Standing when a stop was requested. **SafeHold** ramps the reference to
+//! the posture measured when a fatal fault struck and stays there until a
+//! clinician reset.
+//!
+//! Rules enforced here: a gait starts only from the standing posture it was
+//! planned from (within a tolerance), only with a verified table, never while
+//! a step is in progress; a stop takes effect at the end of the current step.
+//! Work per tick is constant: one table interpolation, no search, no loop
+//! whose length depends on data.
+
+use gait_core::tables::GaitTable;
+
+use crate::operator::Gait;
+use crate::posture::{JOINTS, Side, joints_from_phi};
+
+/// Thresholds and timings of gait execution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SequencerConfig {
+    /// Each crutch must carry at least this before a swing starts, N.
+    pub crutch_ready_n: f32,
+    /// The stance foot must carry at least this before a swing starts, N.
+    pub stance_foot_ready_n: f32,
+    /// Swing-foot force that counts as ground contact, N.
+    pub landing_contact_n: f32,
+    /// Landing is accepted from this fraction of the table's duration on
+    /// (earlier contact is a scuff, not a landing).
+    pub landing_window_fraction: f32,
+    /// After the table ends, how long to wait for contact before giving up
+    /// and holding the posture, s.
+    pub landing_timeout_s: f32,
+    /// Largest joint-angle difference from a table's start posture that
+    /// still counts as "in the start posture", rad.
+    pub start_tolerance_rad: f32,
+    /// Duration of the weight transfer between steps, s.
+    pub transfer_s: f32,
+    /// Duration of the ramp into a safe hold, s.
+    pub hold_ramp_s: f32,
+}
+
+impl SequencerConfig {
+    /// Defaults for a 93 kg system: 60 N per crutch and 300 N on the stance
+    /// foot to be "ready", 80 N of swing-foot force for contact, landing
+    /// accepted after 60 % of the step, 1 s timeout, 0.15 rad start
+    /// tolerance, 0.4 s transfer, 0.3 s hold ramp.
+    pub const DEFAULT: Self = Self {
+        crutch_ready_n: 60.0,
+        stance_foot_ready_n: 300.0,
+        landing_contact_n: 80.0,
+        landing_window_fraction: 0.6,
+        landing_timeout_s: 1.0,
+        start_tolerance_rad: 0.15,
+        transfer_s: 0.4,
+        hold_ramp_s: 0.3,
+    };
+}
+
+/// The verified tables the device carries (a gait without one cannot start).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GaitTables<'t> {
+    /// Level walking.
+    pub walk: Option<GaitTable<'t>>,
+    /// Stair ascent.
+    pub stair_up: Option<GaitTable<'t>>,
+    /// Stair descent.
+    pub stair_down: Option<GaitTable<'t>>,
+}
+
+impl<'t> GaitTables<'t> {
+    /// The table for a gait, if present and verified.
+    pub fn get(&self, gait: Gait) -> Option<&GaitTable<'t>> {
+        match gait {
+            Gait::Walk => self.walk.as_ref(),
+            Gait::StairUp => self.stair_up.as_ref(),
+            Gait::StairDown => self.stair_down.as_ref(),
+        }
+    }
+}
+
+/// Where gait execution is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// Holding a posture.
+    Standing,
+    /// At a step's start posture, waiting for the pilot to be ready.
+    WaitingReady {
+        /// The leg that will carry the body.
+        stance: Side,
+    },
+    /// Playing a step.
+    Swing {
+        /// The leg that carries the body.
+        stance: Side,
+        /// Time since the swing started, s.
+        t_s: f32,
+    },
+    /// Weight transfer after a landing.
+    Transfer {
+        /// The new stance leg.
+        stance: Side,
+        /// Time since the landing, s.
+        t_s: f32,
+    },
+    /// Ramped hold of the posture measured at a fatal fault.
+    SafeHold {
+        /// Time since the hold began, s.
+        t_s: f32,
+    },
+}
+
+/// Something that happened this tick (for the log and the crutch metric).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SeqEvent {
+    /// A start was accepted: now waiting for readiness.
+    StartAccepted(Gait, Side),
+    /// A start was refused.
+    StartRefused(RefuseReason),
+    /// The swing of a step began.
+    SwingStarted(Gait, Side),
+    /// The swing foot landed.
+    Landed,
+    /// No contact within the timeout after the table ended: holding.
+    LandingTimeout,
+    /// Now standing (after a stop or a landing timeout).
+    Stopped,
+}
+
+/// Why a start was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RefuseReason {
+    /// No verified table for that gait.
+    NoTable,
+    /// The joints are not in the table's start posture.
+    NotInStartPosture,
+    /// A step is in progress, a hold is active, or new steps are blocked.
+    Busy,
+}
+
+/// What the sequencer measured this tick (calibrated, NaN where unknown).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sensed {
+    /// Joint angles, joint order, rad.
+    pub joints_rad: [f32; JOINTS],
+    /// Foot forces (0 left, 1 right), N.
+    pub feet_n: [f32; 2],
+    /// Crutch forces (0 left, 1 right), N.
+    pub crutches_n: [f32; 2],
+}
+
+/// What the joints should do this tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plan {
+    /// Reference angles, joint order, rad.
+    pub angle_rad: [f32; JOINTS],
+    /// Reference rates, rad/s.
+    pub rate_rad_s: [f32; JOINTS],
+    /// During a swing: the table, the stance leg and the time, so the
+    /// controller can evaluate the model's feed-forward along the reference.
+    pub swing: Option<(Gait, Side, f32)>,
+    /// The stance leg now.
+    pub stance: Side,
+}
+
+/// Gait execution state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sequencer<'t> {
+    cfg: SequencerConfig,
+    tables: GaitTables<'t>,
+    phase: Phase,
+    gait: Gait,
+    stance: Side,
+    stop_requested: bool,
+    new_steps_blocked: bool,
+    /// Reference at the previous tick (for rates and blends).
+    reference: [f32; JOINTS],
+    /// Start and end of the current blend (transfer or hold ramp).
+    blend_from: [f32; JOINTS],
+    blend_to: [f32; JOINTS],
+}
+
+impl<'t> Sequencer<'t> {
+    /// Starts standing, holding `posture` (normally the measured joints at
+    /// power-up), with the left leg as stance.
+    pub fn new(cfg: SequencerConfig, tables: GaitTables<'t>, posture: [f32; JOINTS]) -> Self {
+        let posture = posture.map(|v| if v.is_finite() { v } else { 0.0 });
+        Self {
+            cfg,
+            tables,
+            phase: Phase::Standing,
+            gait: Gait::Walk,
+            stance: Side::Left,
+            stop_requested: false,
+            new_steps_blocked: false,
+            reference: posture,
+            blend_from: posture,
+            blend_to: posture,
+        }
+    }
+
+    /// Current phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// The tables this sequencer plays.
+    pub fn tables(&self) -> &GaitTables<'t> {
+        &self.tables
+    }
+
+    /// `true` while a step is in progress (the swing or the weight transfer
+    /// after it): no gait change, no new start.
+    pub fn step_in_progress(&self) -> bool {
+        matches!(self.phase, Phase::Swing { .. } | Phase::Transfer { .. })
+    }
+
+    /// `true` while a gait is running (waiting, swinging or transferring).
+    pub fn walking(&self) -> bool {
+        matches!(
+            self.phase,
+            Phase::WaitingReady { .. } | Phase::Swing { .. } | Phase::Transfer { .. }
+        )
+    }
+
+    /// The current reference posture (joint order, rad).
+    pub fn reference(&self) -> [f32; JOINTS] {
+        self.reference
+    }
+
+    /// Asks for a start of `gait`. Accepted only when standing, with a
+    /// verified table, from that table's start posture (either leg may be
+    /// the stance leg: the one whose mapping matches is chosen).
+    pub fn request_start(&mut self, gait: Gait, sensed: &Sensed) -> SeqEvent {
+        if self.phase != Phase::Standing || self.new_steps_blocked {
+            return SeqEvent::StartRefused(RefuseReason::Busy);
+        }
+        let Some(table) = self.tables.get(gait) else {
+            return SeqEvent::StartRefused(RefuseReason::NoTable);
+        };
+        let first = table.first();
+        let tol = self.cfg.start_tolerance_rad;
+        for stance in [self.stance, self.stance.other()] {
+            let start = joints_from_phi(&first, stance);
+            let close = start
+                .iter()
+                .zip(&sensed.joints_rad)
+                .all(|(a, b)| (a - b).abs() <= tol);
+            if close {
+                self.gait = gait;
+                self.stance = stance;
+                self.stop_requested = false;
+                self.begin_blend(start);
+                self.phase = Phase::WaitingReady { stance };
+                return SeqEvent::StartAccepted(gait, stance);
+            }
+        }
+        SeqEvent::StartRefused(RefuseReason::NotInStartPosture)
+    }
+
+    /// Asks to stop at the end of the current step (or at once when only
+    /// waiting for readiness).
+    pub fn request_stop(&mut self) {
+        self.stop_requested = true;
+    }
+
+    /// The supervisor's non-fatal reaction: finish the step, then hold; no
+    /// new steps until a reset.
+    pub fn block_new_steps(&mut self) {
+        self.new_steps_blocked = true;
+        self.stop_requested = true;
+    }
+
+    /// The supervisor's fatal reaction: ramp to `measured` and hold.
+    pub fn enter_safe_hold(&mut self, measured: &[f32; JOINTS]) {
+        if matches!(self.phase, Phase::SafeHold { .. }) {
+            return;
+        }
+        let target = pick_finite(measured, &self.reference);
+        self.blend_from = self.reference;
+        self.blend_to = target;
+        self.phase = Phase::SafeHold { t_s: 0.0 };
+    }
+
+    /// After a clinician reset: stand where the reference is, allow steps.
+    pub fn reset_after_faults(&mut self) {
+        self.new_steps_blocked = false;
+        self.stop_requested = false;
+        self.blend_to = self.reference;
+        self.blend_from = self.reference;
+        self.phase = Phase::Standing;
+    }
+
+    fn begin_blend(&mut self, to: [f32; JOINTS]) {
+        self.blend_from = self.reference;
+        self.blend_to = to;
+    }
+
+    fn blended(&self, fraction: f32) -> [f32; JOINTS] {
+        let s = smoothstep(fraction);
+        let mut out = self.blend_from;
+        for (o, &b) in out.iter_mut().zip(&self.blend_to) {
+            *o += s * (b - *o);
+        }
+        out
+    }
+
+    /// One tick: advances the phase and returns the reference.
+    pub fn update(
+        &mut self,
+        sensed: &Sensed,
+        dt_s: f32,
+        events: &mut impl FnMut(SeqEvent),
+    ) -> Plan {
+        let cfg = self.cfg;
+        let mut swing = None;
+        let next_reference = match self.phase {
+            Phase::Standing => self.blend_to,
+            Phase::WaitingReady { stance } => {
+                if self.stop_requested {
+                    self.phase = Phase::Standing;
+                    events(SeqEvent::Stopped);
+                    self.blend_to
+                } else if self.ready(sensed, stance) {
+                    self.phase = Phase::Swing { stance, t_s: 0.0 };
+                    events(SeqEvent::SwingStarted(self.gait, stance));
+                    self.table_reference(stance, 0.0)
+                } else {
+                    self.blend_to
+                }
+            }
+            Phase::Swing { stance, t_s } => {
+                let t = t_s + dt_s;
+                let duration = self.tables.get(self.gait).map_or(0.0, |tb| tb.duration_s());
+                let swing_foot = sensed
+                    .feet_n
+                    .get(stance.other().foot())
+                    .copied()
+                    .unwrap_or(f32::NAN);
+                let landed = t >= cfg.landing_window_fraction * duration
+                    && swing_foot >= cfg.landing_contact_n;
+                let reference = self.table_reference(stance, t);
+                if landed {
+                    events(SeqEvent::Landed);
+                    if self.stop_requested {
+                        self.blend_from = reference;
+                        self.blend_to = reference;
+                        self.phase = Phase::Standing;
+                        self.stance = stance.other();
+                        events(SeqEvent::Stopped);
+                    } else {
+                        let new_stance = stance.other();
+                        self.stance = new_stance;
+                        self.blend_from = reference;
+                        self.blend_to = self
+                            .tables
+                            .get(self.gait)
+                            .map_or(reference, |tb| joints_from_phi(&tb.first(), new_stance));
+                        self.phase = Phase::Transfer {
+                            stance: new_stance,
+                            t_s: 0.0,
+                        };
+                    }
+                } else if t > duration + cfg.landing_timeout_s {
+                    events(SeqEvent::LandingTimeout);
+                    self.blend_from = reference;
+                    self.blend_to = reference;
+                    self.phase = Phase::Standing;
+                    events(SeqEvent::Stopped);
+                } else {
+                    self.phase = Phase::Swing { stance, t_s: t };
+                    swing = Some((self.gait, stance, t));
+                }
+                reference
+            }
+            Phase::Transfer { stance, t_s } => {
+                let t = t_s + dt_s;
+                let frac = if cfg.transfer_s > 0.0 {
+                    t / cfg.transfer_s
+                } else {
+                    1.0
+                };
+                if frac >= 1.0 {
+                    if self.stop_requested {
+                        self.phase = Phase::Standing;
+                        events(SeqEvent::Stopped);
+                    } else {
+                        self.phase = Phase::WaitingReady { stance };
+                    }
+                    self.blend_from = self.blend_to;
+                    self.blend_to
+                } else {
+                    self.phase = Phase::Transfer { stance, t_s: t };
+                    self.blended(frac)
+                }
+            }
+            Phase::SafeHold { t_s } => {
+                let t = t_s + dt_s;
+                let frac = if cfg.hold_ramp_s > 0.0 {
+                    t / cfg.hold_ramp_s
+                } else {
+                    1.0
+                };
+                self.phase = Phase::SafeHold {
+                    t_s: t.min(cfg.hold_ramp_s.max(0.0) + 1.0),
+                };
+                self.blended(frac.min(1.0))
+            }
+        };
+        let mut rate = [0.0; JOINTS];
+        if dt_s > 0.0 {
+            for ((r, &n), &o) in rate.iter_mut().zip(&next_reference).zip(&self.reference) {
+                *r = (n - o) / dt_s;
+            }
+        }
+        self.reference = next_reference;
+        Plan {
+            angle_rad: next_reference,
+            rate_rad_s: rate,
+            swing,
+            stance: self.stance,
+        }
+    }
+
+    fn ready(&self, sensed: &Sensed, stance: Side) -> bool {
+        let c = self.cfg;
+        let crutches = sensed.crutches_n.iter().all(|&f| f >= c.crutch_ready_n);
+        let foot = sensed
+            .feet_n
+            .get(stance.foot())
+            .is_some_and(|&f| f >= c.stance_foot_ready_n);
+        crutches && foot
+    }
+
+    fn table_reference(&self, stance: Side, t_s: f32) -> [f32; JOINTS] {
+        match self.tables.get(self.gait) {
+            Some(tb) => joints_from_phi(&tb.at_time(t_s), stance),
+            None => self.reference,
+        }
+    }
+}
+
+/// 3s² − 2s³ on [0, 1]: zero velocity at both ends of a blend.
+fn smoothstep(x: f32) -> f32 {
+    let s = if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    s * s * (3.0 - 2.0 * s)
+}
+
+fn pick_finite(a: &[f32; JOINTS], fallback: &[f32; JOINTS]) -> [f32; JOINTS] {
+    let mut out = *fallback;
+    for (o, &v) in out.iter_mut().zip(a) {
+        if v.is_finite() {
+            *o = v;
+        }
+    }
+    out
+}

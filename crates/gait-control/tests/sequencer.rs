@@ -1,0 +1,332 @@
+//! Gait execution rules, step by step: start only from the planned posture
+//! with a verified table, swing only when the pilot is ready, landing only
+//! by the foot sensor inside the landing window, alternate legs, stop at the
+//! end of the step, safe hold.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    missing_docs
+)]
+
+use gait_control::operator::Gait;
+use gait_control::posture::{JOINTS, Side, joints_from_phi};
+use gait_control::sequencer::{
+    GaitTables, Phase, RefuseReason, Sensed, SeqEvent, Sequencer, SequencerConfig,
+};
+use gait_core::gait::GaitError;
+use gait_core::problem::{PaperCase, PaperProblem};
+use gait_core::tables::{GaitKind, GaitTable, encode, image_len};
+
+const DT: f32 = 0.001;
+
+/// A walk table from the paper problem's simple feasible gait.
+fn walk_image() -> Vec<u8> {
+    let pb = PaperProblem::<f64>::paper(PaperCase::Walk);
+    let step = pb.step(&pb.initial_guess());
+    let mut phis = Vec::new();
+    // Φ per sample through the IK, as the table generator does.
+    let ik = gait_core::ik::IkSolver::new(&pb.model);
+    step.for_each_sample::<GaitError>(|s| {
+        let sol = ik
+            .solve(&gait_core::ik::IkTarget {
+                x5: s.p5[0],
+                y5: s.p5[1],
+                phi1: s.phi1,
+                phi3: s.phi3,
+                r2: s.r2,
+            })
+            .unwrap();
+        phis.push(sol.phi.map(|v| v as f32));
+        Ok(())
+    })
+    .unwrap();
+    let mut buf = vec![0u8; image_len(phis.len())];
+    encode(GaitKind::Walk, 10_000, &phis, &mut buf).unwrap();
+    buf
+}
+
+fn sensed(joints: [f32; JOINTS], feet: [f32; 2], crutches: [f32; 2]) -> Sensed {
+    Sensed {
+        joints_rad: joints,
+        feet_n: feet,
+        crutches_n: crutches,
+    }
+}
+
+struct Rig<'t> {
+    seq: Sequencer<'t>,
+    table: GaitTable<'t>,
+    events: Vec<SeqEvent>,
+}
+
+impl<'t> Rig<'t> {
+    fn new(image: &'t [u8]) -> Self {
+        let table = GaitTable::parse(image).unwrap();
+        let tables = GaitTables {
+            walk: Some(table),
+            ..GaitTables::default()
+        };
+        let start = joints_from_phi(&table.first(), Side::Left);
+        Self {
+            seq: Sequencer::new(SequencerConfig::DEFAULT, tables, start),
+            table,
+            events: Vec::new(),
+        }
+    }
+
+    fn step(&mut self, s: &Sensed) -> [f32; JOINTS] {
+        let ev = &mut self.events;
+        self.seq.update(s, DT, &mut |e| ev.push(e)).angle_rad
+    }
+
+    fn start_pose(&self, stance: Side) -> [f32; JOINTS] {
+        joints_from_phi(&self.table.first(), stance)
+    }
+}
+
+const READY_FEET: [f32; 2] = [500.0, 0.0];
+const READY_CRUTCHES: [f32; 2] = [100.0, 100.0];
+
+#[test]
+fn start_needs_a_table_and_the_start_posture() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    assert_eq!(
+        rig.seq.request_start(Gait::StairUp, &s),
+        SeqEvent::StartRefused(RefuseReason::NoTable)
+    );
+    let mut off = pose;
+    off[1] += 0.3;
+    assert_eq!(
+        rig.seq
+            .request_start(Gait::Walk, &sensed(off, READY_FEET, READY_CRUTCHES)),
+        SeqEvent::StartRefused(RefuseReason::NotInStartPosture)
+    );
+    assert_eq!(
+        rig.seq.request_start(Gait::Walk, &s),
+        SeqEvent::StartAccepted(Gait::Walk, Side::Left)
+    );
+    // The mirrored posture starts with the other leg as stance.
+    let mut rig = Rig::new(&img);
+    let s = sensed(rig.start_pose(Side::Right), [0.0, 500.0], READY_CRUTCHES);
+    assert_eq!(
+        rig.seq.request_start(Gait::Walk, &s),
+        SeqEvent::StartAccepted(Gait::Walk, Side::Right)
+    );
+}
+
+#[test]
+fn swing_waits_for_crutches_and_stance_foot() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    rig.seq
+        .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
+    // One crutch unloaded: keep waiting, however long.
+    for _ in 0..2000 {
+        rig.step(&sensed(pose, READY_FEET, [100.0, 10.0]));
+    }
+    assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
+    // Stance foot unloaded (weight on the swing foot): keep waiting.
+    for _ in 0..100 {
+        rig.step(&sensed(pose, [50.0, 500.0], READY_CRUTCHES));
+    }
+    assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
+    // NaN forces (a faulted sensor) never count as ready.
+    rig.step(&sensed(pose, [f32::NAN, 0.0], [f32::NAN, 100.0]));
+    assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
+    rig.step(&sensed(pose, READY_FEET, READY_CRUTCHES));
+    assert!(matches!(
+        rig.seq.phase(),
+        Phase::Swing {
+            stance: Side::Left,
+            ..
+        }
+    ));
+    assert!(
+        rig.events
+            .contains(&SeqEvent::SwingStarted(Gait::Walk, Side::Left))
+    );
+}
+
+/// Runs a swing to its landing; returns the reference trace.
+fn swing_and_land(
+    rig: &mut Rig<'_>,
+    stance: Side,
+    early_contact_at: Option<f32>,
+) -> Vec<[f32; JOINTS]> {
+    let pose = rig.start_pose(stance);
+    let swing_foot = stance.other().foot();
+    let mut trace = Vec::new();
+    let duration = rig.table.duration_s();
+    let mut t = 0.0;
+    loop {
+        let mut feet = [0.0; 2];
+        feet[stance.foot()] = 500.0;
+        let contact = t >= duration || early_contact_at.is_some_and(|e| (t - e).abs() < 0.05);
+        if contact {
+            feet[swing_foot] = 200.0;
+        }
+        let r = rig.step(&sensed(pose, feet, READY_CRUTCHES));
+        trace.push(r);
+        t += DT;
+        if !matches!(
+            rig.seq.phase(),
+            Phase::Swing { .. } | Phase::WaitingReady { .. }
+        ) || t > duration + 2.0
+        {
+            break;
+        }
+    }
+    trace
+}
+
+#[test]
+fn swing_plays_the_table_and_lands_on_the_foot_sensor() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    rig.seq
+        .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
+    // An early scuff at 20 % of the step is not a landing.
+    let scuff = 0.2 * rig.table.duration_s();
+    let trace = swing_and_land(&mut rig, Side::Left, Some(scuff));
+    assert!(rig.events.contains(&SeqEvent::Landed));
+    let n = trace.len() as f32 * DT;
+    assert!(n >= rig.table.duration_s() - 0.01, "landed after {n} s");
+    // Mid-swing the reference is the table, mapped with the left leg standing.
+    let mid = trace[trace.len() / 2];
+    let t_mid = (trace.len() / 2) as f32 * DT;
+    let want = joints_from_phi(&rig.table.at_time(t_mid - DT), Side::Left);
+    for i in 0..JOINTS {
+        assert!(
+            (mid[i] - want[i]).abs() < 2e-3,
+            "joint {i}: {} vs {}",
+            mid[i],
+            want[i]
+        );
+    }
+    // After landing the legs swap: transfer with the right leg standing, then
+    // wait at the next start posture.
+    assert!(matches!(
+        rig.seq.phase(),
+        Phase::Transfer {
+            stance: Side::Right,
+            ..
+        }
+    ));
+    let right_pose = rig.start_pose(Side::Right);
+    for _ in 0..1000 {
+        rig.step(&sensed(right_pose, [0.0, 500.0], [10.0, 10.0]));
+    }
+    assert!(matches!(
+        rig.seq.phase(),
+        Phase::WaitingReady {
+            stance: Side::Right
+        }
+    ));
+    let r = rig.seq.reference();
+    for i in 0..JOINTS {
+        assert!((r[i] - right_pose[i]).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn stop_request_ends_at_the_landing_and_no_gait_change_mid_step() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    rig.step(&s);
+    assert!(rig.seq.step_in_progress());
+    assert_eq!(
+        rig.seq.request_start(Gait::Walk, &s),
+        SeqEvent::StartRefused(RefuseReason::Busy)
+    );
+    rig.seq.request_stop();
+    swing_and_land(&mut rig, Side::Left, None);
+    assert_eq!(rig.seq.phase(), Phase::Standing);
+    assert!(rig.events.contains(&SeqEvent::Stopped));
+    // It holds the landing posture.
+    let held = rig.seq.reference();
+    for _ in 0..500 {
+        let r = rig.step(&s);
+        assert_eq!(r, held);
+    }
+}
+
+#[test]
+fn landing_timeout_holds_the_posture() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    let steps = ((rig.table.duration_s() + 1.2) / DT) as usize;
+    for _ in 0..steps {
+        rig.step(&s); // the swing foot never reports contact
+    }
+    assert!(rig.events.contains(&SeqEvent::LandingTimeout));
+    assert_eq!(rig.seq.phase(), Phase::Standing);
+}
+
+#[test]
+fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    for _ in 0..700 {
+        rig.step(&s);
+    }
+    let measured = [0.3, 0.2, 0.1, 0.4];
+    let before = rig.seq.reference();
+    rig.seq.enter_safe_hold(&measured);
+    let mut last = before;
+    let mut max_step = 0.0f32;
+    for _ in 0..400 {
+        let r = rig.step(&sensed(measured, READY_FEET, READY_CRUTCHES));
+        for i in 0..JOINTS {
+            max_step = max_step.max((r[i] - last[i]).abs());
+        }
+        last = r;
+    }
+    for i in 0..JOINTS {
+        assert!((last[i] - measured[i]).abs() < 1e-6);
+    }
+    // Ramped: no jump bigger than the smoothstep's steepest tick.
+    assert!(
+        max_step < 0.02,
+        "reference jumped {max_step} rad in one tick"
+    );
+    assert_eq!(
+        rig.seq.request_start(Gait::Walk, &s),
+        SeqEvent::StartRefused(RefuseReason::Busy)
+    );
+    rig.seq.reset_after_faults();
+    assert_eq!(rig.seq.phase(), Phase::Standing);
+}
+
+#[test]
+fn non_fatal_block_finishes_the_step_then_refuses_new_ones() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    rig.step(&s);
+    rig.seq.block_new_steps();
+    assert!(rig.seq.step_in_progress(), "the step goes on");
+    swing_and_land(&mut rig, Side::Left, None);
+    assert_eq!(rig.seq.phase(), Phase::Standing);
+    let s2 = sensed(rig.start_pose(Side::Right), [0.0, 500.0], READY_CRUTCHES);
+    assert_eq!(
+        rig.seq.request_start(Gait::Walk, &s2),
+        SeqEvent::StartRefused(RefuseReason::Busy)
+    );
+}
