@@ -7,9 +7,12 @@
 //!   machine (described for clinicians in `docs/operation.md`).
 #![no_std]
 
+pub mod controller;
 pub mod crutch_load;
 pub mod drivers;
+pub mod faults;
 pub mod operator;
 pub mod position_loop;
 pub mod posture;
 pub mod sequencer;
+pub mod supervisor;

@@ -290,6 +290,19 @@ impl<'t> Sequencer<'t> {
         self.phase = Phase::SafeHold { t_s: 0.0 };
     }
 
+    /// While the motors are disabled the joints move freely: the reference
+    /// follows the measured posture (so no tracking error builds up and
+    /// nothing jumps when the motors come back after a reset).
+    pub fn follow_measured(&mut self, measured: &[f32; JOINTS]) {
+        let target = pick_finite(measured, &self.reference);
+        self.reference = target;
+        self.blend_from = target;
+        self.blend_to = target;
+        self.phase = Phase::SafeHold {
+            t_s: self.cfg.hold_ramp_s.max(0.0),
+        };
+    }
+
     /// After a clinician reset: stand where the reference is, allow steps.
     pub fn reset_after_faults(&mut self) {
         self.new_steps_blocked = false;
