@@ -1,0 +1,108 @@
+//! The pilot balancing through the crutches, seen from the stance ankle.
+//!
+//! The paper's premise: the exoskeleton cannot actuate the stance ankle, so
+//! whatever ankle torque the motion needs beyond the ankle's passive spring
+//! is supplied by the pilot pushing on the crutches. We model the pilot as a
+//! torque-limited PD controller on the stance-shank angle φ1 (which, with the
+//! foot flat, is the ankle dorsiflexion) tracking a desired profile, and the
+//! crutches as a lever: vertical crutch force = |ankle torque| / lever arm.
+//! The force is split evenly between the two crutches (no lateral model in a
+//! sagittal plant), and a baseline load is always added: pilots of
+//! exoskeletons never stand without leaning on their crutches.
+
+use gait_core::gait::StanceAnkleProfile;
+
+/// What the pilot tries to do with the stance shank.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PilotTarget {
+    /// The pilot does not balance at all (zero torque, baseline load only).
+    Off,
+    /// Hold φ1 at a fixed angle, rad.
+    Hold {
+        /// Desired stance-shank angle, rad (clockwise from vertical-up).
+        phi1_rad: f64,
+    },
+    /// Track the paper's logistic stance-ankle profile, its time measured
+    /// from the simulation time `t0_s`.
+    Profile {
+        /// The profile φ1(t).
+        profile: StanceAnkleProfile<f64>,
+        /// Simulation time at which the profile's t = 0, s.
+        t0_s: f64,
+    },
+    /// Track the profile with its time measured from the last leg swap (or
+    /// from the start): each new stance restarts it.
+    ProfileFromLanding {
+        /// The profile φ1(t).
+        profile: StanceAnkleProfile<f64>,
+    },
+}
+
+/// Pilot and crutch parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PilotConfig {
+    /// Proportional gain on the φ1 error, N·m/rad.
+    pub kp_nm_per_rad: f64,
+    /// Derivative gain, N·m·s/rad.
+    pub kd_nm_s_per_rad: f64,
+    /// Largest ankle torque the pilot can supply through the crutches, N·m.
+    pub torque_limit_nm: f64,
+    /// Horizontal lever between the stance ankle and the crutch tips, m:
+    /// crutch force = |pilot torque| / lever.
+    pub crutch_lever_m: f64,
+    /// Load the pilot always leans on the crutches with (both together), N.
+    pub baseline_crutch_load_n: f64,
+}
+
+impl Default for PilotConfig {
+    /// Stiff enough to hold the 93 kg inverted pendulum (needs more than
+    /// m·g·h ≈ 900 N·m/rad), damped near critically, 120 N·m at most
+    /// (≈ 270 N on the crutches at 0.45 m), 100 N baseline.
+    fn default() -> Self {
+        Self {
+            kp_nm_per_rad: 2500.0,
+            kd_nm_s_per_rad: 400.0,
+            torque_limit_nm: 120.0,
+            crutch_lever_m: 0.45,
+            baseline_crutch_load_n: 100.0,
+        }
+    }
+}
+
+impl PilotTarget {
+    /// Desired (φ1, φ̇1) at simulation time `t_s`, `since_swap_s` after the
+    /// last leg swap; `None` when the pilot is off.
+    pub fn desired(&self, t_s: f64, since_swap_s: f64) -> Option<(f64, f64)> {
+        let eval = |p: &StanceAnkleProfile<f64>, t: f64| {
+            let e = (-p.k_per_s * (t - p.t_c_s)).exp();
+            let rate = (p.b_rad - p.a_rad) * p.k_per_s * e / ((1.0 + e) * (1.0 + e));
+            (p.at(t), if rate.is_finite() { rate } else { 0.0 })
+        };
+        match self {
+            Self::Off => None,
+            Self::Hold { phi1_rad } => Some((*phi1_rad, 0.0)),
+            Self::Profile { profile, t0_s } => Some(eval(profile, t_s - t0_s)),
+            Self::ProfileFromLanding { profile } => Some(eval(profile, since_swap_s)),
+        }
+    }
+}
+
+impl PilotConfig {
+    /// The pilot's torque on the ankle-dorsiflexion coordinate (N·m, positive
+    /// tips the shank forward), limited.
+    pub fn torque_nm(&self, desired: Option<(f64, f64)>, phi1: f64, dphi1: f64) -> f64 {
+        match desired {
+            None => 0.0,
+            Some((q, dq)) => {
+                let t = self.kp_nm_per_rad * (q - phi1) + self.kd_nm_s_per_rad * (dq - dphi1);
+                t.clamp(-self.torque_limit_nm, self.torque_limit_nm)
+            }
+        }
+    }
+
+    /// Vertical force on each crutch (left, right), N, for a pilot torque.
+    pub fn crutch_forces_n(&self, pilot_torque_nm: f64) -> [f64; 2] {
+        let total = pilot_torque_nm.abs() / self.crutch_lever_m + self.baseline_crutch_load_n;
+        [0.5 * total, 0.5 * total]
+    }
+}

@@ -1,0 +1,824 @@
+//! The exoskeleton-plus-pilot plant: the paper's 5-link chain with its
+//! stance foot pinned at the origin of a per-step frame, and the world
+//! bookkeeping around it (which leg stands, where the feet are, terrain,
+//! landing and leg swap, foot and crutch forces).
+//!
+//! # Conventions
+//!
+//! - Motor torques are **anatomical**, in the order left hip, left knee,
+//!   right hip, right knee, flexion positive, N·m. They map to the model's
+//!   relative-joint torques with the signs of
+//!   [`gait_core::kinematics::anatomical_angles`] (a torque on a coordinate
+//!   q = s·θ is s·T_θ): stance hip −T_θ3, stance knee +T_θ2, swing hip +T_θ4,
+//!   swing knee −T_θ5; then T_Φ solves T_Θ = Aᵀ T_Φ
+//!   (T_φ5 = −T_θ5, T_φi = −T_θi + T_θ(i+1)).
+//! - The stance ankle (θ1) carries a rotational spring and the pilot's
+//!   balancing torque ([`crate::pilot`]); ankle dorsiflexion = φ1 (foot flat).
+//! - World frame: x forward, y up, the first stance foot at the origin.
+//!
+//! # Approximations (documented, not hidden)
+//!
+//! - The swing leg is free: nothing stops it from entering the ground before
+//!   it has been lifted (double support is not a constraint). A landing is
+//!   only registered after the swing ankle has risen above
+//!   `lift_clearance_m`, then comes back within `landing_tolerance_m` of the
+//!   ground at its x while moving down.
+//! - Leg swap: the posture is mirrored exactly (old swing leg → links 1–2,
+//!   old stance leg → links 4–5), so every point keeps its world position.
+//!   Velocities follow a rigid plastic impact that conserves the angular
+//!   momenta the impulses cannot change ([`crate::impact`]); the old stance
+//!   foot is assumed to lift off (its vertical speed is in [`Landing`]).
+//! - The model's mass properties belong to roles (Table III gives the
+//!   stance and swing legs different masses), so a swap changes the mass of
+//!   each physical leg, as in the paper's model.
+//! - Foot forces: the total vertical support M(g + ÿ_com) minus the crutch
+//!   load; while the swing foot touches the ground it takes a share by the
+//!   lever rule on the centre of mass's x between the two ankles.
+
+use gait_core::dynamics::{self, DynamicsError};
+use gait_core::kinematics::{Phi, anatomical_angles, forward_kinematics, link_com, theta_from_phi};
+use gait_core::model::{BodyModel, GRAVITY_M_S2, LINKS};
+
+use crate::pilot::{PilotConfig, PilotTarget};
+use crate::terrain::Terrain;
+
+use std::f64::consts::PI;
+
+/// A leg.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    /// Left leg.
+    Left,
+    /// Right leg.
+    Right,
+}
+
+impl Side {
+    /// Index in per-side arrays: left 0, right 1.
+    pub fn index(self) -> usize {
+        match self {
+            Self::Left => 0,
+            Self::Right => 1,
+        }
+    }
+
+    /// The other leg.
+    pub fn other(self) -> Self {
+        match self {
+            Self::Left => Self::Right,
+            Self::Right => Self::Left,
+        }
+    }
+}
+
+/// Index of each motor in the anatomical torque and angle arrays.
+pub mod joint {
+    /// Left hip.
+    pub const LEFT_HIP: usize = 0;
+    /// Left knee.
+    pub const LEFT_KNEE: usize = 1;
+    /// Right hip.
+    pub const RIGHT_HIP: usize = 2;
+    /// Right knee.
+    pub const RIGHT_KNEE: usize = 3;
+}
+
+/// Plant parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlantConfig {
+    /// The body model (default: the paper's Table III).
+    pub model: BodyModel<f64>,
+    /// The ground.
+    pub terrain: Terrain,
+    /// Control period: one [`Plant::step`], s.
+    pub dt_s: f64,
+    /// RK4 substeps per control period (spring and pilot re-evaluated at
+    /// each, motor torques held: a PWM holds its duty for the period).
+    pub substeps: u32,
+    /// Stance-ankle spring stiffness, N·m/rad (0: free ankle).
+    pub ankle_stiffness_nm_per_rad: f64,
+    /// Ankle angle (dorsiflexion) at which the spring is relaxed, rad.
+    pub ankle_rest_rad: f64,
+    /// Pilot and crutch parameters.
+    pub pilot: PilotConfig,
+    /// The device's mechanical stops at the model's joint limits (Table I),
+    /// or `None` for a chain without stops.
+    pub stops: Option<JointStops>,
+    /// Swing-ankle height above ground counted as touching down, m.
+    pub landing_tolerance_m: f64,
+    /// Height the swing ankle must rise above the ground before a landing
+    /// can be registered, m.
+    pub lift_clearance_m: f64,
+    /// The swing foot carries load while within this height of the ground, m.
+    pub contact_tolerance_m: f64,
+    /// Any link faster than this is a blow-up, rad/s.
+    pub max_speed_rad_s: f64,
+    /// A hip lower than this above the stance foot is a fall, m.
+    pub min_hip_height_m: f64,
+}
+
+impl Default for PlantConfig {
+    fn default() -> Self {
+        Self {
+            model: BodyModel::paper_table_iii(),
+            terrain: Terrain::Level,
+            dt_s: 0.001,
+            substeps: 4,
+            ankle_stiffness_nm_per_rad: 30.0,
+            ankle_rest_rad: 0.0,
+            pilot: PilotConfig::default(),
+            stops: Some(JointStops::default()),
+            landing_tolerance_m: 0.002,
+            lift_clearance_m: 0.01,
+            contact_tolerance_m: 0.005,
+            max_speed_rad_s: 60.0,
+            min_hip_height_m: 0.4,
+        }
+    }
+}
+
+/// Mechanical joint stops: beyond a limit of `BodyModel::limits` a joint
+/// meets a stiff spring-damper that only pushes back (the exoskeleton's hard
+/// stops, e.g. the knee's at full extension). Stiff, but slow enough for
+/// RK4 at the default 0.25 ms substep (ω·h ≈ 0.06 and damping rate × h ≈ 0.13
+/// for a swing shank; RK4 is stable below 2.8).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointStops {
+    /// Stiffness beyond the limit, N·m/rad.
+    pub stiffness_nm_per_rad: f64,
+    /// Damping beyond the limit, N·m·s/rad.
+    pub damping_nm_s_per_rad: f64,
+}
+
+impl Default for JointStops {
+    fn default() -> Self {
+        Self {
+            stiffness_nm_per_rad: 20000.0,
+            damping_nm_s_per_rad: 200.0,
+        }
+    }
+}
+
+impl JointStops {
+    /// The stop torque on a coordinate `q` (rate `dq`) allowed in
+    /// `[-below, above]`: zero inside, pushing back only outside.
+    pub fn torque_nm(&self, q: f64, dq: f64, below: f64, above: f64) -> f64 {
+        if q > above {
+            (-self.stiffness_nm_per_rad * (q - above) - self.damping_nm_s_per_rad * dq).min(0.0)
+        } else if q < -below {
+            (-self.stiffness_nm_per_rad * (q + below) - self.damping_nm_s_per_rad * dq).max(0.0)
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Why the plant refused a configuration or a step. After an error from
+/// [`Plant::step`] the state is the one before the step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SimError {
+    /// A configuration value is unusable (the field is named).
+    Config(&'static str),
+    /// An input torque, or the integrated state, is NaN or infinite.
+    NonFinite,
+    /// gait-core's forward dynamics failed.
+    Dynamics(DynamicsError),
+    /// A link turned faster than `max_speed_rad_s`.
+    Runaway {
+        /// Link (1-based, the paper's numbering).
+        link: usize,
+        /// Its angular speed, rad/s.
+        speed_rad_s: f64,
+    },
+    /// The hip came down below `min_hip_height_m` above the stance foot.
+    Fell {
+        /// Hip height above the stance foot, m.
+        hip_height_m: f64,
+    },
+}
+
+impl core::fmt::Display for SimError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Config(field) => write!(f, "unusable plant configuration: {field}"),
+            Self::NonFinite => f.write_str("non-finite torque or state"),
+            Self::Dynamics(e) => write!(f, "forward dynamics failed: {e:?}"),
+            Self::Runaway { link, speed_rad_s } => {
+                write!(f, "link {link} turns at {speed_rad_s:.1} rad/s")
+            }
+            Self::Fell { hip_height_m } => write!(f, "fell: hip {hip_height_m:.3} m high"),
+        }
+    }
+}
+
+impl std::error::Error for SimError {}
+
+impl From<DynamicsError> for SimError {
+    fn from(e: DynamicsError) -> Self {
+        match e {
+            DynamicsError::NonFinite => Self::NonFinite,
+            other => Self::Dynamics(other),
+        }
+    }
+}
+
+/// A registered landing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Landing {
+    /// Simulation time, s.
+    pub time_s: f64,
+    /// The leg that landed (the new stance leg).
+    pub side: Side,
+    /// Where its ankle landed, world frame, m.
+    pub position_m: [f64; 2],
+    /// Ground height there, m (the ankle may be up to the tolerance above,
+    /// or below it by what it travelled in the last step).
+    pub ground_m: f64,
+    /// Downward ankle speed at touch-down, m/s (positive).
+    pub descent_speed_m_s: f64,
+    /// Horizontal distance from the previous stance foot, m.
+    pub step_length_m: f64,
+    /// Vertical speed of the trailing (old stance) foot just after the
+    /// impact, m/s, positive up; negative means the impact model's lift-off
+    /// assumption did not hold.
+    pub trailing_foot_speed_up_m_s: f64,
+}
+
+/// The true state, for metrics, plots and the peripherals.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrueState {
+    /// Simulation time, s.
+    pub time_s: f64,
+    /// The stance leg.
+    pub stance: Side,
+    /// Absolute link angles Φ in the stance frame, rad.
+    pub phi: Phi<f64>,
+    /// Φ̇, rad/s.
+    pub dphi: Phi<f64>,
+    /// Anatomical joint angles, flexion positive, rad: left hip, left knee,
+    /// right hip, right knee (the order of [`joint`]).
+    pub joint_angles_rad: [f64; 4],
+    /// Their rates, rad/s.
+    pub joint_rates_rad_s: [f64; 4],
+    /// Ankle dorsiflexion per side (left, right), rad: the stance ankle's is
+    /// φ1; the swing ankle is not modelled (`None`).
+    pub ankle_dorsiflexion_rad: [Option<f64>; 2],
+    /// Ankle positions per side (left, right), world frame, m.
+    pub feet_m: [[f64; 2]; 2],
+    /// Stance ankle p0 then p1…p5 (stance knee, hip, torso top, swing knee,
+    /// swing ankle), world frame, m.
+    pub points_m: [[f64; 2]; 6],
+    /// Centre of mass, world frame, m.
+    pub com_m: [f64; 2],
+    /// Vertical ground force under each foot (left, right), N.
+    pub foot_forces_n: [f64; 2],
+    /// Vertical force on each crutch (left, right), N.
+    pub crutch_forces_n: [f64; 2],
+    /// The pilot's balancing torque on the stance ankle (dorsiflexion
+    /// positive), N·m.
+    pub pilot_torque_nm: f64,
+    /// The ankle spring's torque plus the ankle stop's (dorsiflexion
+    /// positive), N·m.
+    pub spring_torque_nm: f64,
+    /// The joint stops' torques (order of [`joint`], flexion positive), N·m.
+    pub stop_torques_nm: [f64; 4],
+    /// The motor torques applied in the last step, N·m (order of [`joint`]).
+    pub motor_torques_nm: [f64; 4],
+    /// Mechanical energy: kinetic + gravity (world heights) + ankle spring, J.
+    pub energy_j: f64,
+    /// Whether the swing ankle has been lifted since the last swap.
+    pub swing_lifted: bool,
+}
+
+/// The plant. See the module documentation.
+#[derive(Clone, Debug)]
+pub struct Plant {
+    cfg: PlantConfig,
+    phi: Phi<f64>,
+    dphi: Phi<f64>,
+    ddphi: Phi<f64>,
+    stance: Side,
+    stance_foot_m: [f64; 2],
+    time_s: f64,
+    last_swap_s: f64,
+    pilot_target: PilotTarget,
+    lifted: bool,
+    motor_nm: [f64; 4],
+    pilot_nm: f64,
+    spring_nm: f64,
+    stops_nm: [f64; 4],
+    landings: Vec<Landing>,
+}
+
+/// The generalised forces at one state.
+struct Forces {
+    t_phi: [f64; LINKS],
+    pilot_nm: f64,
+    /// Ankle spring plus the ankle's stop.
+    spring_nm: f64,
+    stops_nm: [f64; 4],
+}
+
+/// Anatomical angles and rates by role: ankle dorsiflexion, stance knee
+/// flexion, stance hip flexion, swing hip flexion, swing knee flexion.
+fn role_angles(phi: &Phi<f64>, dphi: &Phi<f64>) -> ([f64; LINKS], [f64; LINKS]) {
+    let q = anatomical_angles(&theta_from_phi(phi));
+    // Θ̇ = A⁻¹Φ̇ = theta_from_phi(Φ̇) − theta_from_phi(0) (b drops out).
+    let t = theta_from_phi(dphi);
+    let t0 = theta_from_phi(&[0.0; LINKS]);
+    let dt: [f64; LINKS] = core::array::from_fn(|i| t[i] - t0[i]);
+    (q, [dphi[0], dt[1], -dt[2], dt[3], -dt[4]])
+}
+
+/// Standing upright, feet together: Φ = (0, 0, 0, π, π).
+pub const STANDING: Phi<f64> = [0.0, 0.0, 0.0, PI, PI];
+
+impl Plant {
+    /// Standing upright at the origin on the left leg, at rest, the pilot
+    /// holding φ1 = 0.
+    pub fn new(cfg: PlantConfig) -> Result<Self, SimError> {
+        Self::with_posture(cfg, STANDING, [0.0; LINKS], Side::Left, [0.0, 0.0])
+    }
+
+    /// Any posture: Φ, Φ̇ in the stance frame, the stance leg and its ankle's
+    /// world position.
+    pub fn with_posture(
+        cfg: PlantConfig,
+        phi: Phi<f64>,
+        dphi: Phi<f64>,
+        stance: Side,
+        stance_foot_m: [f64; 2],
+    ) -> Result<Self, SimError> {
+        check_config(&cfg)?;
+        if !phi
+            .iter()
+            .chain(&dphi)
+            .chain(&stance_foot_m)
+            .all(|x| x.is_finite())
+        {
+            return Err(SimError::NonFinite);
+        }
+        let mut plant = Self {
+            cfg,
+            phi,
+            dphi,
+            ddphi: [0.0; LINKS],
+            stance,
+            stance_foot_m,
+            time_s: 0.0,
+            last_swap_s: 0.0,
+            pilot_target: PilotTarget::Hold { phi1_rad: phi[0] },
+            lifted: false,
+            motor_nm: [0.0; 4],
+            pilot_nm: 0.0,
+            spring_nm: 0.0,
+            stops_nm: [0.0; 4],
+            landings: Vec::new(),
+        };
+        plant.lifted = plant.swing_height_above_ground_m() > cfg.lift_clearance_m;
+        plant.refresh_outputs()?;
+        Ok(plant)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &PlantConfig {
+        &self.cfg
+    }
+
+    /// Simulation time, s.
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// The stance leg.
+    pub fn stance(&self) -> Side {
+        self.stance
+    }
+
+    /// Every landing so far.
+    pub fn landings(&self) -> &[Landing] {
+        &self.landings
+    }
+
+    /// What the pilot does from now on.
+    pub fn set_pilot(&mut self, target: PilotTarget) {
+        self.pilot_target = target;
+    }
+
+    /// The pilot's current target.
+    pub fn pilot(&self) -> PilotTarget {
+        self.pilot_target
+    }
+
+    /// Advances one control period under the four motor torques (anatomical,
+    /// flexion positive, N·m, order of [`joint`]). Returns the landing if the
+    /// swing foot touched down in this period (the legs are then swapped).
+    /// On error the state is left as it was.
+    pub fn step(&mut self, motor_torques_nm: [f64; 4]) -> Result<Option<Landing>, SimError> {
+        if !motor_torques_nm.iter().all(|t| t.is_finite()) {
+            return Err(SimError::NonFinite);
+        }
+        let saved = self.clone();
+        let result = self.advance(motor_torques_nm);
+        if result.is_err() {
+            *self = saved;
+        }
+        result
+    }
+
+    fn advance(&mut self, motor_torques_nm: [f64; 4]) -> Result<Option<Landing>, SimError> {
+        self.motor_nm = motor_torques_nm;
+        let h = self.cfg.dt_s / f64::from(self.cfg.substeps);
+        for _ in 0..self.cfg.substeps {
+            self.rk4(h)?;
+        }
+        self.check_sane()?;
+        self.refresh_outputs()?;
+        Ok(self.detect_landing())
+    }
+
+    /// One classical RK4 step of `h` seconds. The ankle spring and the
+    /// pilot are evaluated at every stage (they depend on the state, so
+    /// holding them over the step would cost RK4 its accuracy); the motor
+    /// torques are held.
+    fn rk4(&mut self, h: f64) -> Result<(), SimError> {
+        let t0 = self.time_s;
+        let (q0, w0) = (self.phi, self.dphi);
+        let add = |a: &Phi<f64>, b: &Phi<f64>, s: f64| -> Phi<f64> {
+            core::array::from_fn(|i| a[i] + s * b[i])
+        };
+        let k1w = self.accel(&q0, &w0, t0)?;
+        let k1q = w0;
+        let k2q = add(&w0, &k1w, 0.5 * h);
+        let k2w = self.accel(&add(&q0, &k1q, 0.5 * h), &k2q, t0 + 0.5 * h)?;
+        let k3q = add(&w0, &k2w, 0.5 * h);
+        let k3w = self.accel(&add(&q0, &k2q, 0.5 * h), &k3q, t0 + 0.5 * h)?;
+        let k4q = add(&w0, &k3w, h);
+        let k4w = self.accel(&add(&q0, &k3q, h), &k4q, t0 + h)?;
+        let combine = |x: &Phi<f64>, a: &Phi<f64>, b: &Phi<f64>, c: &Phi<f64>, d: &Phi<f64>| {
+            core::array::from_fn(|i| x[i] + h / 6.0 * (a[i] + 2.0 * b[i] + 2.0 * c[i] + d[i]))
+        };
+        self.phi = combine(&q0, &k1q, &k2q, &k3q, &k4q);
+        self.dphi = combine(&w0, &k1w, &k2w, &k3w, &k4w);
+        self.time_s = t0 + h;
+        Ok(())
+    }
+
+    /// Φ̈ at a state and time, with the held motor torques.
+    fn accel(&self, phi: &Phi<f64>, dphi: &Phi<f64>, t_s: f64) -> Result<Phi<f64>, SimError> {
+        let f = self.forces(phi, dphi, t_s);
+        Ok(dynamics::forward_dynamics(
+            &self.cfg.model,
+            phi,
+            dphi,
+            &f.t_phi,
+        )?)
+    }
+
+    /// Recomputes the reported torques and Φ̈ at the present state.
+    fn refresh_outputs(&mut self) -> Result<(), SimError> {
+        let f = self.forces(&self.phi, &self.dphi, self.time_s);
+        self.pilot_nm = f.pilot_nm;
+        self.spring_nm = f.spring_nm;
+        self.stops_nm = f.stops_nm;
+        self.ddphi = dynamics::forward_dynamics(&self.cfg.model, &self.phi, &self.dphi, &f.t_phi)?;
+        Ok(())
+    }
+
+    /// Every generalised force at a state: motors (held), ankle spring,
+    /// pilot, joint stops; mapped to T_Φ.
+    fn forces(&self, phi: &Phi<f64>, dphi: &Phi<f64>, t_s: f64) -> Forces {
+        let (q, dq) = role_angles(phi, dphi);
+        let (pilot, spring) = self.ankle_torques_at(t_s, phi[0], dphi[0]);
+        let lim = self.cfg.model.limits();
+        let bounds = [
+            (lim.ankle_plantarflexion_rad, lim.ankle_dorsiflexion_rad),
+            (lim.knee_extension_rad, lim.knee_flexion_rad),
+            (lim.hip_extension_rad, lim.hip_flexion_rad),
+            (lim.hip_extension_rad, lim.hip_flexion_rad),
+            (lim.knee_extension_rad, lim.knee_flexion_rad),
+        ];
+        let stops: [f64; LINKS] = match &self.cfg.stops {
+            Some(st) => {
+                core::array::from_fn(|i| st.torque_nm(q[i], dq[i], bounds[i].0, bounds[i].1))
+            }
+            None => [0.0; LINKS],
+        };
+        let m = self.motor_nm;
+        let (st_hip, st_knee, sw_hip, sw_knee) = match self.stance {
+            Side::Left => (m[0], m[1], m[2], m[3]),
+            Side::Right => (m[2], m[3], m[0], m[1]),
+        };
+        // Torques on the role coordinates [ankle dorsiflexion, stance knee
+        // flexion, stance hip flexion, swing hip flexion, swing knee flexion]
+        // = s·θ with s = (−1, +1, −1, +1, −1), so T_θ = s·τ.
+        let role = [
+            pilot + spring + stops[0],
+            st_knee + stops[1],
+            st_hip + stops[2],
+            sw_hip + stops[3],
+            sw_knee + stops[4],
+        ];
+        let t_theta = [-role[0], role[1], -role[2], role[3], -role[4]];
+        let mut stops_nm = [0.0; 4];
+        let (hip_s, knee_s, hip_w, knee_w) = match self.stance {
+            Side::Left => (0, 1, 2, 3),
+            Side::Right => (2, 3, 0, 1),
+        };
+        stops_nm[hip_s] = stops[2];
+        stops_nm[knee_s] = stops[1];
+        stops_nm[hip_w] = stops[3];
+        stops_nm[knee_w] = stops[4];
+        Forces {
+            t_phi: t_phi_from_t_theta(&t_theta),
+            pilot_nm: pilot,
+            spring_nm: spring + stops[0],
+            stops_nm,
+        }
+    }
+
+    /// (pilot, spring) torques on the ankle-dorsiflexion coordinate at `t_s`.
+    fn ankle_torques_at(&self, t_s: f64, phi1: f64, dphi1: f64) -> (f64, f64) {
+        let desired = self.pilot_target.desired(t_s, t_s - self.last_swap_s);
+        let pilot = self.cfg.pilot.torque_nm(desired, phi1, dphi1);
+        let spring = -self.cfg.ankle_stiffness_nm_per_rad * (phi1 - self.cfg.ankle_rest_rad);
+        (pilot, spring)
+    }
+
+    fn check_sane(&self) -> Result<(), SimError> {
+        if !self.phi.iter().chain(&self.dphi).all(|x| x.is_finite()) {
+            return Err(SimError::NonFinite);
+        }
+        for (i, w) in self.dphi.iter().enumerate() {
+            if w.abs() > self.cfg.max_speed_rad_s {
+                return Err(SimError::Runaway {
+                    link: i + 1,
+                    speed_rad_s: w.abs(),
+                });
+            }
+        }
+        let hip = forward_kinematics(&self.cfg.model, &self.phi)[1][1];
+        if hip < self.cfg.min_hip_height_m {
+            return Err(SimError::Fell { hip_height_m: hip });
+        }
+        Ok(())
+    }
+
+    /// Swing-ankle position in the world, m.
+    fn swing_foot_world(&self) -> [f64; 2] {
+        let p5 = forward_kinematics(&self.cfg.model, &self.phi)[4];
+        [self.stance_foot_m[0] + p5[0], self.stance_foot_m[1] + p5[1]]
+    }
+
+    fn swing_height_above_ground_m(&self) -> f64 {
+        let p = self.swing_foot_world();
+        p[1] - self.cfg.terrain.height_m(p[0])
+    }
+
+    /// Swing-ankle velocity, m/s: Σ l_i φ̇_i (cos φ_i, −sin φ_i) over links
+    /// 1, 2, 4, 5.
+    fn swing_foot_velocity(&self) -> [f64; 2] {
+        let l = self.cfg.model.lengths();
+        let mut v = [0.0; 2];
+        for i in [0, 1, 3, 4] {
+            v[0] += l[i] * self.dphi[i] * self.phi[i].cos();
+            v[1] -= l[i] * self.dphi[i] * self.phi[i].sin();
+        }
+        v
+    }
+
+    fn detect_landing(&mut self) -> Option<Landing> {
+        let above = self.swing_height_above_ground_m();
+        if !self.lifted {
+            if above > self.cfg.lift_clearance_m {
+                self.lifted = true;
+            }
+            return None;
+        }
+        let v = self.swing_foot_velocity();
+        if above > self.cfg.landing_tolerance_m || v[1] >= 0.0 {
+            return None;
+        }
+        let foot = self.swing_foot_world();
+        let mut landing = Landing {
+            time_s: self.time_s,
+            side: self.stance.other(),
+            position_m: foot,
+            ground_m: self.cfg.terrain.height_m(foot[0]),
+            descent_speed_m_s: -v[1],
+            step_length_m: foot[0] - self.stance_foot_m[0],
+            trailing_foot_speed_up_m_s: 0.0,
+        };
+        self.swap(foot);
+        landing.trailing_foot_speed_up_m_s = self.swing_foot_velocity()[1];
+        self.landings.push(landing);
+        Some(landing)
+    }
+
+    /// Mirrors the posture onto the other leg and applies the impact map
+    /// ([`crate::impact`]); see the module docs.
+    fn swap(&mut self, new_stance_foot: [f64; 2]) {
+        let [p1, p2, p3, p4, p5] = self.phi;
+        let [_, _, w3, w4, w5] = self.dphi;
+        let near_zero = gait_core::kinematics::wrap_pi::<f64>;
+        let near_pi = |x: f64| PI + near_zero(x - PI);
+        let phi_new = [
+            near_zero(p5 - PI),
+            near_zero(p4 - PI),
+            near_zero(p3),
+            near_pi(p2 + PI),
+            near_pi(p1 + PI),
+        ];
+        self.dphi = crate::impact::post_impact_velocities(
+            &self.cfg.model,
+            &self.phi,
+            &self.dphi,
+            self.stance_foot_m,
+            &phi_new,
+            new_stance_foot,
+        )
+        // Fallback (never needed for a physical posture): keep the new stance
+        // leg's and the torso's angular velocities, stop the new swing leg.
+        .unwrap_or([w5, w4, w3, 0.0, 0.0]);
+        self.phi = phi_new;
+        self.stance = self.stance.other();
+        self.stance_foot_m = new_stance_foot;
+        self.last_swap_s = self.time_s;
+        self.lifted = false;
+        // A failure here would repeat at the next step's first stage and be
+        // reported there; the outputs keep their pre-swap values meanwhile.
+        let _ = self.refresh_outputs();
+    }
+
+    /// The true state now.
+    pub fn state(&self) -> TrueState {
+        let model = &self.cfg.model;
+        let pts = forward_kinematics(model, &self.phi);
+        let o = self.stance_foot_m;
+        let world = |p: [f64; 2]| [o[0] + p[0], o[1] + p[1]];
+        let points_m = [
+            o,
+            world(pts[0]),
+            world(pts[1]),
+            world(pts[2]),
+            world(pts[3]),
+            world(pts[4]),
+        ];
+        let (anat, rates) = role_angles(&self.phi, &self.dphi);
+        let (angles, rates_out) = match self.stance {
+            Side::Left => (
+                [anat[2], anat[1], anat[3], anat[4]],
+                [rates[2], rates[1], rates[3], rates[4]],
+            ),
+            Side::Right => (
+                [anat[3], anat[4], anat[2], anat[1]],
+                [rates[3], rates[4], rates[2], rates[1]],
+            ),
+        };
+        let mut ankle = [None; 2];
+        ankle[self.stance.index()] = Some(self.phi[0]);
+        let mut feet_m = [[0.0; 2]; 2];
+        feet_m[self.stance.index()] = o;
+        feet_m[self.stance.other().index()] = points_m[5];
+
+        let coms = link_com(model, &self.phi);
+        let total_m = model.total_mass_kg();
+        let mut com = [0.0; 2];
+        for (c, l) in coms.iter().zip(model.links()) {
+            com[0] += l.mass_kg * c[0] / total_m;
+            com[1] += l.mass_kg * c[1] / total_m;
+        }
+        let com_m = world(com);
+
+        let crutch_forces_n = self.cfg.pilot.crutch_forces_n(self.pilot_nm);
+        let support = total_m * (GRAVITY_M_S2 + self.com_accel_y());
+        let feet_total = (support - crutch_forces_n[0] - crutch_forces_n[1]).max(0.0);
+        let swing_foot = points_m[5];
+        let swing_above = swing_foot[1] - self.cfg.terrain.height_m(swing_foot[0]);
+        let swing_share = if swing_above <= self.cfg.contact_tolerance_m {
+            let span = swing_foot[0] - o[0];
+            if span.abs() < 0.01 {
+                0.5
+            } else {
+                ((com_m[0] - o[0]) / span).clamp(0.0, 1.0)
+            }
+        } else {
+            0.0
+        };
+        let mut foot_forces_n = [0.0; 2];
+        foot_forces_n[self.stance.index()] = feet_total * (1.0 - swing_share);
+        foot_forces_n[self.stance.other().index()] = feet_total * swing_share;
+
+        let spring_pe = 0.5
+            * self.cfg.ankle_stiffness_nm_per_rad
+            * (self.phi[0] - self.cfg.ankle_rest_rad).powi(2);
+        let energy_j = dynamics::energy(model, &self.phi, &self.dphi)
+            + total_m * GRAVITY_M_S2 * o[1]
+            + spring_pe;
+        TrueState {
+            time_s: self.time_s,
+            stance: self.stance,
+            phi: self.phi,
+            dphi: self.dphi,
+            joint_angles_rad: angles,
+            joint_rates_rad_s: rates_out,
+            ankle_dorsiflexion_rad: ankle,
+            feet_m,
+            points_m,
+            com_m,
+            foot_forces_n,
+            crutch_forces_n,
+            pilot_torque_nm: self.pilot_nm,
+            spring_torque_nm: self.spring_nm,
+            stop_torques_nm: self.stops_nm,
+            motor_torques_nm: self.motor_nm,
+            energy_j,
+            swing_lifted: self.lifted,
+        }
+    }
+
+    /// Vertical acceleration of the centre of mass, m/s²: for each link
+    /// y = Σ_j c_j cos φ_j over the links on its path from the stance ankle
+    /// (c_j = l_j, or d_i for the link itself), so
+    /// ÿ = Σ_j c_j (−sin φ_j φ̈_j − cos φ_j φ̇_j²).
+    fn com_accel_y(&self) -> f64 {
+        let model = &self.cfg.model;
+        let links = model.links();
+        // Path of links from the ankle to each link's proximal joint.
+        const PATH: [&[usize]; LINKS] = [&[], &[0], &[0, 1], &[0, 1], &[0, 1, 3]];
+        let acc = |j: usize, c: f64| {
+            c * (-self.phi[j].sin() * self.ddphi[j] - self.phi[j].cos() * self.dphi[j].powi(2))
+        };
+        let mut total = 0.0;
+        for (i, (link, path)) in links.iter().zip(PATH).enumerate() {
+            let mut a = acc(i, link.com_m);
+            for &j in path {
+                a += acc(j, links[j].length_m);
+            }
+            total += link.mass_kg * a;
+        }
+        total / model.total_mass_kg()
+    }
+}
+
+/// Solves T_Θ = Aᵀ T_Φ for T_Φ (the inverse of
+/// [`gait_core::kinematics::joint_torques`]): T_φ5 = −T_θ5,
+/// T_φi = −T_θi + T_θ(i+1).
+pub fn t_phi_from_t_theta(t_theta: &[f64; LINKS]) -> [f64; LINKS] {
+    core::array::from_fn(|i| {
+        let next = t_theta.get(i + 1).copied().unwrap_or(0.0);
+        -t_theta[i] + next
+    })
+}
+
+fn check_config(cfg: &PlantConfig) -> Result<(), SimError> {
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+    if !positive(cfg.dt_s) {
+        return Err(SimError::Config("dt_s"));
+    }
+    if cfg.substeps == 0 {
+        return Err(SimError::Config("substeps"));
+    }
+    if !non_negative(cfg.ankle_stiffness_nm_per_rad) || !cfg.ankle_rest_rad.is_finite() {
+        return Err(SimError::Config("ankle spring"));
+    }
+    let p = &cfg.pilot;
+    if !non_negative(p.kp_nm_per_rad)
+        || !non_negative(p.kd_nm_s_per_rad)
+        || !non_negative(p.torque_limit_nm)
+        || !positive(p.crutch_lever_m)
+        || !non_negative(p.baseline_crutch_load_n)
+    {
+        return Err(SimError::Config("pilot"));
+    }
+    if !cfg.terrain.is_valid() {
+        return Err(SimError::Config("terrain"));
+    }
+    if !non_negative(cfg.landing_tolerance_m)
+        || !positive(cfg.lift_clearance_m)
+        || cfg.lift_clearance_m <= cfg.landing_tolerance_m
+        || !non_negative(cfg.contact_tolerance_m)
+    {
+        return Err(SimError::Config("contact tolerances"));
+    }
+    if !positive(cfg.max_speed_rad_s) || !cfg.min_hip_height_m.is_finite() {
+        return Err(SimError::Config("blow-up guards"));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gait_core::kinematics::joint_torques;
+
+    #[test]
+    fn t_phi_inverts_joint_torques() {
+        let t_theta = [1.5, -2.0, 0.3, 4.0, -7.0];
+        let back = joint_torques(&t_phi_from_t_theta(&t_theta));
+        for i in 0..LINKS {
+            assert!((back[i] - t_theta[i]).abs() < 1e-12);
+        }
+    }
+}

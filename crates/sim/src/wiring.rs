@@ -1,0 +1,145 @@
+//! The standard wiring of the simulated exoskeleton: the cells that carry
+//! the plant's joint angles and forces to the peripherals and the motor
+//! bridges whose torques drive the plant, in one place so every harness
+//! connects them the same way.
+//!
+//! Channel map of the force ADC (MCP3208): 0 left foot, 1 right foot,
+//! 2 left crutch, 3 right crutch. Encoder and motor order: left hip, left
+//! knee, right hip, right knee ([`crate::plant::joint`]).
+
+use embedded_hal::spi;
+
+use crate::as5048a::{EncoderMount, Mounting, SimAs5048a};
+use crate::mcp3208::{ForceSensorCal, SimMcp3208};
+use crate::motor::SimMotor;
+use crate::plant::{Landing, Plant, SimError, TrueState};
+use crate::shared::{SharedF64, SimClock};
+
+/// ADC channel of each force sensor.
+pub mod channel {
+    /// Left foot.
+    pub const LEFT_FOOT: usize = 0;
+    /// Right foot.
+    pub const RIGHT_FOOT: usize = 1;
+    /// Left crutch.
+    pub const LEFT_CRUTCH: usize = 2;
+    /// Right crutch.
+    pub const RIGHT_CRUTCH: usize = 3;
+}
+
+/// Default motor bridge: PWM resolution and joint torque at 100 % duty.
+pub const MAX_DUTY: u16 = 4200;
+/// Joint torque at 100 % duty, N·m.
+pub const FULL_SCALE_TORQUE_NM: f64 = 150.0;
+
+/// Encoder mountings used by [`Wiring::new`]: arbitrary offsets and one
+/// reversed encoder per leg, so calibration mistakes show up.
+pub const ENCODER_MOUNTS: [EncoderMount; 4] = [
+    EncoderMount {
+        zero_counts: 1234,
+        mounting: Mounting::Positive,
+    },
+    EncoderMount {
+        zero_counts: 15000,
+        mounting: Mounting::Negative,
+    },
+    EncoderMount {
+        zero_counts: 8191,
+        mounting: Mounting::Negative,
+    },
+    EncoderMount {
+        zero_counts: 40,
+        mounting: Mounting::Positive,
+    },
+];
+
+/// Shared cells and motor handles between a plant and its peripherals.
+#[derive(Clone, Debug)]
+pub struct Wiring {
+    /// Anatomical joint angles (flexion positive), rad.
+    pub joint_angles: [SharedF64; 4],
+    /// Force on each ADC channel 0…3 (see [`channel`]), N.
+    pub forces: [SharedF64; 4],
+    /// The four motor bridges.
+    pub motors: [SimMotor; 4],
+    /// The tick counter.
+    pub clock: SimClock,
+}
+
+impl Default for Wiring {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Wiring {
+    /// Cells at zero, motors with [`MAX_DUTY`] and [`FULL_SCALE_TORQUE_NM`].
+    pub fn new() -> Self {
+        Self {
+            joint_angles: Default::default(),
+            forces: Default::default(),
+            motors: std::array::from_fn(|_| SimMotor::new(MAX_DUTY, FULL_SCALE_TORQUE_NM)),
+            clock: SimClock::new(),
+        }
+    }
+
+    /// The encoder of joint `j` (order of [`crate::plant::joint`]), mounted
+    /// as [`ENCODER_MOUNTS`] says.
+    pub fn encoder(&self, j: usize) -> Option<SimAs5048a> {
+        let angle = self.joint_angles.get(j)?.clone();
+        let mount = *ENCODER_MOUNTS.get(j)?;
+        Some(SimAs5048a::new(angle, mount))
+    }
+
+    /// The force ADC with the four sensors connected (foot and crutch
+    /// calibrations of [`ForceSensorCal`]).
+    pub fn force_adc(&self) -> SimMcp3208 {
+        let adc = SimMcp3208::new();
+        let cals = [
+            ForceSensorCal::FOOT,
+            ForceSensorCal::FOOT,
+            ForceSensorCal::CRUTCH,
+            ForceSensorCal::CRUTCH,
+        ];
+        for (ch, (cell, cal)) in self.forces.iter().zip(cals).enumerate() {
+            adc.connect(ch, cell.clone(), cal);
+        }
+        adc
+    }
+
+    /// Writes the plant's true state into the cells (call after each
+    /// plant step, before the controller's next tick).
+    pub fn publish(&self, state: &TrueState) {
+        for (cell, &a) in self.joint_angles.iter().zip(&state.joint_angles_rad) {
+            cell.set(a);
+        }
+        let f = [
+            state.foot_forces_n[0],
+            state.foot_forces_n[1],
+            state.crutch_forces_n[0],
+            state.crutch_forces_n[1],
+        ];
+        for (cell, v) in self.forces.iter().zip(f) {
+            cell.set(v);
+        }
+    }
+
+    /// One control period of the plant: steps it under the bridges'
+    /// torques, publishes the new state to the sensors and advances the
+    /// clock. The controller's tick goes between two calls.
+    pub fn step(&self, plant: &mut Plant) -> Result<Option<Landing>, SimError> {
+        let landing = plant.step(self.motor_torques_nm())?;
+        self.publish(&plant.state());
+        self.clock.tick();
+        Ok(landing)
+    }
+
+    /// The torques the motor bridges produce now (input of
+    /// [`crate::plant::Plant::step`]), N·m.
+    pub fn motor_torques_nm(&self) -> [f64; 4] {
+        std::array::from_fn(|j| self.motors.get(j).map_or(0.0, SimMotor::torque_nm))
+    }
+}
+
+/// A bus error kind for fault injection that no healthy bus produces.
+pub const INJECTED_SPI_ERROR: spi::ErrorKind = spi::ErrorKind::ChipSelectFault;
