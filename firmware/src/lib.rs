@@ -1,9 +1,13 @@
-//! Board-independent pieces of the firmware: the power-on self-test that both
-//! boards run, and the instruction counter used for on-target benchmarks.
+//! Board-independent pieces of the firmware: the configuration both boards
+//! run the controller with ([`board_config`]), the power-on self-test
+//! ([`selftest`]) and the in-memory peripherals of the QEMU control-tick
+//! benchmark ([`qemu_rig`]).
 //!
 //! No control logic lives here (that is gait-control's job); this crate only
 //! wires boards to the portable crates.
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod board_config;
+pub mod qemu_rig;
 pub mod selftest;

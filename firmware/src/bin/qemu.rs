@@ -2,6 +2,12 @@
 //! on-target benchmarks, prints them over semihosting and reports the result
 //! through QEMU's exit status (0 = every check passed).
 //!
+//! The control-tick benchmark builds the controller and its hardware through
+//! `firmware::board_config` exactly as the motor board does, over the
+//! in-memory peripherals of `firmware::qemu_rig` (a pilot standing still),
+//! runs [`CONTROL_TICKS`] ticks and fails the run if the controller reports
+//! any fault or does not enable its motors.
+//!
 //! Instruction counts: run QEMU with `-icount shift=0` so every instruction
 //! advances the virtual clock by 1 ns; SysTick on the core clock (25 MHz on
 //! this machine) then ticks once per 40 instructions.
@@ -16,7 +22,8 @@ use core::hint::black_box;
 use cortex_m::peripheral::{SYST, syst::SystClkSource};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use firmware::selftest;
+use firmware::{board_config, qemu_rig, selftest};
+use gait_control::faults::Reaction;
 use gait_core::BodyModel;
 use gait_core::dynamics::inverse_dynamics;
 use gait_core::ik::{IkSolver, IkTarget};
@@ -26,6 +33,10 @@ use gait_core::scalar::sin_cos_f32;
 /// (1 ns per instruction, 25 MHz core clock).
 const INSTR_PER_TICK: u32 = 40;
 const SYST_MAX: u32 = 0x00FF_FFFF;
+/// Control ticks run by the control-tick benchmark (1 s at 1 kHz).
+const CONTROL_TICKS: u32 = 1_000;
+/// Ticks after which the standing rig's motors must be enabled.
+const ENABLE_WITHIN_TICKS: u32 = 5;
 
 /// Counts instructions with SysTick; intervals must stay below 2^24 ticks.
 struct InstrCounter {
@@ -52,6 +63,17 @@ impl InstrCounter {
         let end = SYST::get_current();
         let ticks = start.wrapping_sub(end) & SYST_MAX;
         ticks.saturating_mul(INSTR_PER_TICK) / n.max(1)
+    }
+
+    /// Instructions of one call of `f` (resolution: one SysTick tick, 40
+    /// instructions) and its result.
+    fn once<T>(&mut self, f: impl FnOnce() -> T) -> (u32, T) {
+        self.syst.clear_current();
+        let start = SYST::get_current();
+        let out = f();
+        let end = SYST::get_current();
+        let ticks = start.wrapping_sub(end) & SYST_MAX;
+        (ticks.saturating_mul(INSTR_PER_TICK), out)
     }
 }
 
@@ -91,7 +113,11 @@ fn run() -> usize {
     );
 
     match cortex_m::Peripherals::take() {
-        Some(p) => bench(InstrCounter::new(p.SYST)),
+        Some(p) => {
+            let mut ctr = InstrCounter::new(p.SYST);
+            bench(&mut ctr);
+            failed += control_tick_bench(&mut ctr);
+        }
         None => {
             hprintln!("bench: SysTick unavailable");
             failed += 1;
@@ -101,7 +127,7 @@ fn run() -> usize {
 }
 
 /// On-target instruction counts (see README, "Performance").
-fn bench(mut ctr: InstrCounter) {
+fn bench(ctr: &mut InstrCounter) {
     let base = ctr.per_call(1000, |i| {
         black_box(i);
     });
@@ -158,6 +184,113 @@ fn bench(mut ctr: InstrCounter) {
         "bench: inverse_dynamics_f32 instr={}",
         id.saturating_sub(base)
     );
+}
+
+/// Runs the board's controller on the standing rig: instructions per tick
+/// (average and worst) and a health check. Returns the number of failures.
+fn control_tick_bench(ctr: &mut InstrCounter) -> usize {
+    let mut controller = match board_config::build_controller() {
+        Ok(c) => c,
+        Err(e) => {
+            hprintln!("FAIL control: configuration refused: {:?}", e);
+            return 1;
+        }
+    };
+    let mut hw = match board_config::hardware(qemu_rig::standing()) {
+        Ok(h) => h,
+        Err(e) => {
+            hprintln!("FAIL control: hardware refused: {:?}", e);
+            return 1;
+        }
+    };
+    // Every driver must start disabled (`hardware` disables each one).
+    let mut failed = 0;
+    if hw.motors.iter().any(|m| m.is_enabled()) {
+        hprintln!("FAIL control: a motor is enabled after boot");
+        failed += 1;
+    }
+    hprintln!(
+        "control: state {} bytes (controller {}, hardware {})",
+        core::mem::size_of_val(&controller) + core::mem::size_of_val(&hw),
+        core::mem::size_of_val(&controller),
+        core::mem::size_of_val(&hw)
+    );
+    let base = ctr.once(|| black_box(0u32)).0;
+    let mut total: u64 = 0;
+    let mut worst = 0u32;
+    let mut worst_at = 0u32;
+    let mut first_bad = None;
+    let mut last = None;
+    for i in 0..CONTROL_TICKS {
+        let (instr, report) = ctr.once(|| controller.tick(&mut hw, false));
+        let instr = instr.saturating_sub(base);
+        total += u64::from(instr);
+        if instr > worst {
+            worst = instr;
+            worst_at = report.tick;
+        }
+        let healthy = report.reaction == Reaction::None
+            && report.faults.is_empty()
+            && report.command_nm.iter().all(|c| c.is_finite())
+            && (i < ENABLE_WITHIN_TICKS || report.motors_enabled);
+        if !healthy && first_bad.is_none() {
+            first_bad = Some(report);
+        }
+        last = Some(report);
+    }
+    let avg = total / u64::from(CONTROL_TICKS.max(1));
+    hprintln!("bench: control_tick instr={}", avg);
+    hprintln!(
+        "bench: control_tick_worst instr={} (tick {})",
+        worst,
+        worst_at
+    );
+    if let Some(r) = last {
+        hprintln!(
+            "control: standing rig, {} ticks: phase {:?}, motors enabled {}, joints {:?} rad, forces {:?} N, commands {:?} N·m",
+            r.tick,
+            r.phase,
+            r.motors_enabled,
+            r.joints_rad,
+            r.forces_n,
+            r.command_nm
+        );
+    }
+    if let Some(r) = first_bad {
+        hprintln!(
+            "FAIL control: unhealthy while standing at tick {}: reaction {:?}, faults {:?}, motors enabled {}",
+            r.tick,
+            r.reaction,
+            r.faults,
+            r.motors_enabled
+        );
+        for rec in controller.supervisor().log() {
+            hprintln!(
+                "  fault log: tick {} {:?} channel {} value {}",
+                rec.tick,
+                rec.code,
+                rec.channel,
+                rec.value
+            );
+        }
+        failed += 1;
+    } else {
+        hprintln!("control: ok (no fault, motors enabled, commands finite)");
+    }
+    // The drivers must have spoken the parts' protocols: two 16-bit frames
+    // per encoder read, one conversion per force sensor, every tick.
+    let frames = hw.encoders.map(|e| e.destroy().frames);
+    let conversions = hw.adc.destroy().conversions;
+    if frames.iter().any(|&f| f != 2 * CONTROL_TICKS) || conversions != 4 * CONTROL_TICKS {
+        hprintln!(
+            "FAIL control: bus traffic: encoder frames {:?}, ADC conversions {} over {} ticks",
+            frames,
+            conversions,
+            CONTROL_TICKS
+        );
+        failed += 1;
+    }
+    failed
 }
 
 #[panic_handler]

@@ -1,13 +1,34 @@
-//! Motor board image (STM32F405, 168 MHz): board wiring only.
+//! Motor board image (STM32F405RG, 168 MHz): board wiring only. The
+//! controller (sense → plan → act → guard → write) is gait-control's; its
+//! configuration is `firmware::board_config`, shared with the QEMU image.
 //!
 //! Boot order puts safety first: the four motor-driver enable lines are
 //! driven low before anything else, the power-on self-test must pass before
-//! the control loop may start, and the independent watchdog resets the board
-//! if a 1 kHz tick is ever missed by more than its window. Control logic
-//! itself lives in gait-control and is wired in here as it lands.
+//! the control loop may start, every driver is built and every motor
+//! disabled through the drivers, and only then do the independent watchdog
+//! and the 1 kHz tick start. A panic drives the enable lines low.
 //!
-//! Pin map (motor board rev A): motor enables PB12 left hip, PB13 left knee,
-//! PB14 right hip, PB15 right knee (active high); status LED PC13.
+//! # Pin map (motor board rev A, LQFP64)
+//!
+//! | signal | pin | notes |
+//! |---|---|---|
+//! | encoder SPI1 SCK / MISO / MOSI | PA5 / PA6 / PA7 | AF5, mode 1, 5.25 MHz |
+//! | encoder CS: left hip, left knee | PA4, PC4 | active low |
+//! | encoder CS: right hip, right knee | PC5, PB0 | active low |
+//! | encoder CS: left ankle, right ankle | PB1, PC6 | active low |
+//! | force ADC SPI2 SCK / MISO / MOSI | PB10 / PC2 / PC3 | AF5, mode 0, 656 kHz |
+//! | force ADC CS (MCP3208) | PC7 | active low |
+//! | PWM TIM1 CH1–CH4: left hip, left knee, right hip, right knee | PA8, PA9, PA10, PA11 | AF1, 20 kHz |
+//! | motor direction, same order | PC8, PC9, PC10, PC11 | high = positive torque |
+//! | motor enable, same order | PB12, PB13, PB14, PB15 | active high |
+//! | MODE / GO buttons | PC0 / PC1 | pull-up, pressed = low |
+//! | e-stop | PA0 | pull-up, NC contact to GND: high = stop (or cut cable) |
+//! | gait LED / fault LED / buzzer | PC13 / PB8 / PB9 | active high |
+//! | SWD | PA13 / PA14 | probe-rs, defmt over RTT |
+//! | HSE 8 MHz crystal | PH0 / PH1 | |
+//!
+//! MCP3208 inputs: CH0 left foot, CH1 right foot, CH2 left crutch, CH3
+//! right crutch (`board_config::FORCE_CHANNELS`).
 #![no_std]
 #![no_main]
 // Unsafe is confined to the panic handler, which must reach the motor-enable
@@ -15,41 +36,99 @@
 // attributes also expand to `#[export_name]`, which this lint counts.
 #![allow(unsafe_code)]
 
+use core::cell::RefCell;
+use core::convert::Infallible;
+
+use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
 use defmt_rtt as _;
+use embedded_hal::digital::{ErrorType, OutputPin};
+use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay, RefCellDevice};
+use firmware::board_config::{self, BoardIo, TICK_HZ};
 use firmware::selftest;
+use gait_control::controller::TickReport;
+use gait_control::faults::{FaultSet, Reaction};
+use stm32f4xx_hal::gpio::{ErasedPin, Output};
+use stm32f4xx_hal::spi::{Mode, Phase, Polarity};
 use stm32f4xx_hal::{pac, prelude::*, watchdog::IndependentWatchdog};
 
 /// Motor-enable pins on GPIOB (see the pin map above).
 const MOTOR_ENABLE_PINS_B: [u8; 4] = [12, 13, 14, 15];
-/// Control-loop rate.
-const TICK_HZ: u32 = 1_000;
+/// Core clock, Hz.
+const SYSCLK_HZ: u32 = 168_000_000;
+/// Core cycles in one control period.
+const CYCLES_PER_TICK: u32 = SYSCLK_HZ / TICK_HZ;
 /// Watchdog window: a stalled loop resets the board (motors disabled by reset).
 const WATCHDOG_MS: u32 = 20;
+/// AS5048A: CSn low to first clock edge, and CSn high time between frames,
+/// at least 350 ns each (datasheet, SPI timing tL and tCSn): 64 cycles at
+/// 168 MHz is 381 ns.
+const ENCODER_CS_CYCLES: u32 = 64;
+/// MCP3208: CS high at least 500 ns between conversions (tCSH): 96 cycles
+/// is 571 ns.
+const ADC_CS_CYCLES: u32 = 96;
+/// Encoder bus clock asked for: the HAL picks the fastest prescaler of
+/// APB2's 84 MHz not above 2× this, /16 = 5.25 MHz (/8 would be 10.5 MHz,
+/// above the AS5048A's 10 MHz).
+const ENCODER_SPI_HZ: u32 = 5_250_000;
+/// ADC bus clock asked for: APB1's 42 MHz / 64 = 656 kHz (the MCP3208 is
+/// rated 1 MHz at 2.7 V; /32 would be 1.31 MHz).
+const ADC_SPI_HZ: u32 = 656_250;
+/// PWM frequency of the H-bridges (above hearing).
+const PWM_HZ: u32 = 20_000;
+
+/// A chip-select line that holds its new level for the part's set-up /
+/// hold time after every change (busy-wait of `CYCLES` core cycles), so two
+/// frames in a row always keep CS high long enough in between.
+struct ChipSelect<const CYCLES: u32>(ErasedPin<Output>);
+
+impl<const CYCLES: u32> ErrorType for ChipSelect<CYCLES> {
+    type Error = Infallible;
+}
+
+impl<const CYCLES: u32> OutputPin for ChipSelect<CYCLES> {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.0.set_low();
+        cortex_m::asm::delay(CYCLES);
+        Ok(())
+    }
+
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.0.set_high();
+        cortex_m::asm::delay(CYCLES);
+        Ok(())
+    }
+}
 
 #[entry]
 fn main() -> ! {
     let Some(dp) = pac::Peripherals::take() else {
         halt("peripherals already taken");
     };
+    let Some(mut cp) = cortex_m::Peripherals::take() else {
+        halt("core peripherals already taken");
+    };
     // 1. Motors off before anything else.
     let gpiob = dp.GPIOB.split();
-    let mut en = (
-        gpiob.pb12.into_push_pull_output(),
-        gpiob.pb13.into_push_pull_output(),
-        gpiob.pb14.into_push_pull_output(),
-        gpiob.pb15.into_push_pull_output(),
-    );
-    en.0.set_low();
-    en.1.set_low();
-    en.2.set_low();
-    en.3.set_low();
+    let mut en = [
+        gpiob.pb12.into_push_pull_output().erase(),
+        gpiob.pb13.into_push_pull_output().erase(),
+        gpiob.pb14.into_push_pull_output().erase(),
+        gpiob.pb15.into_push_pull_output().erase(),
+    ];
+    en.iter_mut().for_each(|p| p.set_low());
+    let gpioa = dp.GPIOA.split();
     let gpioc = dp.GPIOC.split();
-    let mut led = gpioc.pc13.into_push_pull_output();
 
-    // 2. Clocks: 8 MHz crystal → 168 MHz.
+    // 2. Clocks: 8 MHz crystal → 168 MHz (APB1 42 MHz, APB2 84 MHz).
     let rcc = dp.RCC.constrain();
-    let clocks = rcc.cfgr.use_hse(8.MHz()).sysclk(168.MHz()).freeze();
+    let clocks = rcc
+        .cfgr
+        .use_hse(8.MHz())
+        .sysclk(SYSCLK_HZ.Hz())
+        .pclk1(42.MHz())
+        .pclk2(84.MHz())
+        .freeze();
     defmt::info!(
         "exogait motor board up, sysclk {} Hz",
         clocks.sysclk().raw()
@@ -75,22 +154,201 @@ fn main() -> ! {
         halt("self-test failed: motors stay disabled");
     }
 
-    // 4. The 1 kHz loop under an independent watchdog.
+    // 4. Peripherals → drivers (board_config's calibrations and limits);
+    //    `hardware` disables every motor through its driver.
+    let mode_1 = Mode {
+        polarity: Polarity::IdleLow,
+        phase: Phase::CaptureOnSecondTransition,
+    };
+    let mode_0 = Mode {
+        polarity: Polarity::IdleLow,
+        phase: Phase::CaptureOnFirstTransition,
+    };
+    let encoder_bus = RefCell::new(dp.SPI1.spi(
+        (gpioa.pa5, gpioa.pa6, gpioa.pa7),
+        mode_1,
+        ENCODER_SPI_HZ.Hz(),
+        &clocks,
+    ));
+    let adc_bus = dp.SPI2.spi(
+        (gpiob.pb10, gpioc.pc2, gpioc.pc3),
+        mode_0,
+        ADC_SPI_HZ.Hz(),
+        &clocks,
+    );
+    let cs = |pin: ErasedPin<Output>| ChipSelect::<ENCODER_CS_CYCLES>(pin);
+    let encoder = |pin| match RefCellDevice::new_no_delay(&encoder_bus, cs(pin)) {
+        Ok(d) => d,
+        Err(e) => match e {},
+    };
+    let encoders = [
+        encoder(gpioa.pa4.into_push_pull_output().erase()),
+        encoder(gpioc.pc4.into_push_pull_output().erase()),
+        encoder(gpioc.pc5.into_push_pull_output().erase()),
+        encoder(gpiob.pb0.into_push_pull_output().erase()),
+        encoder(gpiob.pb1.into_push_pull_output().erase()),
+        encoder(gpioc.pc6.into_push_pull_output().erase()),
+    ];
+    let adc_cs = ChipSelect::<ADC_CS_CYCLES>(gpioc.pc7.into_push_pull_output().erase());
+    let adc = match ExclusiveDevice::new(adc_bus, adc_cs, NoDelay) {
+        Ok(d) => d,
+        Err(e) => match e {},
+    };
+    let (_pwm_timer, (ch1, ch2, ch3, ch4)) = dp.TIM1.pwm_hz(PWM_HZ.Hz(), &clocks);
+    let mut pwm = [
+        ch1.with(gpioa.pa8).erase(),
+        ch2.with(gpioa.pa9).erase(),
+        ch3.with(gpioa.pa10).erase(),
+        ch4.with(gpioa.pa11).erase(),
+    ];
+    for ch in pwm.iter_mut() {
+        ch.set_duty(0);
+        ch.enable();
+    }
+    let dir = [
+        gpioc.pc8.into_push_pull_output().erase(),
+        gpioc.pc9.into_push_pull_output().erase(),
+        gpioc.pc10.into_push_pull_output().erase(),
+        gpioc.pc11.into_push_pull_output().erase(),
+    ];
+    let io = BoardIo {
+        encoders,
+        adc,
+        pwm,
+        dir,
+        enable: en,
+        mode: gpioc.pc0.into_pull_up_input().erase(),
+        go: gpioc.pc1.into_pull_up_input().erase(),
+        e_stop: gpioa.pa0.into_pull_up_input().erase(),
+        gait_led: gpioc.pc13.into_push_pull_output().erase(),
+        fault_led: gpiob.pb8.into_push_pull_output().erase(),
+        buzzer: gpiob.pb9.into_push_pull_output().erase(),
+    };
+    let mut hw = match board_config::hardware(io) {
+        Ok(hw) => hw,
+        Err(e) => {
+            defmt::error!("board configuration refused: {}", e);
+            halt("bad board configuration: motors stay disabled");
+        }
+    };
+    let mut controller = match board_config::build_controller() {
+        Ok(c) => c,
+        Err(e) => {
+            defmt::error!("controller configuration refused: {}", e);
+            halt("bad controller configuration: motors stay disabled");
+        }
+    };
+
+    // 5. The 1 kHz loop under an independent watchdog. The DWT cycle counter
+    //    measures each tick's work for the log.
+    cp.DCB.enable_trace();
+    cp.DWT.enable_cycle_counter();
     let mut tick = dp.TIM2.counter_hz(&clocks);
+    let mut dog = IndependentWatchdog::new(dp.IWDG);
+    dog.start(WATCHDOG_MS.millis());
     if tick.start(TICK_HZ.Hz()).is_err() {
         halt("cannot start the tick timer");
     }
-    let mut dog = IndependentWatchdog::new(dp.IWDG);
-    dog.start(WATCHDOG_MS.millis());
-    let mut ticks: u32 = 0;
+    let mut log = LoopLog::new();
+    let mut first = true;
     loop {
-        // Busy-wait for the timer: nothing else runs on this core.
-        while tick.wait().is_err() {}
+        // The update flag already set when we come to wait means the
+        // previous tick's work ran past the period boundary: a missed
+        // deadline (the supervisor decides what a run of them means).
+        let overran = tick.wait().is_ok() && !first;
+        if !overran {
+            while tick.wait().is_err() {}
+        }
+        first = false;
+        let start = DWT::cycle_count();
+        let report = controller.tick(&mut hw, overran);
         dog.feed();
-        ticks = ticks.wrapping_add(1);
-        if ticks.is_multiple_of(TICK_HZ) {
-            led.toggle();
-            defmt::debug!("alive, {} s", ticks / TICK_HZ);
+        let cycles = DWT::cycle_count().wrapping_sub(start);
+        log.after_tick(&report, &controller, cycles, overran);
+    }
+}
+
+/// What the loop reports over defmt: new faults and reactions at once,
+/// each finished step's crutch load, and once a second a status line with
+/// the forces and the worst tick.
+struct LoopLog {
+    faults: FaultSet,
+    reaction: Reaction,
+    worst_cycles: u32,
+    overruns: u32,
+    last_step: Option<u32>,
+}
+
+impl LoopLog {
+    fn new() -> Self {
+        Self {
+            faults: FaultSet::EMPTY,
+            reaction: Reaction::None,
+            worst_cycles: 0,
+            overruns: 0,
+            last_step: None,
+        }
+    }
+
+    fn after_tick(
+        &mut self,
+        r: &TickReport,
+        controller: &gait_control::controller::Controller<'_>,
+        cycles: u32,
+        overran: bool,
+    ) {
+        self.worst_cycles = self.worst_cycles.max(cycles);
+        self.overruns = self.overruns.saturating_add(u32::from(overran));
+        if r.faults != self.faults {
+            for code in r.faults.iter() {
+                if !self.faults.contains(code) {
+                    defmt::error!(
+                        "tick {=u32}: fault {=u16} {=str}",
+                        r.tick,
+                        code.code(),
+                        code.name()
+                    );
+                }
+            }
+            self.faults = r.faults;
+        }
+        if r.reaction != self.reaction {
+            defmt::warn!(
+                "tick {=u32}: reaction {} (motors enabled {=bool})",
+                r.tick,
+                r.reaction,
+                r.motors_enabled
+            );
+            self.reaction = r.reaction;
+        }
+        for step in controller.crutch_load().log() {
+            if self.last_step.is_none_or(|s| step.step > s) {
+                defmt::info!(
+                    "step {=u32}: crutch impulse {=f32} N·s, peaks L {=f32} R {=f32} N, {=f32} s",
+                    step.step,
+                    step.impulse_ns,
+                    step.left_peak_n,
+                    step.right_peak_n,
+                    step.duration_s
+                );
+                self.last_step = Some(step.step);
+            }
+        }
+        if r.tick.is_multiple_of(TICK_HZ) {
+            let [left_foot, right_foot, left_crutch, right_crutch] = r.forces_n;
+            defmt::info!(
+                "t {=u32} s: {} feet {=f32} {=f32} N, crutches {=f32} {=f32} N, worst tick {=u32}/{=u32} cycles, overruns {=u32}",
+                r.tick / TICK_HZ,
+                r.phase,
+                left_foot,
+                right_foot,
+                left_crutch,
+                right_crutch,
+                self.worst_cycles,
+                CYCLES_PER_TICK,
+                self.overruns
+            );
+            self.worst_cycles = 0;
         }
     }
 }
@@ -126,4 +384,5 @@ fn panic(_info: &core::panic::PanicInfo) -> ! {
     cortex_m::asm::udf()
 }
 
-defmt::timestamp!("{=u32}", 0);
+// Timestamps are core cycles (wrap every 25.6 s at 168 MHz).
+defmt::timestamp!("{=u32}", DWT::cycle_count());

@@ -1,0 +1,337 @@
+//! In-memory peripherals for running the real controller where there is no
+//! hardware (QEMU's `mps2-an386`): fakes of the AS5048A and MCP3208 that
+//! speak their wire formats, and PWM and GPIO fakes that accept writes.
+//!
+//! The fakes are written from the datasheets, not from gait-control's
+//! drivers, so the benchmark also checks that the drivers speak the parts'
+//! protocols. No heap, no `unsafe`, fixed work per call.
+//!
+//! [`standing`] builds a rig of a pilot standing still on both feet with
+//! both crutches loaded, e-stop released and no button pressed: the
+//! controller must run it without any fault.
+
+use core::convert::Infallible;
+
+use embedded_hal::digital::{self, InputPin, OutputPin};
+use embedded_hal::pwm::{self, SetDutyCycle};
+use embedded_hal::spi::{self, Operation, SpiDevice};
+use gait_control::drivers::as5048a::{Calibration, Direction};
+use gait_control::drivers::buttons::ActiveLevel;
+
+use crate::board_config::{self, BoardIo};
+
+/// AS5048A register addresses (datasheet, "Register Description").
+mod as5048a_reg {
+    pub const NOP: u16 = 0x0000;
+    pub const CLEAR_ERROR_FLAG: u16 = 0x0001;
+    pub const DIAGNOSTICS_AGC: u16 = 0x3FFD;
+    pub const MAGNITUDE: u16 = 0x3FFE;
+    pub const ANGLE: u16 = 0x3FFF;
+}
+
+/// Sets bit 15 so the 16-bit frame has even parity (datasheet: "PAR").
+const fn with_even_parity(frame: u16) -> u16 {
+    let f = frame & 0x7FFF;
+    if f.count_ones() % 2 == 1 {
+        f | 0x8000
+    } else {
+        f
+    }
+}
+
+/// An AS5048A at a fixed angle. It answers each 16-bit frame with the
+/// answer to the *previous* command, as the part does (the command is
+/// executed on CSn's rising edge): one `transaction` is one CSn window.
+#[derive(Debug)]
+pub struct FakeAs5048a {
+    raw_counts: u16,
+    /// Reply of the next frame (the answer to the last command).
+    pending: u16,
+    /// Error register: bit 0 framing, bit 2 parity.
+    errors: u16,
+    /// Frames seen (for checking that the driver talks to the part).
+    pub frames: u32,
+}
+
+impl FakeAs5048a {
+    /// A part reading `raw_counts` (low 14 bits).
+    #[must_use]
+    pub const fn new(raw_counts: u16) -> Self {
+        Self {
+            raw_counts: raw_counts & 0x3FFF,
+            pending: 0,
+            errors: 0,
+            frames: 0,
+        }
+    }
+
+    /// The part reading the raw counts of `angle_rad` under `cal`.
+    #[must_use]
+    pub fn at_angle(cal: Calibration, angle_rad: f32) -> Self {
+        let counts_per_rad = 16_384.0 / (2.0 * core::f32::consts::PI);
+        // |angle| < π, so the rounded count fits an i16 well.
+        let counts = libm::roundf(angle_rad * counts_per_rad) as i16;
+        let zero = cal.zero_offset_counts as i16;
+        let raw = match cal.direction {
+            Direction::Positive => zero.wrapping_add(counts),
+            Direction::Negative => zero.wrapping_sub(counts),
+        };
+        Self::new(raw as u16)
+    }
+
+    /// One 16-bit frame: returns the reply, latches the next one.
+    fn frame(&mut self, command: u16) -> u16 {
+        self.frames = self.frames.wrapping_add(1);
+        let reply = self.pending;
+        let addr = command & 0x3FFF;
+        let read = command & 0x4000 != 0;
+        self.pending = if command.count_ones() % 2 == 1 {
+            // Command parity error: flag it, answer with EF set.
+            self.errors |= 0b100;
+            with_even_parity(0x4000)
+        } else if !read {
+            // Writes are not modelled: answer the old register contents.
+            with_even_parity(0)
+        } else {
+            match addr {
+                as5048a_reg::NOP => with_even_parity(0),
+                as5048a_reg::CLEAR_ERROR_FLAG => {
+                    let e = self.errors;
+                    self.errors = 0;
+                    with_even_parity(e)
+                }
+                // OCF set, AGC mid-range, no CORDIC overflow, field in range.
+                as5048a_reg::DIAGNOSTICS_AGC => with_even_parity(0x0100 | 0x0080),
+                as5048a_reg::MAGNITUDE => with_even_parity(0x1000),
+                as5048a_reg::ANGLE => with_even_parity(self.raw_counts),
+                _ => {
+                    self.errors |= 0b010;
+                    with_even_parity(0x4000)
+                }
+            }
+        };
+        reply
+    }
+
+    /// Any transfer that is not one 16-bit frame is a framing error: the
+    /// part shifts out garbage (all ones here) and flags it.
+    fn bad_frame(&mut self, buf: &mut [u8]) {
+        self.errors |= 0b001;
+        buf.iter_mut().for_each(|b| *b = 0xFF);
+        self.pending = with_even_parity(0x4000);
+    }
+}
+
+impl spi::ErrorType for FakeAs5048a {
+    type Error = Infallible;
+}
+
+impl SpiDevice<u8> for FakeAs5048a {
+    fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), Infallible> {
+        for op in operations.iter_mut() {
+            match op {
+                Operation::TransferInPlace(buf) => match buf {
+                    [hi, lo] => {
+                        let reply = self.frame(u16::from_be_bytes([*hi, *lo]));
+                        [*hi, *lo] = reply.to_be_bytes();
+                    }
+                    other => self.bad_frame(other),
+                },
+                Operation::Transfer(read, write) => match (&mut **read, &**write) {
+                    ([rh, rl], [wh, wl]) => {
+                        let reply = self.frame(u16::from_be_bytes([*wh, *wl]));
+                        [*rh, *rl] = reply.to_be_bytes();
+                    }
+                    (other, _) => self.bad_frame(other),
+                },
+                Operation::Read(buf) => self.bad_frame(buf),
+                Operation::Write(_) => self.errors |= 0b001,
+                Operation::DelayNs(_) => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// An MCP3208 whose eight inputs hold fixed voltages (12-bit counts).
+#[derive(Debug)]
+pub struct FakeMcp3208 {
+    counts: [u16; 8],
+    /// Conversions answered.
+    pub conversions: u32,
+}
+
+impl FakeMcp3208 {
+    /// Inputs at `counts` (low 12 bits), CH0..CH7.
+    #[must_use]
+    pub fn new(counts: [u16; 8]) -> Self {
+        Self {
+            counts: counts.map(|c| c & 0x0FFF),
+            conversions: 0,
+        }
+    }
+
+    /// One 3-byte conversion window (datasheet section 6.1): byte 0 holds
+    /// the start bit (bit 2), SGL/DIFF (bit 1) and D2 (bit 0), byte 1 holds
+    /// D1 D0 in bits 7..6. The reply: a null bit (bit 4 of byte 1, zero),
+    /// B11..B8 in bits 3..0 of byte 1, B7..B0 in byte 2.
+    fn convert(&mut self, buf: &mut [u8]) {
+        let [b0, b1, b2] = buf else {
+            buf.iter_mut().for_each(|b| *b = 0);
+            return;
+        };
+        let started = *b0 & 0b100 != 0;
+        let single = *b0 & 0b010 != 0;
+        let channel = usize::from(((*b0 & 1) << 2) | (*b1 >> 6));
+        let counts = match (started, single) {
+            (true, true) => self.counts.get(channel).copied().unwrap_or(0),
+            // Differential or no start bit: not modelled, reads 0.
+            _ => 0,
+        };
+        self.conversions = self.conversions.wrapping_add(1);
+        let [hi, lo] = counts.to_be_bytes();
+        *b0 = 0xFF; // MISO is high-impedance while the request goes out.
+        *b1 = hi & 0x0F;
+        *b2 = lo;
+    }
+}
+
+impl spi::ErrorType for FakeMcp3208 {
+    type Error = Infallible;
+}
+
+impl SpiDevice<u8> for FakeMcp3208 {
+    fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), Infallible> {
+        for op in operations.iter_mut() {
+            match op {
+                Operation::TransferInPlace(buf) => self.convert(buf),
+                Operation::Transfer(read, write) => {
+                    for (r, w) in read.iter_mut().zip(write.iter()) {
+                        *r = *w;
+                    }
+                    self.convert(read);
+                }
+                Operation::Read(buf) => buf.iter_mut().for_each(|b| *b = 0),
+                Operation::Write(_) | Operation::DelayNs(_) => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A PWM channel that remembers its duty. `max_duty` 8,400: TIM1 at
+/// 20 kHz from a 168 MHz timer clock, as on the motor board.
+#[derive(Debug)]
+pub struct FakePwm {
+    /// The last duty written.
+    pub duty: u16,
+}
+
+/// The motor board's TIM1 period at 20 kHz (168 MHz / 20 kHz).
+pub const PWM_MAX_DUTY: u16 = 8_400;
+
+impl pwm::ErrorType for FakePwm {
+    type Error = Infallible;
+}
+
+impl SetDutyCycle for FakePwm {
+    fn max_duty_cycle(&self) -> u16 {
+        PWM_MAX_DUTY
+    }
+
+    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Infallible> {
+        self.duty = duty.min(PWM_MAX_DUTY);
+        Ok(())
+    }
+}
+
+/// An output pin that remembers its level.
+#[derive(Debug)]
+pub struct FakeOutput {
+    /// Level last written.
+    pub high: bool,
+}
+
+impl digital::ErrorType for FakeOutput {
+    type Error = Infallible;
+}
+
+impl OutputPin for FakeOutput {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.high = false;
+        Ok(())
+    }
+
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.high = true;
+        Ok(())
+    }
+}
+
+/// An input pin at a fixed level.
+#[derive(Debug)]
+pub struct FakeInput {
+    /// The level it reads.
+    pub high: bool,
+}
+
+impl digital::ErrorType for FakeInput {
+    type Error = Infallible;
+}
+
+impl InputPin for FakeInput {
+    fn is_high(&mut self) -> Result<bool, Infallible> {
+        Ok(self.high)
+    }
+
+    fn is_low(&mut self) -> Result<bool, Infallible> {
+        Ok(!self.high)
+    }
+}
+
+/// The rig's peripherals, typed as [`board_config::hardware`] takes them.
+pub type RigIo =
+    BoardIo<FakeAs5048a, FakeMcp3208, FakePwm, FakeOutput, FakeOutput, FakeInput, FakeOutput>;
+
+/// Standing posture of the rig, rad: hips and knees slightly flexed (joint
+/// order), ankles neutral (left, right).
+pub const STANDING_JOINTS_RAD: [f32; 4] = [0.05, 0.05, 0.05, 0.05];
+/// Ankle angles of the standing rig, rad (left, right).
+pub const STANDING_ANKLES_RAD: [f32; 2] = [0.0, 0.0];
+
+/// ADC counts of the standing rig: 1,500 counts on each foot (≈ 367 N with
+/// the board's foot calibration) and on each crutch (≈ 82 N), ≈ 900 N in
+/// all (93 kg); the unused inputs sit mid-range.
+pub const STANDING_ADC_COUNTS: [u16; 8] = [1_500, 1_500, 1_500, 1_500, 2_048, 2_048, 2_048, 2_048];
+
+/// A pilot standing still on both feet, both crutches loaded, e-stop
+/// released, no button pressed, with the board's calibrations.
+#[must_use]
+pub fn standing() -> RigIo {
+    let [c0, c1, c2, c3, c4, c5] = board_config::ENCODER_CALIBRATION;
+    let [j0, j1, j2, j3] = STANDING_JOINTS_RAD;
+    let [a0, a1] = STANDING_ANKLES_RAD;
+    let released = |active_high: bool| FakeInput { high: !active_high };
+    let button_active_high = matches!(board_config::BUTTONS.active, ActiveLevel::High);
+    BoardIo {
+        encoders: [
+            FakeAs5048a::at_angle(c0, j0),
+            FakeAs5048a::at_angle(c1, j1),
+            FakeAs5048a::at_angle(c2, j2),
+            FakeAs5048a::at_angle(c3, j3),
+            FakeAs5048a::at_angle(c4, a0),
+            FakeAs5048a::at_angle(c5, a1),
+        ],
+        adc: FakeMcp3208::new(STANDING_ADC_COUNTS),
+        pwm: [0; 4].map(|duty| FakePwm { duty }),
+        dir: [0; 4].map(|_| FakeOutput { high: false }),
+        // Enables start high so the boot-time disable is visible.
+        enable: [0; 4].map(|_| FakeOutput { high: true }),
+        mode: released(button_active_high),
+        go: released(button_active_high),
+        e_stop: released(board_config::E_STOP_ACTIVE_HIGH),
+        gait_led: FakeOutput { high: false },
+        fault_led: FakeOutput { high: false },
+        buzzer: FakeOutput { high: false },
+    }
+}
