@@ -241,7 +241,10 @@ pub struct SupervisorConfig {
     /// The joint counts as driven when its reference moves at least this
     /// fast, rad/s …
     pub frozen_reference_speed_rad_s: f32,
-    /// … or when |command| ≥ this fraction of the motor's limit.
+    /// … or when |command| ≥ this fraction of the motor's limit. Near the
+    /// limit (0.9 by default), not below: a still stance knee holding the
+    /// body, or a joint held against its stop, legitimately reads constant
+    /// counts under a large command.
     pub frozen_command_fraction: f32,
     /// Bad force samples (bus, open, shorted, out of range) that make a
     /// fault.
@@ -312,7 +315,7 @@ impl SupervisorConfig {
             max_jump_counts_per_tick: 100,
             frozen_ticks: 100,
             frozen_reference_speed_rad_s: 0.1,
-            frozen_command_fraction: 0.5,
+            frozen_command_fraction: 0.9,
             force_debounce: Debounce {
                 count: 3,
                 window_ticks: 100,

@@ -18,6 +18,7 @@
 //! lock-step at 1 kHz.
 
 pub mod as5048a;
+pub mod closed_loop;
 pub mod impact;
 pub mod mcp3208;
 pub mod motor;

@@ -115,6 +115,45 @@ pub struct PlantConfig {
     pub max_speed_rad_s: f64,
     /// A hip lower than this above the stance foot is a fall, m.
     pub min_hip_height_m: f64,
+    /// Ground contact of the swing foot (double support before lift-off, a
+    /// scuff during the swing): a penalty spring-damper with friction, or
+    /// `None` for the bare chain (no double support).
+    pub contact: Option<GroundContact>,
+}
+
+/// Penalty contact between the swing ankle and the ground: vertical
+/// spring-damper that only pushes, horizontal spring to the point where
+/// contact began (sticking) limited by Coulomb friction.
+///
+/// Without it the 5-link chain has no double support at all: the trailing
+/// foot of a step would carry nothing and the whole body would hang on the
+/// stance ankle and the pilot's crutches, which is not how a pilot stands.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroundContact {
+    /// Vertical stiffness, N/m.
+    pub stiffness_n_per_m: f64,
+    /// Vertical damping, N·s/m.
+    pub damping_n_s_per_m: f64,
+    /// Horizontal (sticking) stiffness, N/m.
+    pub tangential_stiffness_n_per_m: f64,
+    /// Horizontal damping, N·s/m.
+    pub tangential_damping_n_s_per_m: f64,
+    /// Coulomb friction coefficient.
+    pub friction: f64,
+}
+
+impl Default for GroundContact {
+    /// 200 kN/m (2 mm under half the body weight), damped at about a third
+    /// of critical for the whole body, friction 0.8.
+    fn default() -> Self {
+        Self {
+            stiffness_n_per_m: 2.0e5,
+            damping_n_s_per_m: 3.0e3,
+            tangential_stiffness_n_per_m: 2.0e5,
+            tangential_damping_n_s_per_m: 3.0e3,
+            friction: 0.8,
+        }
+    }
 }
 
 impl Default for PlantConfig {
@@ -133,6 +172,7 @@ impl Default for PlantConfig {
             contact_tolerance_m: 0.005,
             max_speed_rad_s: 60.0,
             min_hip_height_m: 0.4,
+            contact: Some(GroundContact::default()),
         }
     }
 }
@@ -303,6 +343,10 @@ pub struct Plant {
     last_swap_s: f64,
     pilot_target: PilotTarget,
     lifted: bool,
+    /// World x where the swing foot's current ground contact began.
+    contact_anchor_x: Option<f64>,
+    /// The swing foot's ground force at the present state (x, y), N.
+    contact_n: [f64; 2],
     motor_nm: [f64; 4],
     pilot_nm: f64,
     spring_nm: f64,
@@ -313,6 +357,7 @@ pub struct Plant {
 /// The generalised forces at one state.
 struct Forces {
     t_phi: [f64; LINKS],
+    contact_n: [f64; 2],
     pilot_nm: f64,
     /// Ankle spring plus the ankle's stop.
     spring_nm: f64,
@@ -369,6 +414,8 @@ impl Plant {
             last_swap_s: 0.0,
             pilot_target: PilotTarget::Hold { phi1_rad: phi[0] },
             lifted: false,
+            contact_anchor_x: None,
+            contact_n: [0.0; 2],
             motor_nm: [0.0; 4],
             pilot_nm: 0.0,
             spring_nm: 0.0,
@@ -376,6 +423,7 @@ impl Plant {
             landings: Vec::new(),
         };
         plant.lifted = plant.swing_height_above_ground_m() > cfg.lift_clearance_m;
+        plant.update_contact_anchor();
         plant.refresh_outputs()?;
         Ok(plant)
     }
@@ -431,6 +479,7 @@ impl Plant {
         let h = self.cfg.dt_s / f64::from(self.cfg.substeps);
         for _ in 0..self.cfg.substeps {
             self.rk4(h)?;
+            self.update_contact_anchor();
         }
         self.check_sane()?;
         self.refresh_outputs()?;
@@ -479,6 +528,7 @@ impl Plant {
     fn refresh_outputs(&mut self) -> Result<(), SimError> {
         let f = self.forces(&self.phi, &self.dphi, self.time_s);
         self.pilot_nm = f.pilot_nm;
+        self.contact_n = f.contact_n;
         self.spring_nm = f.spring_nm;
         self.stops_nm = f.stops_nm;
         self.ddphi = dynamics::forward_dynamics(&self.cfg.model, &self.phi, &self.dphi, &f.t_phi)?;
@@ -529,8 +579,17 @@ impl Plant {
         stops_nm[knee_s] = stops[1];
         stops_nm[hip_w] = stops[3];
         stops_nm[knee_w] = stops[4];
+        let mut t_phi = t_phi_from_t_theta(&t_theta);
+        let contact_n = self.contact_force(phi, dphi);
+        // Generalised forces of a force F at the swing ankle: Jᵀ F with
+        // ∂p5/∂φ_i = l_i (cos φ_i, −sin φ_i) for links 1, 2, 4, 5.
+        let l = self.cfg.model.lengths();
+        for i in [0, 1, 3, 4] {
+            t_phi[i] += l[i] * (phi[i].cos() * contact_n[0] - phi[i].sin() * contact_n[1]);
+        }
         Forces {
-            t_phi: t_phi_from_t_theta(&t_theta),
+            t_phi,
+            contact_n,
             pilot_nm: pilot,
             spring_nm: spring + stops[0],
             stops_nm,
@@ -543,6 +602,52 @@ impl Plant {
         let pilot = self.cfg.pilot.torque_nm(desired, phi1, dphi1);
         let spring = -self.cfg.ankle_stiffness_nm_per_rad * (phi1 - self.cfg.ankle_rest_rad);
         (pilot, spring)
+    }
+
+    /// Swing-ankle world position and velocity at a state.
+    fn swing_foot_at(&self, phi: &Phi<f64>, dphi: &Phi<f64>) -> ([f64; 2], [f64; 2]) {
+        let p5 = forward_kinematics(&self.cfg.model, phi)[4];
+        let l = self.cfg.model.lengths();
+        let mut v = [0.0; 2];
+        for i in [0, 1, 3, 4] {
+            v[0] += l[i] * dphi[i] * phi[i].cos();
+            v[1] -= l[i] * dphi[i] * phi[i].sin();
+        }
+        let o = self.stance_foot_m;
+        ([o[0] + p5[0], o[1] + p5[1]], v)
+    }
+
+    /// The ground's force on the swing ankle at a state (world x, y), N.
+    fn contact_force(&self, phi: &Phi<f64>, dphi: &Phi<f64>) -> [f64; 2] {
+        let Some(c) = &self.cfg.contact else {
+            return [0.0; 2];
+        };
+        let (p, v) = self.swing_foot_at(phi, dphi);
+        let depth = self.cfg.terrain.height_m(p[0]) - p[1];
+        if depth <= 0.0 {
+            return [0.0; 2];
+        }
+        let fy = (c.stiffness_n_per_m * depth - c.damping_n_s_per_m * v[1]).max(0.0);
+        let stick = self
+            .contact_anchor_x
+            .map_or(0.0, |ax| -c.tangential_stiffness_n_per_m * (p[0] - ax));
+        let limit = c.friction * fy;
+        let fx = (stick - c.tangential_damping_n_s_per_m * v[0]).clamp(-limit, limit);
+        [fx, fy]
+    }
+
+    /// Remembers where the swing foot's contact began; forgets it once the
+    /// foot is clear of the ground.
+    fn update_contact_anchor(&mut self) {
+        let (p, _) = self.swing_foot_at(&self.phi, &self.dphi);
+        let depth = self.cfg.terrain.height_m(p[0]) - p[1];
+        if depth >= 0.0 {
+            if self.contact_anchor_x.is_none() {
+                self.contact_anchor_x = Some(p[0]);
+            }
+        } else if depth < -0.001 {
+            self.contact_anchor_x = None;
+        }
     }
 
     fn check_sane(&self) -> Result<(), SimError> {
@@ -645,6 +750,8 @@ impl Plant {
         self.stance_foot_m = new_stance_foot;
         self.last_swap_s = self.time_s;
         self.lifted = false;
+        self.contact_anchor_x = None;
+        self.update_contact_anchor();
         // A failure here would repeat at the next step's first stage and be
         // reported there; the outputs keep their pre-swap values meanwhile.
         let _ = self.refresh_outputs();
@@ -693,21 +800,12 @@ impl Plant {
         let crutch_forces_n = self.cfg.pilot.crutch_forces_n(self.pilot_nm);
         let support = total_m * (GRAVITY_M_S2 + self.com_accel_y());
         let feet_total = (support - crutch_forces_n[0] - crutch_forces_n[1]).max(0.0);
-        let swing_foot = points_m[5];
-        let swing_above = swing_foot[1] - self.cfg.terrain.height_m(swing_foot[0]);
-        let swing_share = if swing_above <= self.cfg.contact_tolerance_m {
-            let span = swing_foot[0] - o[0];
-            if span.abs() < 0.01 {
-                0.5
-            } else {
-                ((com_m[0] - o[0]) / span).clamp(0.0, 1.0)
-            }
-        } else {
-            0.0
-        };
+        // The swing foot carries what the ground contact pushes; the stance
+        // foot the rest of the support the crutches do not take.
+        let swing_load = self.contact_n[1].max(0.0);
         let mut foot_forces_n = [0.0; 2];
-        foot_forces_n[self.stance.index()] = feet_total * (1.0 - swing_share);
-        foot_forces_n[self.stance.other().index()] = feet_total * swing_share;
+        foot_forces_n[self.stance.index()] = (feet_total - swing_load).max(0.0);
+        foot_forces_n[self.stance.other().index()] = swing_load;
 
         let spring_pe = 0.5
             * self.cfg.ankle_stiffness_nm_per_rad

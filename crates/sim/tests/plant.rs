@@ -21,6 +21,7 @@ fn free_config() -> PlantConfig {
     PlantConfig {
         ankle_stiffness_nm_per_rad: 0.0,
         stops: None,
+        contact: None,
         max_speed_rad_s: 1e3,
         min_hip_height_m: -10.0,
         ..PlantConfig::default()
@@ -169,7 +170,12 @@ fn a_flexion_torque_flexes_each_joint_of_either_leg() {
 
 #[test]
 fn servo_holds_standing_and_crutches_carry_the_baseline() {
-    let cfg = PlantConfig::default();
+    // The bare chain (no swing-foot contact): everything through the stance
+    // ankle, so the statics are exact.
+    let cfg = PlantConfig {
+        contact: None,
+        ..PlantConfig::default()
+    };
     let phi = [0.03, -0.02, 0.01, PI - 0.05, PI];
     let mut p = Plant::with_posture(cfg, phi, [0.0; 5], Side::Right, [0.0, 0.0]).unwrap();
     p.set_pilot(PilotTarget::Hold { phi1_rad: 0.0 });
@@ -197,8 +203,8 @@ fn servo_holds_standing_and_crutches_carry_the_baseline() {
         "feet {feet} + crutch {crutch} vs weight {}",
         m * G
     );
-    // Feet together: both carry load.
-    assert!(s.foot_forces_n[0] > 100.0 && s.foot_forces_n[1] > 100.0);
+    // Without ground contact the swing (left) foot carries nothing.
+    assert!(s.foot_forces_n[0] == 0.0 && s.foot_forces_n[1] > 100.0);
     assert!(p.landings().is_empty());
 }
 
@@ -332,8 +338,12 @@ fn knee_stop_holds_full_extension() {
 fn leaning_pilot_carries_the_gravity_moment_on_the_crutches() {
     // Held still leaning forward, the ankle must supply −M·g·x_com (statics);
     // the spring takes its share, the pilot the rest, and the crutches carry
-    // the pilot's part over the lever, plus the baseline.
-    let cfg = PlantConfig::default();
+    // the pilot's part over the lever, plus the baseline. Bare chain: no
+    // swing-foot contact sharing the moment.
+    let cfg = PlantConfig {
+        contact: None,
+        ..PlantConfig::default()
+    };
     let lean = 0.08;
     let phi = [lean, lean, 0.0, PI, PI];
     let mut p = Plant::with_posture(cfg, phi, [0.0; 5], Side::Left, [0.0, 0.0]).unwrap();
