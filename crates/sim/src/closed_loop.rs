@@ -142,8 +142,12 @@ pub fn controller_config(model: BodyModel<f32>) -> Result<ControllerConfig, RigE
     Ok(ControllerConfig {
         dt_s: 0.001,
         gains: [hip, knee, hip, knee],
+        // The simulated pilot does not shift weight onto the front foot
+        // before a swing (no weight-shift model), so "weight on the stance
+        // foot" is a lower bar here than on a device.
         sequencer: SequencerConfig {
             crutch_ready_n: 30.0,
+            stance_foot_ready_n: 100.0,
             ..SequencerConfig::DEFAULT
         },
         force_calibration: [
@@ -187,7 +191,7 @@ pub fn motor_config() -> MotorConfig {
         i2t_fault_a2s: 600.0,
         derated_limit_nm: 160.0,
         slew_nm_per_tick: 12.0,
-        soft_start_ticks: 200,
+        soft_start_ticks: 40,
         dt_s: 0.001,
     }
 }
@@ -290,6 +294,8 @@ pub struct RigSetup {
     pub phi: [f64; 5],
     /// The stance leg.
     pub stance: Side,
+    /// World position of the stance ankle, m (on the terrain).
+    pub stance_foot_m: [f64; 2],
     /// What the pilot does with the stance shank.
     pub pilot: PilotBehaviour,
     /// The gait the clinician's list allows first (selected at power-up).
@@ -330,8 +336,13 @@ pub fn heel_rocker_model() -> BodyModel<f64> {
 impl<'t> Rig<'t> {
     /// Builds the plant, the peripherals, the drivers and the controller.
     pub fn new(setup: &RigSetup, tables: GaitTables<'t>) -> Result<Self, RigError> {
-        let mut plant =
-            Plant::with_posture(setup.plant, setup.phi, [0.0; 5], setup.stance, [0.0, 0.0])?;
+        let mut plant = Plant::with_posture(
+            setup.plant,
+            setup.phi,
+            [0.0; 5],
+            setup.stance,
+            setup.stance_foot_m,
+        )?;
         plant.set_pilot(pilot_target(&setup.pilot, None, 0.0));
         let wiring = Wiring::new();
         let joint_encoders: [SimAs5048a; 4] = [0, 1, 2, 3].map(|j| {

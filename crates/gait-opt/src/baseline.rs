@@ -1,0 +1,532 @@
+//! Baselines from human data (the paper's first experiment): a swing step
+//! built from reference joint angles, evaluated with the same cost as the
+//! optimised gait. The construction is documented step by step in
+//! `docs/optimiser.md`; in short:
+//!
+//! 1. Swing phase: the reference leg from toe-off to its next heel strike;
+//!    the stance leg is the same curve half a cycle earlier (symmetric gait).
+//!    The phase is mapped linearly onto [0, ts] and sampled at t_k = kΔt.
+//! 2. Angles → Φ: thigh inclinations (forward +) come from the data's thigh
+//!    segment angle (Reznick) or hip flexion minus pelvic tilt (0 where the
+//!    file has none); torso upright, φ3 = 0;
+//!    φ2 = −thigh_stance, φ1 = φ2 + knee_stance (the stance shank from the
+//!    thigh and knee, so no foot is needed), φ4 = π − thigh_swing,
+//!    φ5 = φ4 + knee_swing (signs of `kinematics::anatomical_angles`).
+//! 3. Amplitude: each of the four curves is scaled about its mean over the
+//!    phase by one factor s, found by bisection so that the swing ankle's
+//!    forward travel (FK, before end correction) equals the case's.
+//! 4. Ends: a minimum-norm correction of (φ2, φ4, φ5) at t = 0 and at
+//!    t = ts (Gauss–Newton on FK) puts the swing ankle exactly on the case's
+//!    start and landing points; the correction is blended linearly in time
+//!    between the two ends.
+//!
+//! The Φ sequence is then evaluated by [`crate::phi_cost::cost_from_phi`]
+//! with no IK, so the paper IK's 45° cap on stance-knee flexion
+//! (φ2 ≥ φ1 − π/4) does not constrain the baseline, while it does
+//! constrain the optimised gait.
+
+use std::path::{Path, PathBuf};
+
+use gait_core::kinematics::{Phi, forward_kinematics};
+use gait_core::problem::{Cost, PaperCase, PaperProblem};
+use serde::{Deserialize, Serialize};
+
+use crate::phi_cost::{PhiCostError, cost_from_phi};
+
+/// A reference data set usable as a baseline.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    /// Fukuchi et al. 2018 treadmill walking mean (primary for walking).
+    Fukuchi2018Walk,
+    /// Winter 2009 Table A.4, one stride (hip relative to the trunk).
+    WinterWalk,
+    /// Vicon Plug-in-Gait normal data (with pelvic tilt).
+    ViconWalk,
+    /// Reznick et al. 2021 stair ascent mean at 20° (primary for stairs).
+    ReznickStairI20,
+    /// Riener et al. 2002 stair ascent (digitised).
+    RienerStairAscent,
+}
+
+impl Source {
+    /// The primary source for a case.
+    pub fn primary(case: PaperCase) -> Self {
+        match case {
+            PaperCase::Walk => Self::Fukuchi2018Walk,
+            PaperCase::StairUp => Self::ReznickStairI20,
+        }
+    }
+
+    /// A one-line description with the file and events used.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Fukuchi2018Walk => {
+                "walk_fukuchi2018/fukuchi2018_walk_mean_sd_2pct.csv (Fukuchi et al. 2018, CC BY 4.0): \
+                 mean curves, heel strike 0 %, toe-off 62 %, pelvis taken upright"
+            }
+            Self::WinterWalk => {
+                "walk_winter/winter_walk_right_HS_to_HS.csv (Winter 2009, Table A.4): heel strike 0 %, \
+                 toe-off 60.9 %, hip relative to the trunk"
+            }
+            Self::ViconWalk => {
+                "walk_vicon_gaitutils/vicon_normal_sagittal_2pct.csv (Vicon normal data): heel strike 0 %, \
+                 toe-off 65.48 %, thigh = hip flexion − pelvic tilt"
+            }
+            Self::ReznickStairI20 => {
+                "stair_reznick_cortino/reznick_stair_ascent_mean_150pt.csv, 20° columns (Reznick et al. 2021): \
+                 thigh segment angle; file origin shifted: heel strike at 5 % of the file, toe-off 63 % later"
+            }
+            Self::RienerStairAscent => {
+                "stair_riener_cortino/riener_stair_ascent_1000pt.csv (Riener et al. 2002, digitised): \
+                 heel strike 0 %, toe-off 63 %, pelvis taken upright"
+            }
+        }
+    }
+}
+
+/// A baseline swing step: Φ samples and their cost.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Baseline {
+    /// Which data set.
+    pub source: Source,
+    /// Description of the file and events used.
+    pub source_detail: String,
+    /// Amplitude factor s of step 3.
+    pub amplitude_scale: f64,
+    /// End corrections of (φ2, φ4, φ5) at t = 0 and t = ts, rad.
+    pub end_correction_rad: [[f64; 3]; 2],
+    /// Φ(t_k), k = 0…N, rad.
+    pub phi: Vec<Phi<f64>>,
+    /// J and its parts (not serialised: rebuild with `cost_from_phi`).
+    #[serde(skip)]
+    pub cost: Option<Cost<f64>>,
+}
+
+/// Why a baseline could not be built.
+#[derive(Debug)]
+pub enum BaselineError {
+    /// The data file could not be read.
+    Io(PathBuf, std::io::Error),
+    /// The data file is not what we expect (message says what).
+    Format(PathBuf, String),
+    /// The data set is not for this case.
+    WrongCase(Source, PaperCase),
+    /// No amplitude factor or end correction reaches the case's points.
+    Unreachable(String),
+    /// Evaluating the Φ sequence failed.
+    Cost(PhiCostError),
+}
+
+impl std::fmt::Display for BaselineError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Format(p, m) => write!(f, "{}: {m}", p.display()),
+            Self::WrongCase(s, c) => write!(f, "{s:?} is not a data set for {c:?}"),
+            Self::Unreachable(m) => write!(f, "baseline construction failed: {m}"),
+            Self::Cost(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for BaselineError {}
+
+/// The folder of the shared gait data: `$EXOGAIT_GAIT_DATA` if set, else
+/// `shared/data/gait` beside the repository.
+pub fn default_data_dir() -> PathBuf {
+    if let Some(d) = std::env::var_os("EXOGAIT_GAIT_DATA") {
+        return PathBuf::from(d);
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/gait")
+}
+
+/// Reference curves on a percent-of-cycle axis, degrees.
+struct Curves {
+    thigh: PeriodicSpline,
+    knee: PeriodicSpline,
+    /// Heel strike and toe-off, percent of the file's axis.
+    heel_strike_pct: f64,
+    toe_off_pct: f64,
+}
+
+/// A periodic (period 100 %) cubic interpolating spline, C² everywhere.
+///
+/// Why not linear interpolation: the data are sampled every 0.1–2 % of the
+/// cycle, and the cost takes second differences of Φ at Δt = 0.01 s, so
+/// every kink of a piecewise-linear curve becomes a torque spike (tens of
+/// N·m per knot at 2 % spacing) that belongs to the interpolation, not to
+/// the human gait.
+struct PeriodicSpline {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    /// Second derivatives at the knots.
+    m: Vec<f64>,
+}
+
+impl PeriodicSpline {
+    /// Knots `x` strictly increasing within [0, 100), at least 3 of them.
+    fn new(x: Vec<f64>, y: Vec<f64>) -> Self {
+        let n = x.len();
+        let knot = |i: isize| -> (f64, f64) {
+            // Knot i with periodic wrap: x shifted by whole periods.
+            let k = i.rem_euclid(n as isize) as usize;
+            let wraps = i.div_euclid(n as isize) as f64;
+            (
+                x.get(k).copied().unwrap_or(0.0) + 100.0 * wraps,
+                y.get(k).copied().unwrap_or(0.0),
+            )
+        };
+        // h_{i−1} M_{i−1} + 2 (h_{i−1} + h_i) M_i + h_i M_{i+1} = r_i, cyclic;
+        // strictly diagonally dominant, so Gauss–Seidel converges at least
+        // by half per sweep.
+        let mut rows = Vec::with_capacity(n);
+        for i in 0..n as isize {
+            let (xp, yp) = knot(i - 1);
+            let (xi, yi) = knot(i);
+            let (xn, yn) = knot(i + 1);
+            let (h0, h1) = (xi - xp, xn - xi);
+            rows.push((
+                h0,
+                2.0 * (h0 + h1),
+                h1,
+                6.0 * ((yn - yi) / h1 - (yi - yp) / h0),
+            ));
+        }
+        let mut m = vec![0.0; n];
+        for _ in 0..200 {
+            for i in 0..n {
+                let prev = m.get((i + n - 1) % n).copied().unwrap_or(0.0);
+                let next = m.get((i + 1) % n).copied().unwrap_or(0.0);
+                if let (Some(&(a, d, c, r)), Some(mi)) = (rows.get(i), m.get_mut(i)) {
+                    *mi = (r - a * prev - c * next) / d;
+                }
+            }
+        }
+        Self { x, y, m }
+    }
+
+    fn at(&self, x: f64) -> f64 {
+        let n = self.x.len();
+        let x = x.rem_euclid(100.0);
+        // Interval [x_i, x_{i+1}) with wrap (before the first knot: the last
+        // interval, shifted down one period).
+        let j = self.x.partition_point(|&p| p <= x);
+        let i = (j + n - 1) % n;
+        let xi = self.x.get(i).copied().unwrap_or(0.0) - if j == 0 { 100.0 } else { 0.0 };
+        let xn = self.x.get((i + 1) % n).copied().unwrap_or(0.0)
+            + if i + 1 == n && j != 0 { 100.0 } else { 0.0 };
+        let (yi, yn) = (
+            self.y.get(i).copied().unwrap_or(0.0),
+            self.y.get((i + 1) % n).copied().unwrap_or(0.0),
+        );
+        let (mi, mn) = (
+            self.m.get(i).copied().unwrap_or(0.0),
+            self.m.get((i + 1) % n).copied().unwrap_or(0.0),
+        );
+        let h = xn - xi;
+        if h <= 0.0 {
+            return yi;
+        }
+        let (a, b) = (xn - x, x - xi);
+        mi * a * a * a / (6.0 * h)
+            + mn * b * b * b / (6.0 * h)
+            + (yi / h - mi * h / 6.0) * a
+            + (yn / h - mn * h / 6.0) * b
+    }
+}
+
+fn read_csv(path: &Path, columns: &[&str]) -> Result<Vec<Vec<f64>>, BaselineError> {
+    let text =
+        std::fs::read_to_string(path).map_err(|e| BaselineError::Io(path.to_path_buf(), e))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines
+        .next()
+        .ok_or_else(|| BaselineError::Format(path.to_path_buf(), "empty file".into()))?
+        .split(',')
+        .map(str::trim)
+        .collect();
+    let idx: Vec<usize> = columns
+        .iter()
+        .map(|c| {
+            header
+                .iter()
+                .position(|h| h == c)
+                .ok_or_else(|| BaselineError::Format(path.to_path_buf(), format!("no column {c}")))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut out = vec![Vec::new(); columns.len()];
+    for (ln, line) in lines.enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').collect();
+        for (col, &i) in out.iter_mut().zip(&idx) {
+            let v = cells
+                .get(i)
+                .and_then(|c| c.trim().parse::<f64>().ok())
+                .ok_or_else(|| {
+                    BaselineError::Format(
+                        path.to_path_buf(),
+                        format!("line {}: bad number", ln + 2),
+                    )
+                })?;
+            col.push(v);
+        }
+    }
+    Ok(out)
+}
+
+fn load(source: Source, dir: &Path) -> Result<Curves, BaselineError> {
+    let sub = |v: &[f64], w: &[f64]| v.iter().zip(w).map(|(a, b)| a - b).collect::<Vec<_>>();
+    let take = |file: &str, cols: &[&str]| read_csv(&dir.join(file), cols);
+    let c = match source {
+        Source::Fukuchi2018Walk => {
+            let v = take(
+                "walk_fukuchi2018/fukuchi2018_walk_mean_sd_2pct.csv",
+                &["pct_gait_cycle", "hip_flex_deg_mean", "knee_flex_deg_mean"],
+            )?;
+            (v, 0.0, 62.0, None)
+        }
+        Source::WinterWalk => {
+            let v = take(
+                "walk_winter/winter_walk_right_HS_to_HS.csv",
+                &["pct_gait_cycle", "hip_flex_deg", "knee_flex_deg"],
+            )?;
+            (v, 0.0, 60.9, None)
+        }
+        Source::ViconWalk => {
+            let v = take(
+                "walk_vicon_gaitutils/vicon_normal_sagittal_2pct.csv",
+                &[
+                    "pct_gait_cycle",
+                    "HipFlexExt_mean_deg",
+                    "KneeFlexExt_mean_deg",
+                    "PelvicTilt_mean_deg",
+                ],
+            )?;
+            (v, 0.0, 65.48, Some(3))
+        }
+        Source::ReznickStairI20 => {
+            let v = take(
+                "stair_reznick_cortino/reznick_stair_ascent_mean_150pt.csv",
+                &["pct_linspace", "thigh_i20_deg", "knee_i20_deg"],
+            )?;
+            (v, 5.0, 68.0, None)
+        }
+        Source::RienerStairAscent => {
+            let v = take(
+                "stair_riener_cortino/riener_stair_ascent_1000pt.csv",
+                &["pct_gait_cycle", "hip_flex_deg", "knee_flex_deg"],
+            )?;
+            (v, 0.0, 63.0, None)
+        }
+    };
+    let (mut v, hs, to, tilt) = c;
+    let tilt_col = tilt.and_then(|i| v.get(i).cloned());
+    let mut it = v.drain(..);
+    let (Some(mut pct), Some(mut thigh), Some(mut knee)) = (it.next(), it.next(), it.next()) else {
+        return Err(BaselineError::Format(
+            dir.to_path_buf(),
+            "missing columns".into(),
+        ));
+    };
+    drop(it);
+    if let Some(t) = tilt_col {
+        thigh = sub(&thigh, &t);
+    }
+    // A file whose last row is 100 % repeats its first (periodic): drop it
+    // so interpolation wraps cleanly; a 150-point linspace file (Reznick)
+    // has no repeat and is re-labelled with a period of 150 samples.
+    if pct.last().is_some_and(|&p| p >= 100.0 - 1e-9) {
+        if source == Source::ReznickStairI20 {
+            let n = pct.len() as f64;
+            pct = (0..pct.len()).map(|i| 100.0 * i as f64 / n).collect();
+        } else {
+            pct.pop();
+            thigh.pop();
+            knee.pop();
+        }
+    }
+    if pct.len() < 10
+        || pct.iter().any(|&p| !(0.0..100.0).contains(&p))
+        || pct.windows(2).any(|w| matches!(w, [a, b] if b <= a))
+    {
+        return Err(BaselineError::Format(
+            dir.to_path_buf(),
+            format!("{source:?}: percent axis not increasing"),
+        ));
+    }
+    Ok(Curves {
+        thigh: PeriodicSpline::new(pct.clone(), thigh),
+        knee: PeriodicSpline::new(pct, knee),
+        heel_strike_pct: hs,
+        toe_off_pct: to,
+    })
+}
+
+/// Step 2 of the module doc: (thigh_st, knee_st, thigh_sw, knee_sw) in
+/// radians → Φ with the torso upright.
+fn phi_from_angles(a: [f64; 4]) -> Phi<f64> {
+    let [thigh_st, knee_st, thigh_sw, knee_sw] = a;
+    let phi2 = -thigh_st;
+    let phi1 = phi2 + knee_st;
+    let phi4 = std::f64::consts::PI - thigh_sw;
+    [phi1, phi2, 0.0, phi4, phi4 + knee_sw]
+}
+
+/// Minimum-norm change of (φ2, φ4, φ5) that puts FK's p5 on `target`
+/// (Gauss–Newton with the 2×3 Jacobian's pseudo-inverse).
+fn end_correction(
+    problem: &PaperProblem<f64>,
+    phi: &Phi<f64>,
+    target: [f64; 2],
+) -> Option<[f64; 3]> {
+    let [_, l2, _, l4, l5] = problem.model.lengths();
+    let mut q = *phi;
+    for _ in 0..50 {
+        let p5 = forward_kinematics(&problem.model, &q)[4];
+        let e = [target[0] - p5[0], target[1] - p5[1]];
+        if e[0].hypot(e[1]) < 1e-13 {
+            return Some([q[1] - phi[1], q[3] - phi[3], q[4] - phi[4]]);
+        }
+        // ∂p5/∂φ for p = l (sin φ, cos φ): l (cos φ, −sin φ).
+        let cols = [(1, l2), (3, l4), (4, l5)].map(|(i, l)| {
+            let a = q.get(i).copied().unwrap_or(0.0);
+            [l * a.cos(), -l * a.sin()]
+        });
+        // J Jᵀ (2×2) and its inverse.
+        let mut m = [[0.0; 2]; 2];
+        for c in &cols {
+            m[0][0] += c[0] * c[0];
+            m[0][1] += c[0] * c[1];
+            m[1][1] += c[1] * c[1];
+        }
+        m[1][0] = m[0][1];
+        let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        let y = [
+            (m[1][1] * e[0] - m[0][1] * e[1]) / det,
+            (-m[1][0] * e[0] + m[0][0] * e[1]) / det,
+        ];
+        for ((i, _), c) in [(1, l2), (3, l4), (4, l5)].iter().zip(&cols) {
+            if let Some(v) = q.get_mut(*i) {
+                *v += c[0] * y[0] + c[1] * y[1];
+            }
+        }
+    }
+    None
+}
+
+/// Builds the baseline of `case` from `source` in `dir` (see the module
+/// documentation) and evaluates it.
+pub fn baseline_from(
+    case: PaperCase,
+    source: Source,
+    dir: &Path,
+) -> Result<Baseline, BaselineError> {
+    let is_walk = matches!(
+        source,
+        Source::Fukuchi2018Walk | Source::WinterWalk | Source::ViconWalk
+    );
+    if is_walk != (case == PaperCase::Walk) {
+        return Err(BaselineError::WrongCase(source, case));
+    }
+    let curves = load(source, dir)?;
+    let problem = PaperProblem::<f64>::paper(case);
+    let n = problem.sampling.intervals;
+    let ts = problem.case.step_time_s;
+    let dt = problem.sampling.dt_s;
+    let to = curves.toe_off_pct;
+    let swing_len = 100.0 - (to - curves.heel_strike_pct);
+    // Raw angles at each sample, radians: [thigh_st, knee_st, thigh_sw, knee_sw].
+    let raw: Vec<[f64; 4]> = (0..=n)
+        .map(|k| {
+            let frac = (k as f64 * dt / ts).min(1.0);
+            let sw = to + swing_len * frac;
+            let st = sw - 50.0;
+            [
+                curves.thigh.at(st),
+                curves.knee.at(st),
+                curves.thigh.at(sw),
+                curves.knee.at(sw),
+            ]
+            .map(f64::to_radians)
+        })
+        .collect();
+    let mut mean = [0.0; 4];
+    for r in &raw {
+        for (m, v) in mean.iter_mut().zip(r) {
+            *m += v / raw.len() as f64;
+        }
+    }
+    let scaled = |s: f64| -> Vec<Phi<f64>> {
+        raw.iter()
+            .map(|r| {
+                let mut a = [0.0; 4];
+                for ((o, &v), &m) in a.iter_mut().zip(r).zip(&mean) {
+                    *o = m + s * (v - m);
+                }
+                phi_from_angles(a)
+            })
+            .collect()
+    };
+    let travel = |phi: &[Phi<f64>]| -> f64 {
+        match (phi.first(), phi.last()) {
+            (Some(a), Some(b)) => {
+                forward_kinematics(&problem.model, b)[4][0]
+                    - forward_kinematics(&problem.model, a)[4][0]
+            }
+            _ => 0.0,
+        }
+    };
+    let want = problem.case.landing_m[0] - problem.case.start_m[0];
+    let (mut lo, mut hi) = (0.05, 4.0);
+    if (travel(&scaled(lo)) - want) * (travel(&scaled(hi)) - want) > 0.0 {
+        return Err(BaselineError::Unreachable(format!(
+            "no amplitude factor in [{lo}, {hi}] gives a swing travel of {want} m"
+        )));
+    }
+    let increasing = travel(&scaled(hi)) > travel(&scaled(lo));
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        if (travel(&scaled(mid)) < want) == increasing {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let s = 0.5 * (lo + hi);
+    let mut phi = scaled(s);
+    let (Some(&first), Some(&last)) = (phi.first(), phi.last()) else {
+        return Err(BaselineError::Unreachable("no samples".into()));
+    };
+    let d0 = end_correction(&problem, &first, problem.case.start_m)
+        .ok_or_else(|| BaselineError::Unreachable("start point out of reach".into()))?;
+    let d1 = end_correction(&problem, &last, problem.case.landing_m)
+        .ok_or_else(|| BaselineError::Unreachable("landing point out of reach".into()))?;
+    for (k, p) in phi.iter_mut().enumerate() {
+        let w = k as f64 / n as f64;
+        for (j, &i) in [1usize, 3, 4].iter().enumerate() {
+            if let (Some(v), Some(a), Some(b)) = (p.get_mut(i), d0.get(j), d1.get(j)) {
+                *v += (1.0 - w) * a + w * b;
+            }
+        }
+    }
+    let cost = cost_from_phi(&problem, &phi).map_err(BaselineError::Cost)?;
+    Ok(Baseline {
+        source,
+        source_detail: source.describe().to_string(),
+        amplitude_scale: s,
+        end_correction_rad: [d0, d1],
+        phi,
+        cost: Some(cost),
+    })
+}
+
+/// The baseline of `case` from its primary source in [`default_data_dir`].
+pub fn baseline(case: PaperCase) -> Result<Baseline, BaselineError> {
+    baseline_from(case, Source::primary(case), &default_data_dir())
+}
