@@ -10,8 +10,10 @@
 )]
 
 use gait_control::faults::{FaultCode, Reaction};
+use gait_control::sequencer::GaitTables;
 use gait_control::sequencer::Phase;
-use host_tests::{standing_rig, strong_pilot};
+use gait_core::tables::GaitTable;
+use host_tests::{gentle_walk_image, rig_with, standing_rig, strong_pilot};
 use sim::closed_loop::Rig;
 use sim::mcp3208::ChannelFault;
 use sim::pilot::PilotConfig;
@@ -210,4 +212,39 @@ fn commands_stay_within_limits_under_sensor_garbage() {
         }
     }
     assert!(rig.worst_reaction() >= Reaction::SafeHold);
+}
+
+#[test]
+fn a_swing_lands_on_the_planned_point() {
+    // The slow-landing walk: the real controller plays the whole swing, the
+    // simulated foot clears the ground and lands within a few centimetres
+    // of the planned 0.3 m, and nothing faults until the landing.
+    let tables = GaitTables {
+        walk: Some(GaitTable::parse(gentle_walk_image()).unwrap()),
+        ..GaitTables::default()
+    };
+    let mut rig = rig_with(strong_pilot(), tables).unwrap();
+    Rig::press(&rig.go, 400, 1200);
+    rig.run_until(6000, |_| false).unwrap();
+    let landing = *rig.plant.landings().first().expect("the swing foot landed");
+    assert!(
+        (landing.position_m[0] - 0.3).abs() < 0.03 && landing.position_m[1].abs() < 0.005,
+        "landed at {:?}",
+        landing.position_m
+    );
+    let landed_tick = (landing.time_s * 1000.0) as usize;
+    let before = &rig.trace[..landed_tick.min(rig.trace.len())];
+    assert!(before.iter().all(|s| s.report.reaction == Reaction::None));
+    let clearance = before
+        .iter()
+        .map(|s| s.state.feet_m[1][1])
+        .fold(f64::MIN, f64::max);
+    assert!(clearance > 0.1, "swing foot cleared only {clearance} m");
+    // The controller saw it too: the sequencer moved on to the weight
+    // transfer onto the right leg.
+    assert!(
+        rig.trace[landed_tick..]
+            .iter()
+            .any(|s| matches!(s.report.phase, Phase::Transfer { .. }))
+    );
 }

@@ -304,7 +304,10 @@ impl SupervisorConfig {
             dt_s: 0.001,
             joint_range: [hip, knee, hip, knee],
             ankle_range: [ankle, ankle],
-            velocity_limit_rad_s: [5.0; JOINTS],
+            // Hip 6, knee 8 rad/s: above what the planned gaits use (the walk
+            // table's swing knee extends at up to 5.5 rad/s before landing;
+            // healthy walking reaches 6–7), below a runaway.
+            velocity_limit_rad_s: [6.0, 8.0, 6.0, 8.0],
             velocity_filter_alpha: 0.2,
             tracking_error_limit_rad: 0.15,
             tracking_error_ticks: 100,

@@ -235,7 +235,11 @@ impl<'a> GaitTable<'a> {
     /// samples and held at the ends. Constant time: no search.
     pub fn at_time(&self, t_s: f32) -> [f32; LINKS] {
         let period = self.period_s();
-        let x = if t_s.is_finite() && t_s > 0.0 { t_s / period } else { 0.0 };
+        let x = if t_s.is_finite() && t_s > 0.0 {
+            t_s / period
+        } else {
+            0.0
+        };
         let last = self.count.saturating_sub(1);
         let k = (x as usize).min(last);
         let w = if k >= last { 0.0 } else { x - k as f32 };
@@ -335,10 +339,16 @@ mod tests {
             for bit in 0..8 {
                 let mut b = buf;
                 b[byte] ^= 1 << bit;
-                assert!(GaitTable::parse(&b).is_err(), "flip at {byte}:{bit} accepted");
+                assert!(
+                    GaitTable::parse(&b).is_err(),
+                    "flip at {byte}:{bit} accepted"
+                );
             }
         }
-        assert_eq!(GaitTable::parse(&buf[..buf.len() - 1]), Err(TableError::BadLength));
+        assert_eq!(
+            GaitTable::parse(&buf[..buf.len() - 1]),
+            Err(TableError::BadLength)
+        );
         let mut v = buf;
         v[4] = 2;
         assert_eq!(GaitTable::parse(&v), Err(TableError::UnknownVersion(2)));
@@ -348,10 +358,19 @@ mod tests {
     fn writer_refuses_what_the_reader_would() {
         let mut buf = [0u8; 256];
         let nan = [[f32::NAN; LINKS], [0.0; LINKS]];
-        assert_eq!(encode(GaitKind::Walk, 10_000, &nan, &mut buf), Err(TableError::NonFinite));
+        assert_eq!(
+            encode(GaitKind::Walk, 10_000, &nan, &mut buf),
+            Err(TableError::NonFinite)
+        );
         let one = [[0.0; LINKS]];
-        assert_eq!(encode(GaitKind::Walk, 10_000, &one, &mut buf), Err(TableError::BadHeader));
+        assert_eq!(
+            encode(GaitKind::Walk, 10_000, &one, &mut buf),
+            Err(TableError::BadHeader)
+        );
         let many = [[0.0; LINKS]; 20];
-        assert_eq!(encode(GaitKind::Walk, 10_000, &many, &mut buf), Err(TableError::BufferTooSmall));
+        assert_eq!(
+            encode(GaitKind::Walk, 10_000, &many, &mut buf),
+            Err(TableError::BufferTooSmall)
+        );
     }
 }

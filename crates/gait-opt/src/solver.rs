@@ -218,6 +218,17 @@ pub fn optimize(
     config: &OptimizeConfig,
     progress: &mut dyn FnMut(&Progress),
 ) -> Result<OptimizeResult, OptimizeError> {
+    optimize_problem(&PaperProblem::<f64>::paper(config.case), config, progress)
+}
+
+/// Minimises J for any problem of the paper's form (another step geometry,
+/// step time, body model or velocity weight); `config.case` only labels the
+/// result and picks nothing else. [`optimize`] is this with paper mode.
+pub fn optimize_problem(
+    problem: &PaperProblem<f64>,
+    config: &OptimizeConfig,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<OptimizeResult, OptimizeError> {
     if config.max_evals < 200 {
         return Err(OptimizeError::BadConfig(
             "max_evals must be at least 200".into(),
@@ -229,7 +240,7 @@ pub fn optimize(
         ));
     }
     let started = Instant::now();
-    let problem = PaperProblem::<f64>::paper(config.case);
+    let problem = *problem;
     let encoding = Encoding::new(&problem);
     let tracker = RefCell::new(Tracker {
         problem,

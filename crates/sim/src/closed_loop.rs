@@ -170,13 +170,13 @@ fn force_calibration(
     points_n: [f32; FORCE_CAL_POINTS],
 ) -> Result<ForceCalibration<FORCE_CAL_POINTS>, RigError> {
     let counts = points_n.map(|n| sensor.counts(f64::from(n)));
-    ForceCalibration::new(counts, points_n, 50, 4090, -50.0, 2000.0)
+    ForceCalibration::new(counts, points_n, 50, 4090, -50.0, 2500.0)
         .map_err(|_| RigError::Config("force calibration refused"))
 }
 
-/// Calibration points of the foot sensors (to 1.1 kN) and the crutch
+/// Calibration points of the foot sensors (to 2.2 kN) and the crutch
 /// sensors (to 550 N), within each sensor's 12-bit range.
-const FOOT_POINTS_N: [f32; FORCE_CAL_POINTS] = [0.0, 300.0, 700.0, 1100.0];
+const FOOT_POINTS_N: [f32; FORCE_CAL_POINTS] = [0.0, 600.0, 1400.0, 2200.0];
 const CRUTCH_POINTS_N: [f32; FORCE_CAL_POINTS] = [0.0, 150.0, 350.0, 550.0];
 
 /// Motor drive settings matching the simulated bridges.
@@ -452,6 +452,11 @@ impl<'t> Rig<'t> {
             support_ticks: setup.support_ticks,
             pilot: setup.pilot,
         };
+        // Start the ankle readings at their true values (no lag to settle).
+        let s = rig.plant.state();
+        for (cell, a) in rig.ankle_cells.iter().zip(s.ankle_dorsiflexion_rad) {
+            cell.set(a.unwrap_or(0.0));
+        }
         rig.publish();
         Ok(rig)
     }
@@ -459,9 +464,17 @@ impl<'t> Rig<'t> {
     fn publish(&self) {
         let s = self.plant.state();
         self.wiring.publish(&s);
+        // The swing ankle is not modelled: its spring holds it near rest (0)
+        // in the air, and at foot-flat it turns to the stance angle within a
+        // few tens of milliseconds. Both ankle readings follow their targets
+        // (stance: φ1; swing: rest) through a 30 ms first-order lag, so the
+        // swap at landing reads as a fast but physical rotation, not a jump.
+        const TAU_S: f64 = 0.03;
+        let alpha = (self.plant.config().dt_s / TAU_S).min(1.0);
         for (cell, a) in self.ankle_cells.iter().zip(s.ankle_dorsiflexion_rad) {
-            // The swing ankle is not modelled: its spring holds it at rest.
-            cell.set(a.unwrap_or(0.0));
+            let target = a.unwrap_or(0.0);
+            let now = cell.get();
+            cell.set(now + alpha * (target - now));
         }
     }
 

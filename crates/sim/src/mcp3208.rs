@@ -40,11 +40,11 @@ pub struct ForceSensorCal {
 }
 
 impl ForceSensorCal {
-    /// A foot sensor: 200 counts unloaded, 3.5 counts/N (≈ 1,100 N to
-    /// full scale).
+    /// A foot sensor: 200 counts unloaded, 1.75 counts/N (≈ 2,200 N to
+    /// full scale: a landing on one foot peaks well above body weight).
     pub const FOOT: Self = Self {
         offset_counts: 200.0,
-        counts_per_n: 3.5,
+        counts_per_n: 1.75,
     };
     /// A crutch-tip sensor: 200 counts unloaded, 7 counts/N (≈ 560 N).
     pub const CRUTCH: Self = Self {
@@ -243,8 +243,12 @@ mod tests {
         let f = SharedF64::new(100.0);
         let mut adc = SimMcp3208::new();
         adc.set_hi_z_level(false);
-        adc.connect(5, f.clone(), ForceSensorCal::FOOT);
-        let value = ForceSensorCal::FOOT.counts(100.0); // 550 = 0x226
+        let cal = ForceSensorCal {
+            offset_counts: 200.0,
+            counts_per_n: 3.5,
+        };
+        adc.connect(5, f.clone(), cal);
+        let value = cal.counts(100.0); // 550 = 0x226
         assert_eq!(value, 550);
         // Figure 6-1: 0000_011D2 | D1D0xx_xxxx | xxxx_xxxx; channel 5 = 101.
         let mut b = [0b0000_0111, 0b0100_0000, 0];

@@ -171,7 +171,11 @@ fn adc_driver_reads_each_force_within_calibration_error() {
         for ch in 0..4 {
             assert_eq!(drv.read_raw(CHANNELS[ch]).unwrap(), adc.counts(ch));
             let n = drv.read_force(CHANNELS[ch], &cals[ch]).unwrap();
-            let gain = if ch < 2 { 3.5 } else { 7.0 };
+            let gain = if ch < 2 {
+                ForceSensorCal::FOOT.counts_per_n
+            } else {
+                ForceSensorCal::CRUTCH.counts_per_n
+            };
             // Half a count of quantisation, plus f32 rounding.
             let tol = 0.5 / gain + 1e-3;
             assert!(
@@ -220,7 +224,7 @@ fn adc_driver_sees_open_short_and_bus_faults() {
     assert!(drv.read_force(Channel::Ch1, &cal).is_ok());
     // A force beyond the sensor clamps at full scale: the driver's short
     // check catches it (a saturated sensor is not believed).
-    w.forces[wiring::channel::RIGHT_FOOT].set(5000.0);
+    w.forces[wiring::channel::RIGHT_FOOT].set(9000.0);
     assert!(matches!(
         drv.read_force(Channel::Ch1, &cal),
         Err(mcp3208::Error::Sensor(ForceFault::ShortCircuit { .. }))
