@@ -38,18 +38,17 @@ pub const TICK_HZ: u32 = 1_000;
 /// Control-loop period, s.
 pub const DT_S: f32 = 1.0 / TICK_HZ as f32;
 
-/// The gait tables this image carries, verified.
-///
-/// The flash images will come from the generated module
-/// `gait_core::tables::flash` (not there yet). Until then this returns no
-/// table at all, so no gait can start: the sequencer refuses a start whose
-/// table is missing, which is the only correct behaviour without verified
-/// tables. When the module lands this becomes one line, e.g.
-/// `gait_core::tables::flash::verified()` (whatever it exports that yields
-/// `GaitTables`, or the three `GaitTable::parse(..).ok()` calls).
+/// The gait tables this image carries (`gait_core::flash_tables`, made by
+/// `cargo xtask tables`), each verified (magic, version, kind, length,
+/// CRC-32, finite samples) before it can be selected: a table that fails is
+/// left out, so its gait cannot start. Stair descent has no table yet.
 #[must_use]
 pub fn flash_tables() -> GaitTables<'static> {
-    GaitTables::default()
+    GaitTables {
+        walk: gait_core::flash_tables::walk().ok(),
+        stair_up: gait_core::flash_tables::stair_up().ok(),
+        stair_down: None,
+    }
 }
 
 /// Hip position loop (joints 0 and 2). Kp 500 N·m/rad: 0.1 rad of error

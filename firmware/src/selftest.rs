@@ -30,7 +30,7 @@ impl Check {
 }
 
 /// Number of checks [`run`] performs.
-pub const CHECKS: usize = 6;
+pub const CHECKS: usize = 7;
 
 /// A swing-phase state away from any symmetry (angles in rad, rates in rad/s).
 const PHI: [f64; LINKS] = [0.21, -0.18, 0.07, 2.71, 3.52];
@@ -79,6 +79,15 @@ pub fn run() -> [Check; CHECKS] {
     // 6. Energy of the free chain over 0.2 s of RK4 in f32 (relative drift).
     let drift = free_energy_drift_f32(&m32, f32s(PHI), f32s(DPHI));
 
+    // 7. The gait tables in flash pass their CRC and format checks here.
+    let bad_tables = [
+        gait_core::flash_tables::walk().is_err(),
+        gait_core::flash_tables::stair_up().is_err(),
+    ]
+    .iter()
+    .filter(|&&bad| bad)
+    .count() as f64;
+
     [
         Check {
             name: "fk_standing_hip_m",
@@ -109,6 +118,11 @@ pub fn run() -> [Check; CHECKS] {
             name: "energy_drift_f32_rel",
             value: drift,
             bound: 1e-3,
+        },
+        Check {
+            name: "flash_tables_failing",
+            value: bad_tables,
+            bound: 0.0,
         },
     ]
 }

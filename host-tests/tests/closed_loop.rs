@@ -10,10 +10,8 @@
 )]
 
 use gait_control::faults::{FaultCode, Reaction};
-use gait_control::sequencer::GaitTables;
 use gait_control::sequencer::Phase;
-use gait_core::tables::GaitTable;
-use host_tests::{gentle_walk_image, rig_with, standing_rig, strong_pilot};
+use host_tests::{standing_rig, strong_pilot};
 use sim::closed_loop::Rig;
 use sim::mcp3208::ChannelFault;
 use sim::pilot::PilotConfig;
@@ -216,14 +214,10 @@ fn commands_stay_within_limits_under_sensor_garbage() {
 
 #[test]
 fn a_swing_lands_on_the_planned_point() {
-    // The slow-landing walk: the real controller plays the whole swing, the
+    // The flash walk table: the real controller plays the whole swing, the
     // simulated foot clears the ground and lands within a few centimetres
     // of the planned 0.3 m, and nothing faults until the landing.
-    let tables = GaitTables {
-        walk: Some(GaitTable::parse(gentle_walk_image()).unwrap()),
-        ..GaitTables::default()
-    };
-    let mut rig = rig_with(strong_pilot(), tables).unwrap();
+    let mut rig = standing_rig(strong_pilot()).unwrap();
     Rig::press(&rig.go, 400, 1200);
     rig.run_until(6000, |_| false).unwrap();
     let landing = *rig.plant.landings().first().expect("the swing foot landed");

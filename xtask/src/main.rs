@@ -62,6 +62,7 @@ fn main() -> ExitCode {
         "qemu" => Toolchain::detect().and_then(|tc| qemu(&tc)),
         "size" => Toolchain::detect().and_then(|tc| size_all(&tc)),
         "clippy" => Toolchain::detect().and_then(|tc| clippy(&tc)),
+        "tables" => regenerate_tables(),
         "help" | "--help" | "-h" => {
             println!("{}", HELP);
             Ok(())
@@ -93,6 +94,8 @@ usage: cargo xtask <task>
   qemu      build the QEMU image and run its self-test and benchmarks
   size      flash/RAM use per board
   clippy    clippy with warnings denied, host and firmware
+  tables    regenerate the flash gait tables (crates/gait-core/src/flash_tables.rs)
+            from the optimiser (deterministic; a test checks they are current)
   setup     install missing system packages for cross-building";
 
 fn root() -> PathBuf {
@@ -117,6 +120,19 @@ fn ci() -> Result {
     step("QEMU self-test", || qemu(&tc))?;
     step("size report", || size_all(&tc))?;
     Ok(())
+}
+
+fn regenerate_tables() -> Result {
+    run(cargo().args([
+        "run",
+        "--release",
+        "-p",
+        "gait-opt",
+        "--example",
+        "flash_tables",
+        "--",
+        "crates/gait-core/src/flash_tables.rs",
+    ]))
 }
 
 fn run_main_job(_args: &[String]) -> Result {

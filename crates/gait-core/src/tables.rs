@@ -355,6 +355,16 @@ mod tests {
     }
 
     #[test]
+    fn flash_tables_verify() {
+        let w = crate::flash_tables::walk().unwrap();
+        assert_eq!(w.kind(), GaitKind::Walk);
+        assert!((w.duration_s() - 2.24).abs() < 1e-4);
+        let s = crate::flash_tables::stair_up().unwrap();
+        assert_eq!(s.kind(), GaitKind::StairUp);
+        assert!((s.duration_s() - 2.28).abs() < 1e-4);
+    }
+
+    #[test]
     fn writer_refuses_what_the_reader_would() {
         let mut buf = [0u8; 256];
         let nan = [[f32::NAN; LINKS], [0.0; LINKS]];

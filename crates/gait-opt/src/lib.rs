@@ -21,6 +21,7 @@ pub mod plot;
 pub mod report;
 pub mod run;
 pub mod solver;
+pub mod tables;
 
 pub use baseline::{Baseline, BaselineError, Source, baseline, baseline_from, default_data_dir};
 pub use phi_cost::{PhiCostError, cost_from_phi};
