@@ -242,3 +242,30 @@ fn a_swing_lands_on_the_planned_point() {
             .any(|s| matches!(s.report.phase, Phase::Transfer { .. }))
     );
 }
+
+#[test]
+fn the_main_job_reports_a_step() {
+    // `exogait simulate` runs this: its summary must say what the trace says.
+    let run = sim::scenario::walk_step(8.0).unwrap();
+    let s = &run.summary;
+    let landing = s.landing.expect("landed");
+    assert!((landing.position_m[0] - s.planned_landing_x_m).abs() < 0.03);
+    assert!((s.planned_landing_x_m - 0.3).abs() < 1e-3);
+    assert!(s.swing_start_s.is_some_and(|t| (1.3..1.6).contains(&t)));
+    assert!(s.foot_clearance_m > 0.1);
+    assert!(
+        s.tracking_peak_rad < 0.15,
+        "tracking peak {}",
+        s.tracking_peak_rad
+    );
+    assert!(s.crutch_impulse_ns > 0.0 && s.crutch_peak_n.iter().all(|&p| p > 0.0));
+    assert!(s.crutch_impulse_on_board_ns.is_some());
+    let text = s.to_string();
+    assert!(text.contains("landed") && text.contains("crutch load F"));
+    // And the plot it writes.
+    let path = std::env::temp_dir().join(format!("exogait-walk-{}.svg", std::process::id()));
+    sim::plot::plot_run(&run.rig.trace, s, &path).unwrap();
+    let svg = std::fs::read_to_string(&path).unwrap();
+    let _ = std::fs::remove_file(&path);
+    assert!(svg.starts_with("<svg") && svg.contains("polyline") && svg.len() > 10_000);
+}

@@ -218,6 +218,10 @@ impl Toolchain {
             })
             .unwrap_or(false);
         let mut pkgs: Vec<&str> = Vec::new();
+        // Plot text (plotters renders it from a TTF file).
+        if !Path::new("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf").exists() {
+            pkgs.push("fonts-dejavu-core");
+        }
         if !have("qemu-system-arm") {
             pkgs.push("qemu-system-arm");
         }

@@ -25,8 +25,11 @@ pub mod motor;
 pub mod pilot;
 pub mod pins;
 pub mod plant;
+pub mod plot;
+pub mod scenario;
 pub mod shared;
 pub mod spi;
+pub mod summary;
 pub mod terrain;
 pub mod wiring;
 

@@ -1,0 +1,127 @@
+//! Ready-made closed-loop set-ups: the device with the tables it carries in
+//! flash, standing in the walk table's start posture, with a pilot who knows
+//! the gait; and the main job, one walking step from GO to landing.
+
+use gait_control::operator::Gait;
+use gait_control::sequencer::GaitTables;
+use gait_core::kinematics::forward_kinematics;
+use gait_core::problem::{PaperCase, PaperProblem};
+
+use crate::closed_loop::{PilotBehaviour, Rig, RigError, RigSetup, heel_rocker_model};
+use crate::pilot::PilotConfig;
+use crate::plant::{PlantConfig, Side, SimError};
+use crate::summary::{RunSummary, summarise};
+
+/// The tables the firmware carries (`gait_core::flash_tables`), verified.
+pub fn flash_tables() -> GaitTables<'static> {
+    GaitTables {
+        walk: gait_core::flash_tables::walk().ok(),
+        stair_up: gait_core::flash_tables::stair_up().ok(),
+        stair_down: None,
+    }
+}
+
+/// A pilot strong enough for the paper's walk (300 N·m through the
+/// crutches, ≈ 670 N on them together at the 0.45 m lever).
+pub fn strong_pilot() -> PilotConfig {
+    PilotConfig {
+        torque_limit_nm: 300.0,
+        ..PilotConfig::default()
+    }
+}
+
+/// The device standing (double support) in the walk table's start posture,
+/// left leg in front as stance, the pilot following the plan, the plant held
+/// still for the first 60 ms while the drives soft-start (40 ms).
+pub fn walk_rig(pilot: PilotConfig, tables: GaitTables<'static>) -> Result<Rig<'static>, RigError> {
+    let first = tables
+        .walk
+        .as_ref()
+        .map(|t| t.first().map(f64::from))
+        .ok_or(RigError::Config("no verified walk table"))?;
+    let case = PaperProblem::<f64>::paper(PaperCase::Walk).case;
+    let setup = RigSetup {
+        plant: PlantConfig {
+            model: heel_rocker_model(),
+            pilot,
+            ..PlantConfig::default()
+        },
+        phi: first,
+        stance: Side::Left,
+        stance_foot_m: [0.0, 0.0],
+        pilot: PilotBehaviour::FollowsPlan(case.stance),
+        gait: Gait::Walk,
+        support_ticks: 60,
+    };
+    Rig::new(&setup, tables)
+}
+
+/// When GO is pressed in [`walk_step`] (tick), and for how long.
+pub const GO_AT_TICK: u64 = 400;
+/// GO is held past the 1 s long press.
+pub const GO_TICKS: u64 = 1200;
+
+/// One closed-loop run and what it did.
+pub struct StepRun {
+    /// The rig, with its trace.
+    pub rig: Rig<'static>,
+    /// The summary.
+    pub summary: RunSummary,
+    /// Why the simulation stopped early (the plant fell or blew up), if it
+    /// did; the summary covers what happened before.
+    pub ended_by: Option<SimError>,
+}
+
+/// The main job: GO, one walking step with the flash table, and 1.5 s after
+/// the landing (or `max_s` in all).
+pub fn walk_step(max_s: f64) -> Result<StepRun, RigError> {
+    let tables = flash_tables();
+    let planned_landing_x_m = tables.walk.as_ref().map_or(0.0, |t| {
+        let m = heel_rocker_model();
+        let last = t.last().map(f64::from);
+        forward_kinematics(&m, &last)[4][0]
+    });
+    let mut rig = walk_rig(strong_pilot(), tables)?;
+    Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
+    let max_ticks = (max_s * 1000.0) as u64;
+    let mut landed_at: Option<usize> = None;
+    let mut result = Ok(());
+    for _ in 0..max_ticks {
+        if let Err(e) = rig.tick() {
+            result = Err(e);
+            break;
+        }
+        if landed_at.is_none() && !rig.plant.landings().is_empty() {
+            landed_at = Some(rig.trace.len());
+        }
+        if landed_at.is_some_and(|k| rig.trace.len() > k + 1500) {
+            break;
+        }
+    }
+    let faults = rig.faults().iter().map(|c| c.name()).collect();
+    let on_board = rig
+        .controller
+        .crutch_load()
+        .log()
+        .last()
+        .map(|s| f64::from(s.impulse_ns))
+        .or_else(|| {
+            rig.controller
+                .crutch_load()
+                .current()
+                .map(|s| f64::from(s.impulse_ns))
+        });
+    let summary = summarise(
+        &rig.trace,
+        rig.plant.landings(),
+        planned_landing_x_m,
+        faults,
+        on_board,
+        rig.plant.config().dt_s,
+    );
+    Ok(StepRun {
+        rig,
+        summary,
+        ended_by: result.err(),
+    })
+}
