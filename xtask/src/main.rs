@@ -89,7 +89,7 @@ usage: cargo xtask <task>
 
   ci        everything CI checks: fmt, clippy (host and both boards, warnings
             denied), host tests, firmware builds, QEMU self-test, size report
-  run       the main job: the firmware self-test under QEMU
+  run       the main job: a closed-loop walking step (metrics + plot)
   firmware  build the firmware for every board (release)
   qemu      build the QEMU image and run its self-test and benchmarks
   size      flash/RAM use per board
@@ -135,9 +135,29 @@ fn regenerate_tables() -> Result {
     ]))
 }
 
-fn run_main_job(_args: &[String]) -> Result {
-    let tc = Toolchain::detect()?;
-    qemu(&tc)
+/// The main job: one closed-loop walking step of the real controller on the
+/// simulated exoskeleton (flash walk table), its metrics on stdout and a plot
+/// in `target/sim/walk-step.svg` (or the path given).
+fn run_main_job(args: &[String]) -> Result {
+    let plot = args
+        .first()
+        .cloned()
+        .unwrap_or_else(|| "target/sim/walk-step.svg".into());
+    if let Some(dir) = Path::new(&plot).parent() {
+        std::fs::create_dir_all(root().join(dir))
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    run(cargo().args([
+        "run",
+        "--quiet",
+        "--release",
+        "-p",
+        "exogait-cli",
+        "--",
+        "simulate",
+        "--plot",
+        &plot,
+    ]))
 }
 
 fn step(name: &str, f: impl FnOnce() -> Result) -> Result {

@@ -1,11 +1,15 @@
 //! `exogait`: the project's command-line tool.
 //!
 //! Thin by design: it parses JSON lines, calls gait-core and prints JSON
-//! lines. No algorithm lives here. See `crates/exogait-cli/README.md`.
+//! lines; `optimize` and `cost` call gait-opt. No algorithm lives here. See
+//! `crates/exogait-cli/README.md`.
 
 mod commands;
+mod cost;
 mod jsonl;
 mod model_file;
+mod optimize;
+mod simulate;
 
 use std::io;
 use std::path::PathBuf;
@@ -20,6 +24,9 @@ const EXIT_OK: u8 = 0;
 const EXIT_LINE_FAILED: u8 = 1;
 /// Exit status for a bad `--model` file or an I/O failure.
 const EXIT_FATAL: u8 = 2;
+// `optimize`: 0 report written, 1 the search failed, 2 bad arguments,
+// model or I/O. `cost`: 0 J agrees with the file's, 1 it does not, 2 bad
+// file. clap's own usage errors also exit with 2.
 
 /// Exoskeleton gait model tools: JSON lines in on stdin, JSON lines out on
 /// stdout, one answer per input line, SI units (m, kg, s, rad, N·m).
@@ -43,10 +50,63 @@ enum Command {
     Fk,
     /// Inverse kinematics: {"x5","y5","phi1","phi3","r2"} → {"phi":[5],"theta":[5]}.
     Ik,
+    /// Optimises a swing step (paper mode or a geometry of one's own) and
+    /// writes the JSON report (and a plot). stair-down has no paper mode: it
+    /// defaults to the paper's stair (rise 0.0935 m, tread 0.275 m, 2.28 s).
+    Optimize(optimize::OptimizeArgs),
+    /// Recomputes J from a report file and compares it with the stored J
+    /// (exit 1 if they differ by more than 1e-9 relative, 2 for a bad file).
+    Cost {
+        /// The report (from `exogait optimize`).
+        #[arg(value_name = "FILE.json")]
+        file: PathBuf,
+    },
+    /// One closed-loop walking step: the real controller on the simulated
+    /// exoskeleton and pilot, with the flash walk table; prints the metrics
+    /// (exit 1 if the foot did not land within 5 cm of the plan).
+    Simulate(simulate::SimulateArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Command::Simulate(args) = &cli.command {
+        if cli.model.is_some() {
+            eprintln!("exogait: --model does not apply to simulate (the device's model is fixed)");
+            return ExitCode::from(EXIT_FATAL);
+        }
+        return ExitCode::from(simulate::run(args));
+    }
+    if let Command::Cost { file } = &cli.command {
+        if cli.model.is_some() {
+            eprintln!("exogait: --model does not apply to cost (the report holds its model)");
+            return ExitCode::from(EXIT_FATAL);
+        }
+        return match cost::run(file) {
+            Ok(answer) => {
+                match serde_json::to_string(&answer) {
+                    Ok(text) => println!("{text}"),
+                    Err(e) => {
+                        eprintln!("exogait: {e}");
+                        return ExitCode::from(EXIT_FATAL);
+                    }
+                }
+                if answer.agrees() {
+                    ExitCode::from(EXIT_OK)
+                } else {
+                    eprintln!(
+                        "exogait: {}: recomputed J differs from the stored J by more than {} (relative)",
+                        file.display(),
+                        cost::TOLERANCE
+                    );
+                    ExitCode::from(EXIT_LINE_FAILED)
+                }
+            }
+            Err(e) => {
+                eprintln!("exogait: {e}");
+                ExitCode::from(EXIT_FATAL)
+            }
+        };
+    }
     let model = match &cli.model {
         None => BodyModel::<f64>::paper_table_iii(),
         Some(path) => match model_file::load(path) {
@@ -57,6 +117,20 @@ fn main() -> ExitCode {
             }
         },
     };
+    if let Command::Optimize(args) = &cli.command {
+        let given = cli.model.is_some().then_some(model);
+        return match optimize::run(args, given) {
+            Ok(()) => ExitCode::from(EXIT_OK),
+            Err(optimize::Failure::Search(e)) => {
+                eprintln!("exogait: {e}");
+                ExitCode::from(EXIT_LINE_FAILED)
+            }
+            Err(optimize::Failure::Usage(e)) => {
+                eprintln!("exogait: {e}");
+                ExitCode::from(EXIT_FATAL)
+            }
+        };
+    }
     let stdin = io::stdin().lock();
     let stdout = io::stdout().lock();
     let result = match cli.command {
@@ -65,6 +139,10 @@ fn main() -> ExitCode {
         Command::Ik => {
             let solver = gait_core::ik::IkSolver::new(&model);
             jsonl::run(stdin, stdout, |r| commands::ik(&solver, r))
+        }
+        // Handled above.
+        Command::Optimize(_) | Command::Cost { .. } | Command::Simulate(_) => {
+            Ok(jsonl::Summary::default())
         }
     };
     match result {

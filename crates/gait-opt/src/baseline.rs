@@ -434,8 +434,21 @@ pub fn baseline_from(
     if is_walk != (case == PaperCase::Walk) {
         return Err(BaselineError::WrongCase(source, case));
     }
+    baseline_for_problem(&PaperProblem::<f64>::paper(case), source, dir)
+}
+
+/// The baseline from `source` in `dir` at `problem`'s geometry, step time
+/// and model (same construction as [`baseline_from`], which is this with
+/// paper mode). The caller picks a source that fits the step (walking data
+/// for a level step, ascent data for a rising one); a geometry the data
+/// cannot be scaled or corrected to gives [`BaselineError::Unreachable`].
+pub fn baseline_for_problem(
+    problem: &PaperProblem<f64>,
+    source: Source,
+    dir: &Path,
+) -> Result<Baseline, BaselineError> {
     let curves = load(source, dir)?;
-    let problem = PaperProblem::<f64>::paper(case);
+    let problem = *problem;
     let n = problem.sampling.intervals;
     let ts = problem.case.step_time_s;
     let dt = problem.sampling.dt_s;

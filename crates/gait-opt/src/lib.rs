@@ -23,7 +23,10 @@ pub mod run;
 pub mod solver;
 pub mod tables;
 
-pub use baseline::{Baseline, BaselineError, Source, baseline, baseline_from, default_data_dir};
+pub use baseline::{
+    Baseline, BaselineError, Source, baseline, baseline_for_problem, baseline_from,
+    default_data_dir,
+};
 pub use phi_cost::{PhiCostError, cost_from_phi};
 #[cfg(feature = "plot")]
 pub use plot::{PlotError, plot_report};

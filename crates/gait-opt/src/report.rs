@@ -231,6 +231,9 @@ pub struct Report {
     pub tau_peak_nm: f64,
     /// The human-data baseline, if one was built.
     pub baseline: Option<BaselineFigures>,
+    /// Why `baseline` is null, when it is (absent from older reports).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub baseline_note: Option<String>,
     /// Reductions against the baseline.
     pub reduction_pct: Option<Reductions>,
     /// Solver figures.
@@ -287,6 +290,12 @@ const COST_TEXT: &str = "J = (1/(N-1)) sum_{k=2..N} c_k tau_k^2 + v_p max_{k=1..
 impl ProblemSpec {
     /// The specification of a problem.
     pub fn of(case: PaperCase, p: &PaperProblem<f64>) -> Self {
+        Self::labelled(case_name(case), p)
+    }
+
+    /// The specification of any problem of the paper's form, `label` naming
+    /// its case (e.g. "stair_down").
+    pub fn labelled(label: &str, p: &PaperProblem<f64>) -> Self {
         let (lo, hi) = p.bounds();
         let links = p.model.links().map(|l| LinkSpec {
             length_m: l.length_m,
@@ -296,7 +305,7 @@ impl ProblemSpec {
         });
         let c = &p.case;
         Self {
-            case: case_name(case).into(),
+            case: label.into(),
             start_m: c.start_m,
             landing_m: c.landing_m,
             step_time_s: c.step_time_s,
@@ -483,6 +492,19 @@ impl Report {
     /// Builds the report of an optimisation, with its baseline if given.
     pub fn new(result: &OptimizeResult, baseline: Option<&Baseline>) -> Result<Self, ReportError> {
         let problem = PaperProblem::<f64>::paper(result.case);
+        Self::for_problem(case_name(result.case), &problem, result, baseline)
+    }
+
+    /// Builds the report of an optimisation of `problem` (any geometry, step
+    /// time or model; `label` names the case in `problem.case`), with its
+    /// baseline if given (which must have been built for `problem`).
+    pub fn for_problem(
+        label: &str,
+        problem: &PaperProblem<f64>,
+        result: &OptimizeResult,
+        baseline: Option<&Baseline>,
+    ) -> Result<Self, ReportError> {
+        let problem = *problem;
         let samples = step_samples(&problem, &result.control_points)?;
         let j = CostFigures::from(result.cost);
         let baseline_figures = match baseline {
@@ -523,12 +545,13 @@ impl Report {
         });
         Ok(Self {
             format: REPORT_FORMAT.into(),
-            problem: ProblemSpec::of(result.case, &problem),
+            problem: ProblemSpec::labelled(label, &problem),
             control_points: result.control_points,
             j,
             tau_rms_nm: j.tau_rms_nm,
             tau_peak_nm: j.tau_peak_nm,
             baseline: baseline_figures,
+            baseline_note: None,
             reduction_pct,
             solver: SolverFigures {
                 name: "IPOP-CMA-ES (cmaes crate) with successive-halving starts + compass-search polish".into(),

@@ -1,0 +1,55 @@
+//! `exogait simulate`: one closed-loop walking step of the real controller
+//! (gait-control) on the simulated exoskeleton and pilot (sim), with the
+//! tables the firmware carries in flash. Prints the run's metrics; writes a
+//! plot (`--plot`, SVG or PNG). No algorithm here: `sim::scenario` runs it.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+/// Options of `exogait simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// Simulated time at most, s (the run also stops 1.5 s after landing).
+    #[arg(long, default_value_t = 8.0)]
+    pub seconds: f64,
+    /// Write a plot of the run (.svg or .png).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+}
+
+/// Runs the step; exit status 0 when the swing foot landed within 5 cm of
+/// the planned point, 1 when it did not, 2 when the run could not be set up
+/// or the options are unusable.
+pub fn run(args: &SimulateArgs) -> u8 {
+    if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 60.0) {
+        eprintln!("exogait simulate: --seconds must be in (0, 60]");
+        return 2;
+    }
+    let run = match sim::scenario::walk_step(args.seconds) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("exogait simulate: {e}");
+            return 2;
+        }
+    };
+    println!("exogait closed loop: one walking step, flash walk table");
+    println!("{}", run.summary);
+    if let Some(e) = &run.ended_by {
+        println!("simulation stopped     {e:?}");
+    }
+    if let Some(path) = &args.plot {
+        match sim::plot::plot_run(&run.rig.trace, &run.summary, path) {
+            Ok(()) => println!("plot                     {}", path.display()),
+            Err(e) => {
+                eprintln!("exogait simulate: {}: {e}", path.display());
+                return 2;
+            }
+        }
+    }
+    let landed_on_plan = run
+        .summary
+        .landing
+        .is_some_and(|l| (l.position_m[0] - run.summary.planned_landing_x_m).abs() < 0.05);
+    if landed_on_plan { 0 } else { 1 }
+}
