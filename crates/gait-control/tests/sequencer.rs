@@ -28,16 +28,7 @@ fn walk_image() -> Vec<u8> {
     // Φ per sample through the IK, as the table generator does.
     let ik = gait_core::ik::IkSolver::new(&pb.model);
     step.for_each_sample::<GaitError>(|s| {
-        let sol = ik
-            .solve(&gait_core::ik::IkTarget {
-                x5: s.p5[0],
-                y5: s.p5[1],
-                phi1: s.phi1,
-                phi3: s.phi3,
-                r2: s.r2,
-            })
-            .unwrap();
-        phis.push(sol.phi.map(|v| v as f32));
+        phis.push(s.solve(&ik)?.phi.map(|v| v as f32));
         Ok(())
     })
     .unwrap();

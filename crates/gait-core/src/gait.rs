@@ -13,7 +13,7 @@
 
 use crate::bezier::Bezier;
 use crate::dynamics::inverse_dynamics;
-use crate::ik::{IkError, IkSolver, IkTarget};
+use crate::ik::{IkError, IkSolution, IkSolver, IkTarget};
 use crate::kinematics::{Phi, joint_torques};
 use crate::model::{BodyModel, LINKS};
 use crate::scalar::Real;
@@ -246,6 +246,21 @@ pub struct GaitSample<T> {
     pub phi1: T,
 }
 
+impl<T: Real> GaitSample<T> {
+    /// The posture this sample asks for: the IK at its (x5, y5, φ1, φ3, r2),
+    /// with an IK failure reported against the sample's index.
+    pub fn solve(&self, ik: &IkSolver<T>) -> Result<IkSolution<T>, GaitError> {
+        ik.solve(&IkTarget {
+            x5: self.p5[0],
+            y5: self.p5[1],
+            phi1: self.phi1,
+            phi3: self.phi3,
+            r2: self.r2,
+        })
+        .map_err(|error| GaitError::Ik { k: self.k, error })
+    }
+}
+
 /// A step: control points, the stance-ankle profile and the sampling.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Step<T> {
@@ -369,15 +384,7 @@ pub fn evaluate_step<T: Real, E: From<GaitError>>(
     let mut window: [Option<(GaitSample<T>, Phi<T>)>; 3] = [None, None, None];
     let mut prev_dphi: Option<Phi<T>> = None;
     step.for_each_sample(|s| {
-        let sol = ik
-            .solve(&IkTarget {
-                x5: s.p5[0],
-                y5: s.p5[1],
-                phi1: s.phi1,
-                phi3: s.phi3,
-                r2: s.r2,
-            })
-            .map_err(|error| GaitError::Ik { k: s.k, error })?;
+        let sol = s.solve(&ik)?;
         visit(StepEvent::Sample(s))?;
         window = [window[1], window[2], Some((*s, sol.phi))];
         match differences {

@@ -7,7 +7,7 @@ use gait_core::gait::{
     CONTACT_THRESHOLD_M, ControlPoints, Differences, GaitError, Sampling, StanceAnkleProfile,
     StepEvent, contact_weight, evaluate_step,
 };
-use gait_core::ik::{IkSolver, IkTarget};
+use gait_core::ik::IkSolver;
 use gait_core::kinematics::theta_from_phi;
 use gait_core::model::{BodyModel, JointLimits, Link};
 use gait_core::problem::{Cost, PaperCase, PaperProblem, StepCase};
@@ -449,15 +449,7 @@ pub fn step_samples(
     evaluate_step::<f64, GaitError>(&problem.model, &step, problem.differences, |ev| {
         match ev {
             StepEvent::Sample(s) => {
-                let sol = ik
-                    .solve(&IkTarget {
-                        x5: s.p5[0],
-                        y5: s.p5[1],
-                        phi1: s.phi1,
-                        phi3: s.phi3,
-                        r2: s.r2,
-                    })
-                    .map_err(|error| GaitError::Ik { k: s.k, error })?;
+                let sol = s.solve(&ik)?;
                 rows.push(SampleRow {
                     t_s: s.t_s,
                     phi_rad: sol.phi,

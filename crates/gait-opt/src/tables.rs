@@ -21,7 +21,7 @@
 use std::fmt::Write as _;
 
 use gait_core::gait::{ControlPoints, GaitError};
-use gait_core::ik::{IkSolver, IkTarget};
+use gait_core::ik::IkSolver;
 use gait_core::kinematics::Phi;
 use gait_core::problem::{PaperCase, PaperProblem};
 use gait_core::tables::{GaitKind, TableError, encode, image_len};
@@ -64,16 +64,7 @@ pub fn step_phi(
     let ik = IkSolver::new(&problem.model);
     let mut out = Vec::new();
     problem.step(p).for_each_sample::<GaitError>(|s| {
-        let sol = ik
-            .solve(&IkTarget {
-                x5: s.p5[0],
-                y5: s.p5[1],
-                phi1: s.phi1,
-                phi3: s.phi3,
-                r2: s.r2,
-            })
-            .map_err(|error| GaitError::Ik { k: s.k, error })?;
-        out.push(sol.phi);
+        out.push(s.solve(&ik)?.phi);
         Ok(())
     })?;
     Ok(out)
