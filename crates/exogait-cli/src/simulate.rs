@@ -10,9 +10,13 @@ use clap::Args;
 /// Options of `exogait simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Simulated time at most, s (the run also stops 1.5 s after landing).
-    #[arg(long, default_value_t = 8.0)]
+    /// Simulated time at most, s (the run also stops 1.5 s after the last
+    /// landing asked for, or 1 s into a safe hold).
+    #[arg(long, default_value_t = 12.0)]
     pub seconds: f64,
+    /// Steps (landings) to walk.
+    #[arg(long, default_value_t = 2)]
+    pub steps: usize,
     /// Write a plot of the run (.svg or .png).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
@@ -26,14 +30,21 @@ pub fn run(args: &SimulateArgs) -> u8 {
         eprintln!("exogait simulate: --seconds must be in (0, 60]");
         return 2;
     }
-    let run = match sim::scenario::walk_step(args.seconds) {
+    if args.steps == 0 || args.steps > 20 {
+        eprintln!("exogait simulate: --steps must be in 1..=20");
+        return 2;
+    }
+    let run = match sim::scenario::walk(args.seconds, args.steps) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("exogait simulate: {e}");
             return 2;
         }
     };
-    println!("exogait closed loop: one walking step, flash walk table");
+    println!(
+        "exogait closed loop: walking {} step(s), flash walk table",
+        args.steps
+    );
     println!("{}", run.summary);
     if let Some(e) = &run.ended_by {
         println!("simulation stopped     {e:?}");

@@ -174,7 +174,7 @@ impl<'t> Controller<'t> {
         };
         Ok(Self {
             cfg,
-            seq: Sequencer::new(cfg.sequencer, tables, [0.0; JOINTS]),
+            seq: Sequencer::new(cfg.sequencer, tables, [0.0; JOINTS]).with_model(cfg.model),
             loops: [JointLoop::default(); JOINTS],
             operator: Operator::new(operator),
             supervisor,
@@ -242,7 +242,8 @@ impl<'t> Controller<'t> {
         };
         if !self.primed {
             // First tick: hold the posture the device is in.
-            self.seq = Sequencer::new(self.cfg.sequencer, *self.seq.tables(), joints);
+            self.seq = Sequencer::new(self.cfg.sequencer, *self.seq.tables(), joints)
+                .with_model(self.cfg.model);
             self.primed = true;
         }
 

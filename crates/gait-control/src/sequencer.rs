@@ -15,7 +15,10 @@
 //! Work per tick is constant: one table interpolation, no search, no loop
 //! whose length depends on data.
 
+use gait_core::ik::{IkSolver, IkTarget};
+use gait_core::kinematics::{Phi, forward_kinematics, wrap_pi};
 use gait_core::tables::GaitTable;
+use gait_core::{BodyModel, LINKS};
 
 use crate::operator::Gait;
 use crate::posture::{JOINTS, Side, joints_from_phi};
@@ -186,6 +189,25 @@ pub struct Sequencer<'t> {
     /// Start and end of the current blend (transfer or hold ramp).
     blend_from: [f32; JOINTS],
     blend_to: [f32; JOINTS],
+    /// With a model, the weight transfer is planned in double support (see
+    /// [`Sequencer::with_model`]); without, it blends joint angles.
+    model: Option<BodyModel<f32>>,
+    transfer: Option<TransferPlan>,
+}
+
+/// A weight transfer in double support: both feet stay where they are, the
+/// stance shank, torso and knee choice move from the landing posture to the
+/// next step's start posture, and the IK keeps the trailing foot planted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct TransferPlan {
+    /// (x5, y5, φ1, φ3, r2) at the landing and at the next start.
+    from: [f32; 5],
+    to: [f32; 5],
+    /// Joint-angle offset at the landing between the reference and the IK's
+    /// reconstruction of it (it decays to zero over the transfer, so the
+    /// reference is continuous even where the landing posture lies outside
+    /// the IK's human range).
+    offset: [f32; JOINTS],
 }
 
 impl<'t> Sequencer<'t> {
@@ -204,7 +226,99 @@ impl<'t> Sequencer<'t> {
             reference: posture,
             blend_from: posture,
             blend_to: posture,
+            model: None,
+            transfer: None,
         }
+    }
+
+    /// Plans each weight transfer in double support with this model's IK
+    /// (the trailing foot stays planted while the stance shank, torso and
+    /// knee choice move to the next start posture) instead of blending joint
+    /// angles, which in double support would make the legs fight each other
+    /// through the ground.
+    #[must_use]
+    pub fn with_model(mut self, model: BodyModel<f32>) -> Self {
+        self.model = Some(model);
+        self
+    }
+
+    /// The double-support plan from the reference Φ at landing (old stance
+    /// frame) to the next table's first posture (new stance frame).
+    fn plan_transfer(
+        &self,
+        landing_phi: &Phi<f32>,
+        start: &Phi<f32>,
+        new_stance: Side,
+    ) -> Option<TransferPlan> {
+        let model = self.model.as_ref()?;
+        let ik = IkSolver::new(model);
+        let pi = core::f32::consts::PI;
+        // The same posture seen from the new stance foot (links swap roles).
+        let [p1, p2, p3, p4, p5] = *landing_phi;
+        let mirrored: Phi<f32> = [
+            wrap_pi(p5 - pi),
+            wrap_pi(p4 - pi),
+            p3,
+            pi + wrap_pi(p2),
+            pi + wrap_pi(p1),
+        ];
+        let params = |phi: &Phi<f32>| -> Option<[f32; 5]> {
+            let [x5, y5] = forward_kinematics(model, phi).get(LINKS - 1).copied()?;
+            let (lo, hi) = ik.phi2_range(x5, y5, phi[0]).ok()?;
+            let r2 = if hi - lo > 1e-4 {
+                ((phi[1] - lo) / (hi - lo)).clamp(0.0, 1.0)
+            } else {
+                0.5
+            };
+            Some([x5, y5, phi[0], phi[2], r2])
+        };
+        let from = params(&mirrored)?;
+        let to = params(start)?;
+        let at_landing = self.transfer_joints(&ik, &from, new_stance)?;
+        let reference = joints_from_phi(&mirrored, new_stance);
+        let mut offset = [0.0; JOINTS];
+        for ((o, r), a) in offset.iter_mut().zip(&reference).zip(&at_landing) {
+            *o = r - a;
+        }
+        Some(TransferPlan { from, to, offset })
+    }
+
+    fn transfer_joints(
+        &self,
+        ik: &IkSolver<f32>,
+        p: &[f32; 5],
+        stance: Side,
+    ) -> Option<[f32; JOINTS]> {
+        let sol = ik
+            .solve(&IkTarget {
+                x5: p[0],
+                y5: p[1],
+                phi1: p[2],
+                phi3: p[3],
+                r2: p[4],
+            })
+            .ok()?;
+        Some(joints_from_phi(&sol.phi, stance))
+    }
+
+    /// The transfer reference at `fraction` (smoothstepped), or the joint
+    /// blend when there is no plan or the IK fails.
+    fn transfer_reference(&self, fraction: f32, stance: Side) -> [f32; JOINTS] {
+        let planned = self.transfer.and_then(|plan| {
+            let model = self.model.as_ref()?;
+            let ik = IkSolver::new(model);
+            let s = smoothstep(fraction);
+            let mut p = plan.from;
+            for (v, &b) in p.iter_mut().zip(&plan.to) {
+                *v += s * (b - *v);
+            }
+            let mut joints = self.transfer_joints(&ik, &p, stance)?;
+            for (j, &o) in joints.iter_mut().zip(&plan.offset) {
+                *j += (1.0 - s) * o;
+            }
+            Some(joints)
+        });
+        planned.unwrap_or_else(|| self.blended(fraction))
     }
 
     /// Current phase.
@@ -373,10 +487,12 @@ impl<'t> Sequencer<'t> {
                         let new_stance = stance.other();
                         self.stance = new_stance;
                         self.blend_from = reference;
-                        self.blend_to = self
-                            .tables
-                            .get(self.gait)
-                            .map_or(reference, |tb| joints_from_phi(&tb.first(), new_stance));
+                        let table = self.tables.get(self.gait).copied();
+                        self.blend_to =
+                            table.map_or(reference, |tb| joints_from_phi(&tb.first(), new_stance));
+                        self.transfer = table.and_then(|tb| {
+                            self.plan_transfer(&tb.at_time(t), &tb.first(), new_stance)
+                        });
                         self.phase = Phase::Transfer {
                             stance: new_stance,
                             t_s: 0.0,
@@ -412,7 +528,7 @@ impl<'t> Sequencer<'t> {
                     self.blend_to
                 } else {
                     self.phase = Phase::Transfer { stance, t_s: t };
-                    self.blended(frac)
+                    self.transfer_reference(frac, stance)
                 }
             }
             Phase::SafeHold { t_s } => {

@@ -267,18 +267,42 @@ pub struct Rig<'t> {
     pub trace: Vec<Sample>,
     support_ticks: u64,
     pilot: PilotBehaviour,
+    transfer_from_phi1: Option<f64>,
+    transfer_s: f32,
 }
 
-/// The pilot's target given the controller's phase.
-fn pilot_target(b: &PilotBehaviour, swing_t_s: Option<f32>, now_s: f64) -> PilotTarget {
+/// Where the pilot's stance shank should be, given the controller's phase:
+/// the planned profile during a swing; during the weight transfer a smooth
+/// move from where the shank was at landing to the profile's start (as the
+/// controller's transfer plans it); otherwise held at the profile's start.
+fn pilot_target(
+    b: &PilotBehaviour,
+    phase: &Phase,
+    transfer_from: Option<f64>,
+    transfer_s: f32,
+    now_s: f64,
+) -> PilotTarget {
     match *b {
         PilotBehaviour::Fixed(t) => t,
-        PilotBehaviour::FollowsPlan(profile) => match swing_t_s {
-            Some(t) => PilotTarget::Profile {
+        PilotBehaviour::FollowsPlan(profile) => match *phase {
+            Phase::Swing { t_s, .. } => PilotTarget::Profile {
                 profile,
-                t0_s: now_s - f64::from(t),
+                t0_s: now_s - f64::from(t_s),
             },
-            None => PilotTarget::Hold {
+            Phase::Transfer { t_s, .. } => {
+                let to = profile.at(0.0);
+                let from = transfer_from.unwrap_or(to);
+                let x = if transfer_s > 0.0 {
+                    f64::from(t_s / transfer_s).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                let s = x * x * (3.0 - 2.0 * x);
+                PilotTarget::Hold {
+                    phi1_rad: from + s * (to - from),
+                }
+            }
+            _ => PilotTarget::Hold {
                 phi1_rad: profile.at(0.0),
             },
         },
@@ -343,7 +367,7 @@ impl<'t> Rig<'t> {
             setup.stance,
             setup.stance_foot_m,
         )?;
-        plant.set_pilot(pilot_target(&setup.pilot, None, 0.0));
+        plant.set_pilot(pilot_target(&setup.pilot, &Phase::Standing, None, 0.0, 0.0));
         let wiring = Wiring::new();
         let joint_encoders: [SimAs5048a; 4] = [0, 1, 2, 3].map(|j| {
             wiring
@@ -413,6 +437,7 @@ impl<'t> Rig<'t> {
             buzzer: Indicator::new(indicators[2].clone()),
         };
         let model: BodyModel<f32> = setup.plant.model.cast();
+        let transfer_s = controller_config(model)?.sequencer.transfer_s;
         let allowed_list: Vec<Gait> = std::iter::once(setup.gait)
             .chain(
                 [Gait::Walk, Gait::StairUp, Gait::StairDown]
@@ -451,6 +476,8 @@ impl<'t> Rig<'t> {
             trace: Vec::new(),
             support_ticks: setup.support_ticks,
             pilot: setup.pilot,
+            transfer_from_phi1: None,
+            transfer_s,
         };
         // Start the ankle readings at their true values (no lag to settle).
         let s = rig.plant.state();
@@ -492,11 +519,21 @@ impl<'t> Rig<'t> {
     /// One controller tick, then one plant step.
     pub fn tick(&mut self) -> Result<&Sample, SimError> {
         let report = self.controller.tick(&mut self.hw, false);
-        let swing_t = match report.phase {
-            Phase::Swing { t_s, .. } => Some(t_s),
-            _ => None,
-        };
-        let target = pilot_target(&self.pilot, swing_t, self.plant.time_s());
+        match report.phase {
+            Phase::Transfer { .. } => {
+                if self.transfer_from_phi1.is_none() {
+                    self.transfer_from_phi1 = Some(self.plant.state().phi[0]);
+                }
+            }
+            _ => self.transfer_from_phi1 = None,
+        }
+        let target = pilot_target(
+            &self.pilot,
+            &report.phase,
+            self.transfer_from_phi1,
+            self.transfer_s,
+            self.plant.time_s(),
+        );
         if target != self.plant.pilot() {
             self.plant.set_pilot(target);
         }

@@ -72,9 +72,15 @@ pub struct StepRun {
     pub ended_by: Option<SimError>,
 }
 
-/// The main job: GO, one walking step with the flash table, and 1.5 s after
-/// the landing (or `max_s` in all).
+/// The main job: GO and walking with the flash table until `steps`
+/// landings have happened and 1.5 s more (or a safe hold has lasted 1 s, or
+/// `max_s` in all).
 pub fn walk_step(max_s: f64) -> Result<StepRun, RigError> {
+    walk(max_s, 1)
+}
+
+/// See [`walk_step`]; `steps` landings.
+pub fn walk(max_s: f64, steps: usize) -> Result<StepRun, RigError> {
     let tables = flash_tables();
     let planned_landing_x_m = tables.walk.as_ref().map_or(0.0, |t| {
         let m = heel_rocker_model();
@@ -85,16 +91,24 @@ pub fn walk_step(max_s: f64) -> Result<StepRun, RigError> {
     Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
     let max_ticks = (max_s * 1000.0) as u64;
     let mut landed_at: Option<usize> = None;
+    let mut held_since: Option<usize> = None;
     let mut result = Ok(());
     for _ in 0..max_ticks {
         if let Err(e) = rig.tick() {
             result = Err(e);
             break;
         }
-        if landed_at.is_none() && !rig.plant.landings().is_empty() {
+        if landed_at.is_none() && rig.plant.landings().len() >= steps.max(1) {
             landed_at = Some(rig.trace.len());
         }
         if landed_at.is_some_and(|k| rig.trace.len() > k + 1500) {
+            break;
+        }
+        if held_since.is_none() && rig.worst_reaction() >= gait_control::faults::Reaction::SafeHold
+        {
+            held_since = Some(rig.trace.len());
+        }
+        if held_since.is_some_and(|k| rig.trace.len() > k + 1000) {
             break;
         }
     }
@@ -103,7 +117,7 @@ pub fn walk_step(max_s: f64) -> Result<StepRun, RigError> {
         .controller
         .crutch_load()
         .log()
-        .last()
+        .next()
         .map(|s| f64::from(s.impulse_ns))
         .or_else(|| {
             rig.controller

@@ -19,6 +19,10 @@ pub struct RunSummary {
     pub swing_start_s: Option<f64>,
     /// First landing of the swing foot in the plant.
     pub landing: Option<Landing>,
+    /// Every landing (steps completed).
+    pub landings: usize,
+    /// Swings started (the controller entered `Phase::Swing`).
+    pub swings_started: usize,
     /// Planned landing x in the world frame, m.
     pub planned_landing_x_m: f64,
     /// Highest swing-ankle height above its start, m.
@@ -59,10 +63,21 @@ pub fn summarise(
     on_board_impulse_ns: Option<f64>,
     dt_s: f64,
 ) -> RunSummary {
+    // The first step's swing: swing ticks before the first landing.
+    let first_landing_s = landings.first().map_or(f64::INFINITY, |l| l.time_s);
     let swing: Vec<&Sample> = trace
         .iter()
-        .filter(|s| matches!(s.report.phase, Phase::Swing { .. }))
+        .filter(|s| {
+            matches!(s.report.phase, Phase::Swing { .. }) && s.state.time_s <= first_landing_s
+        })
         .collect();
+    let swings_started = trace
+        .windows(2)
+        .filter(|w| {
+            matches!(w[1].report.phase, Phase::Swing { .. })
+                && !matches!(w[0].report.phase, Phase::Swing { .. })
+        })
+        .count();
     let swing_start_s = swing.first().map(|s| s.state.time_s - dt_s);
     let start_y = swing.first().map_or(0.0, |s| s.state.points_m[5][1]);
     let foot_clearance_m = swing
@@ -90,6 +105,8 @@ pub fn summarise(
         duration_s: trace.last().map_or(0.0, |s| s.state.time_s),
         swing_start_s,
         landing: landings.first().copied(),
+        landings: landings.len(),
+        swings_started,
         planned_landing_x_m,
         foot_clearance_m,
         tracking_rms_rad: sq.map(|v| (v / n).sqrt()),
@@ -127,10 +144,19 @@ impl std::fmt::Display for RunSummary {
             )?,
             None => writeln!(f, "landed                   no")?,
         }
-        writeln!(f, "foot clearance           {:.3} m", self.foot_clearance_m)?;
         writeln!(
             f,
-            "tracking RMS (swing)     L hip {:.4}  L knee {:.4}  R hip {:.4}  R knee {:.4} rad; peak {:.4} rad",
+            "steps                    {} swing(s) started, {} landing(s)",
+            self.swings_started, self.landings
+        )?;
+        writeln!(
+            f,
+            "foot clearance           {:.3} m (first swing)",
+            self.foot_clearance_m
+        )?;
+        writeln!(
+            f,
+            "tracking RMS (1st swing) L hip {:.4}  L knee {:.4}  R hip {:.4}  R knee {:.4} rad; peak {:.4} rad",
             self.tracking_rms_rad[0],
             self.tracking_rms_rad[1],
             self.tracking_rms_rad[2],
@@ -139,21 +165,21 @@ impl std::fmt::Display for RunSummary {
         )?;
         writeln!(
             f,
-            "crutch load F (swing)    {:.1} N·s (plant){}",
+            "crutch load F (1st swing) {:.1} N·s (plant){}",
             self.crutch_impulse_ns,
             self.crutch_impulse_on_board_ns
                 .map_or(String::new(), |v| format!(
-                    ", {v:.1} N·s (on-board log, whole step)"
+                    ", {v:.1} N·s (on-board log, 1st step)"
                 ))
         )?;
         writeln!(
             f,
-            "crutch peaks (swing)     left {:.0} N, right {:.0} N",
+            "crutch peaks (1st swing) left {:.0} N, right {:.0} N",
             self.crutch_peak_n[0], self.crutch_peak_n[1]
         )?;
         writeln!(
             f,
-            "pilot ankle torque       RMS {:.1} N·m, peak {:.1} N·m",
+            "pilot ankle torque (1st) RMS {:.1} N·m, peak {:.1} N·m",
             self.pilot_torque_rms_nm, self.pilot_torque_peak_nm
         )?;
         match self.first_reaction {
