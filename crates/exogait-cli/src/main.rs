@@ -61,9 +61,9 @@ enum Command {
         #[arg(value_name = "FILE.json")]
         file: PathBuf,
     },
-    /// One closed-loop walking step: the real controller on the simulated
-    /// exoskeleton and pilot, with the flash walk table; prints the metrics
-    /// (exit 1 if the foot did not land within 5 cm of the plan).
+    /// Closed-loop walking: the real controller on the simulated exoskeleton
+    /// and pilot, with the flash walk table; prints the metrics (exit 1 if
+    /// the first step did not land within 5 cm of the plan).
     Simulate(simulate::SimulateArgs),
 }
 
