@@ -515,8 +515,8 @@ mod tests {
     /// numbers printed here are the ones quoted in docs/anthropometry.md
     /// (`cargo test -p gait-core anthropometry -- --nocapture`).
     #[test]
-    fn reproduces_table_iii_lengths_and_masses() {
-        let model = body_model_for(&Pilot::<f64>::paper(), &ExoSegments::paper_default()).unwrap();
+    fn reproduces_table_iii_lengths_and_masses() -> Result<(), AnthropometryError> {
+        let model = body_model_for(&Pilot::<f64>::paper(), &ExoSegments::paper_default())?;
         let ours = model.links();
         let paper = BodyModel::<f64>::paper_table_iii();
         let theirs = paper.links();
@@ -565,31 +565,32 @@ mod tests {
         // Hip height standing, ankle to hip: 0.491 H = 0.859 m vs 0.836 m.
         let hip = ours[0].length_m + ours[1].length_m;
         assert!(rel(hip, 0.836).abs() < 0.03);
+        Ok(())
     }
 
     #[test]
-    fn hip_to_shoulder_option() {
+    fn hip_to_shoulder_option() -> Result<(), AnthropometryError> {
         let opts = Options {
             torso: TorsoSpan::HipToShoulder,
             ..Options::default()
         };
-        let m =
-            body_model_with(&Pilot::<f64>::paper(), &ExoSegments::paper_default(), &opts).unwrap();
+        let m = body_model_with(&Pilot::<f64>::paper(), &ExoSegments::paper_default(), &opts)?;
         assert!((m.links()[2].length_m - 0.288 * 1.75).abs() < 1e-12);
         // Same dynamics-relevant torso properties as the default span, apart
         // from the default exo inertia (a rod over the link).
-        let d = body_model_for(&Pilot::<f64>::paper(), &ExoSegments::paper_default()).unwrap();
+        let d = body_model_for(&Pilot::<f64>::paper(), &ExoSegments::paper_default())?;
         assert!((m.links()[2].com_m - d.links()[2].com_m).abs() < 1e-12);
         assert!((m.links()[2].mass_kg - d.links()[2].mass_kg).abs() < 1e-12);
+        Ok(())
     }
 
     #[test]
-    fn pilot_alone_matches_winter_by_hand() {
+    fn pilot_alone_matches_winter_by_hand() -> Result<(), AnthropometryError> {
         let p = Pilot {
             height_m: 1.80_f64,
             mass_kg: 80.0,
         };
-        let m = body_model_for(&p, &ExoSegments::none()).unwrap();
+        let m = body_model_for(&p, &ExoSegments::none())?;
         let l = m.links();
         // Thigh: 0.245 H, 0.100 M, COM 0.433 l from the hip, k = 0.323 l.
         let lt: f64 = 0.245 * 1.80;
@@ -617,10 +618,11 @@ mod tests {
         assert!((l[2].inertia_kgm2 - 0.678 * 80.0 * (0.496 * lh).powi(2)).abs() < 1e-9);
         // The table's fractions sum to the whole body.
         assert!((m.total_mass_kg() - 80.0).abs() < 1e-9);
+        Ok(())
     }
 
     #[test]
-    fn exo_parallel_axis_by_hand() {
+    fn exo_parallel_axis_by_hand() -> Result<(), AnthropometryError> {
         let p = Pilot {
             height_m: 1.75_f64,
             mass_kg: 70.0,
@@ -634,7 +636,7 @@ mod tests {
             },
             shank: ExoSegment::of_mass(0.0),
         };
-        let m = body_model_for(&p, &exo).unwrap();
+        let m = body_model_for(&p, &exo)?;
         let lt: f64 = 0.245 * 1.75;
         let (mh, dh, ih): (f64, f64, f64) = (7.0, 0.433 * lt, 7.0 * (0.323 * lt).powi(2));
         let d = (mh * dh + 3.0 * 0.30) / 10.0;
@@ -645,6 +647,7 @@ mod tests {
         assert!((t.inertia_kgm2 - i).abs() < 1e-12);
         // Stance thigh: same body measured from the knee.
         assert!((m.links()[1].com_m - (lt - d)).abs() < 1e-12);
+        Ok(())
     }
 
     #[test]
@@ -696,13 +699,14 @@ mod tests {
     }
 
     #[test]
-    fn f32_matches_f64() {
-        let a = body_model_for(&Pilot::<f32>::paper(), &ExoSegments::paper_default()).unwrap();
-        let b = body_model_for(&Pilot::<f64>::paper(), &ExoSegments::paper_default()).unwrap();
+    fn f32_matches_f64() -> Result<(), AnthropometryError> {
+        let a = body_model_for(&Pilot::<f32>::paper(), &ExoSegments::paper_default())?;
+        let b = body_model_for(&Pilot::<f64>::paper(), &ExoSegments::paper_default())?;
         for (x, y) in a.links().iter().zip(b.links()) {
             assert!((f64::from(x.mass_kg) - y.mass_kg).abs() < 1e-4);
             assert!((f64::from(x.inertia_kgm2) - y.inertia_kgm2).abs() < 1e-5);
         }
+        Ok(())
     }
 
     fn exo_strategy() -> impl Strategy<Value = ExoSegments<f64>> {
@@ -726,7 +730,7 @@ mod tests {
             let opts = Options { torso, ..Options::default() };
             let model = body_model_with(&pilot, &exo, &opts);
             prop_assert!(model.is_ok(), "{:?}", model);
-            let model = model.unwrap();
+            let model = model.map_err(|e| TestCaseError::fail(std::format!("{e}")))?;
             // Passes BodyModel::new again (the builder went through it).
             prop_assert!(BodyModel::new(*model.links(), *model.limits()).is_ok());
             let expected = m + exo.total_mass_kg();
@@ -739,7 +743,7 @@ mod tests {
             m in MIN_MASS_KG..=MAX_MASS_KG,
         ) {
             let pilot = Pilot { height_m: h, mass_kg: m };
-            let model = body_model_for(&pilot, &ExoSegments::paper_default()).unwrap();
+            let model = body_model_for(&pilot, &ExoSegments::paper_default()).map_err(|e| TestCaseError::fail(std::format!("{e}")))?;
             prop_assert!((model.total_mass_kg() - (m + 17.0)).abs() < 1e-9);
         }
     }

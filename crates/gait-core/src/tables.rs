@@ -303,37 +303,38 @@ pub fn encode(
 mod tests {
     use super::*;
 
-    fn image() -> ([u8; image_len(3)], usize) {
+    fn image() -> Result<([u8; image_len(3)], usize), TableError> {
         let mut buf = [0u8; image_len(3)];
         let s = [
             [0.0, 0.1, 0.0, 3.0, 3.2],
             [0.1, 0.0, 0.05, 2.9, 3.3],
             [0.2, -0.1, 0.1, 2.8, 3.4],
         ];
-        let n = encode(GaitKind::StairUp, 10_000, &s, &mut buf).unwrap();
-        (buf, n)
+        let n = encode(GaitKind::StairUp, 10_000, &s, &mut buf)?;
+        Ok((buf, n))
     }
 
     #[test]
-    fn round_trip_and_interpolation() {
-        let (buf, n) = image();
+    fn round_trip_and_interpolation() -> Result<(), TableError> {
+        let (buf, n) = image()?;
         assert_eq!(n, buf.len());
-        let t = GaitTable::parse(&buf).unwrap();
+        let t = GaitTable::parse(&buf)?;
         assert_eq!(t.kind(), GaitKind::StairUp);
         assert_eq!(t.len(), 3);
         assert!((t.duration_s() - 0.02).abs() < 1e-7);
-        assert_eq!(t.sample(1).unwrap()[3], 2.9);
+        assert_eq!(t.sample(1).map(|s| s[3]), Some(2.9));
         assert!(t.sample(3).is_none());
         let mid = t.at_time(0.015);
         assert!((mid[0] - 0.15).abs() < 1e-6);
         assert_eq!(t.at_time(-1.0), t.first());
         assert_eq!(t.at_time(f32::NAN), t.first());
         assert_eq!(t.at_time(99.0), t.last());
+        Ok(())
     }
 
     #[test]
-    fn every_corruption_is_refused() {
-        let (buf, _) = image();
+    fn every_corruption_is_refused() -> Result<(), TableError> {
+        let (buf, _) = image()?;
         // Any single flipped bit anywhere is caught (header checks or CRC).
         for byte in 0..buf.len() {
             for bit in 0..8 {
@@ -352,16 +353,18 @@ mod tests {
         let mut v = buf;
         v[4] = 2;
         assert_eq!(GaitTable::parse(&v), Err(TableError::UnknownVersion(2)));
+        Ok(())
     }
 
     #[test]
-    fn flash_tables_verify() {
-        let w = crate::flash_tables::walk().unwrap();
+    fn flash_tables_verify() -> Result<(), TableError> {
+        let w = crate::flash_tables::walk()?;
         assert_eq!(w.kind(), GaitKind::Walk);
         assert!((w.duration_s() - 2.24).abs() < 1e-4);
-        let s = crate::flash_tables::stair_up().unwrap();
+        let s = crate::flash_tables::stair_up()?;
         assert_eq!(s.kind(), GaitKind::StairUp);
         assert!((s.duration_s() - 2.28).abs() < 1e-4);
+        Ok(())
     }
 
     #[test]
