@@ -99,6 +99,11 @@ pub struct IkSolver<T> {
     /// Slack accepted on r2 ∈ [0, 1] and on circle-intersection radicands,
     /// so that targets exactly at a boundary (rounded) still solve.
     pub tolerance: T,
+    /// Largest stance-knee flexion the φ2 range allows, rad: φ2min =
+    /// φ1 − this. The paper's human range is π/4 (the default); stair
+    /// descent needs more (the trailing knee bends past 45° while the foot
+    /// is still on the upper step; docs/model.md).
+    pub stance_knee_max_rad: T,
 }
 
 impl<T: Real> IkSolver<T> {
@@ -109,7 +114,23 @@ impl<T: Real> IkSolver<T> {
         Self {
             l: model.lengths(),
             tolerance,
+            stance_knee_max_rad: T::frac_pi_4(),
         }
+    }
+
+    /// The same solver with another stance-knee flexion cap (clamped to
+    /// [0, π/2]: beyond a right angle the stance thigh would point below
+    /// the knee's horizontal and the range formulas no longer describe a
+    /// standing leg).
+    #[must_use]
+    pub fn with_stance_knee_max(mut self, max_rad: T) -> Self {
+        let v = if max_rad.finite() {
+            max_rad
+        } else {
+            T::frac_pi_4()
+        };
+        self.stance_knee_max_rad = v.max(T::zero()).min(T::frac_pi_2());
+        self
     }
 
     /// The feasible φ2 range [φ2min, φ2max] for a swing-ankle target and φ1
@@ -123,8 +144,7 @@ impl<T: Real> IkSolver<T> {
         let dy = y5 - p1[1];
         let dist = (dx * dx + dy * dy).sqrt();
         let leg = l4 + l5;
-        let quarter = T::frac_pi_4();
-        let lo = phi1 - quarter;
+        let lo = phi1 - self.stance_knee_max_rad;
         // Step 2 first: no circle intersection, the whole human range works.
         if dist + l2 <= leg {
             return Ok((lo, phi1));

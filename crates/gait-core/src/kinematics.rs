@@ -127,6 +127,28 @@ pub fn anatomical_angles<T: Real>(theta: &Theta<T>) -> [T; LINKS] {
     [T::frac_pi_2() - t1, t2, -t3, t4, -t5]
 }
 
+/// The same double-support posture described from the other foot: the swing
+/// leg becomes the stance leg and vice versa (links 1↔5 and 2↔4 swap roles
+/// and directions, the torso keeps its angle). Used to chain steps: a step's
+/// landing posture, swapped, is where the next step starts. An involution up
+/// to 2π: `swap_legs(swap_legs(Φ)) ≡ Φ`.
+///
+/// Why: link i of the chain points away from the stance ankle, so the old
+/// swing shank (knee → ankle, φ5) seen as the new stance shank (ankle → knee)
+/// is φ5 − π, and the old stance thigh (knee → hip, φ2) seen as the new
+/// swing thigh (hip → knee) is φ2 + π.
+pub fn swap_legs<T: Real>(phi: &Phi<T>) -> Phi<T> {
+    let pi = T::pi();
+    let [p1, p2, p3, p4, p5] = *phi;
+    [
+        wrap_pi(p5 - pi),
+        wrap_pi(p4 - pi),
+        p3,
+        pi + wrap_pi(p2),
+        pi + wrap_pi(p1),
+    ]
+}
+
 /// Wraps an angle to (−π, π].
 pub fn wrap_pi<T: Real>(x: T) -> T {
     let two_pi = T::two_pi();
@@ -195,5 +217,31 @@ mod tests {
         assert!((a[1] - 0.4).abs() < 1e-12);
         // Stance hip flexed: torso upright, thigh rising backward from the knee.
         assert!((a[2] - 0.2).abs() < 1e-12);
+    }
+
+    proptest::proptest! {
+        /// Seen from the other foot, the chain has the same joints: knees,
+        /// hip and torso top move with the foot that is now the origin.
+        #[test]
+        fn swap_legs_describes_the_same_posture(
+            p1 in -0.6f64..0.6, p2 in -0.8f64..0.8, p3 in -0.3f64..0.3,
+            p4 in 2.3f64..4.0, p5 in 2.5f64..4.2,
+        ) {
+            let m = BodyModel::<f64>::paper_table_iii();
+            let phi = [p1, p2, p3, p4, p5];
+            let old = forward_kinematics(&m, &phi);
+            let swapped = swap_legs(&phi);
+            let new = forward_kinematics(&m, &swapped);
+            let foot = old[4];
+            let rel = |q: [f64; 2]| [q[0] - foot[0], q[1] - foot[1]];
+            let expect = [rel(old[3]), rel(old[1]), rel(old[2]), rel(old[0]), rel([0.0, 0.0])];
+            for (a, b) in new.iter().zip(&expect) {
+                proptest::prop_assert!((a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12);
+            }
+            let back = swap_legs(&swapped);
+            for (a, b) in back.iter().zip(&phi) {
+                proptest::prop_assert!(wrap_pi(a - b).abs() < 1e-12);
+            }
+        }
     }
 }
