@@ -19,6 +19,8 @@ use crate::gait::{
     CONTACT_THRESHOLD_M, CONTROL_ROWS, ControlPoints, Differences, GaitError, Sampling,
     StanceAnkleProfile, Step, StepEvent, contact_weight, evaluate_step,
 };
+use crate::ik::{IkSolver, IkTarget};
+use crate::kinematics::swap_legs;
 use crate::model::BodyModel;
 use crate::scalar::Real;
 
@@ -50,6 +52,113 @@ pub struct StepCase<T> {
     pub r2_start: T,
     /// Torso angle φ3 at the start of the swing, rad.
     pub phi3_start_rad: T,
+    /// The posture the step must land in, when fixed (periodic steps);
+    /// `None` in the paper's cases, where r2(ts) and φ3(ts) are free.
+    pub end_posture: Option<EndPosture<T>>,
+}
+
+/// r2 and φ3 at the landing, fixed by eq. (cons) with equal bounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EndPosture<T> {
+    /// r2(ts).
+    pub r2: T,
+    /// φ3(ts), rad.
+    pub phi3_rad: T,
+}
+
+/// What defines a step that can repeat with the legs alternating.
+///
+/// In double support the posture has three degrees of freedom once both
+/// feet are placed: the stance shank φ1, the torso φ3 and the knee choice
+/// r2. A step is *periodic* when its landing posture, seen from the new
+/// stance foot ([`crate::kinematics::swap_legs`]), is its start posture:
+/// then the next step starts exactly where this one ended and the weight
+/// transfer between steps moves no joint. The paper's cases are not
+/// periodic (the walk lands with the new stance shank 0.3 rad ahead of where
+/// the next step starts), so every transfer has to move the body backwards
+/// over the new stance foot — through the crutches.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PeriodicStep<T> {
+    /// The front ankle relative to the back one in double support, m
+    /// (walk: (half the swing ankle's travel, 0); stair ascent: (tread,
+    /// rise)). The swing ankle starts at −spacing and lands at +spacing.
+    pub spacing_m: [T; 2],
+    /// Step time ts, s.
+    pub step_time_s: T,
+    /// Stance shank φ1 at the start, rad.
+    pub phi1_start_rad: T,
+    /// r2 at the start.
+    pub r2_start: T,
+    /// Torso angle at the start and at the landing, rad.
+    pub phi3_rad: T,
+    /// Steepness k of the stance-shank logistic, 1/s.
+    pub k_per_s: T,
+    /// Midpoint t_c of the logistic, s.
+    pub t_c_s: T,
+}
+
+impl<T: Real> PeriodicStep<T> {
+    /// Level walking as the device plays it: the paper's step (the swing
+    /// ankle travels 0.6 m, from 0.3 m behind to 0.3 m ahead),
+    /// step time (2.24 s), logistic shape (k, t_c) and stance shank at the
+    /// start (φ1(0) = −0.0932 rad, the paper profile's value), upright torso,
+    /// and r2(0) = 1 (the paper's 0.94 would land with the trailing ankle at
+    /// 16.8° of dorsiflexion, 1.2° inside the supervisor's envelope; r2 = 1
+    /// lands at 10.9°).
+    pub fn walk() -> Self {
+        let l = T::lit;
+        Self {
+            spacing_m: [l(0.3), l(0.0)],
+            step_time_s: l(2.24),
+            phi1_start_rad: l(-0.0932),
+            r2_start: l(1.0),
+            phi3_rad: l(0.0),
+            k_per_s: l(0.5638),
+            t_c_s: l(2.24),
+        }
+    }
+
+    /// Stair ascent as the device plays it: the paper's stair (tread
+    /// 0.275 m, rise 0.0935 m), step time (2.28 s), logistic shape, r2(0) =
+    /// 0.5 and φ1(0) = 0.0017 rad (the paper profile's start). The paper's
+    /// profile ends at 0.158 rad; the periodic landing needs 0.162 rad.
+    pub fn stair_up() -> Self {
+        let l = T::lit;
+        Self {
+            spacing_m: [l(0.275), l(0.0935)],
+            step_time_s: l(2.28),
+            phi1_start_rad: l(0.0017),
+            r2_start: l(0.5),
+            phi3_rad: l(0.0),
+            k_per_s: l(4.0),
+            t_c_s: l(1.14),
+        }
+    }
+}
+
+/// Why no periodic case exists for a [`PeriodicStep`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PeriodicError {
+    /// The start posture has no IK solution.
+    Start(crate::ik::IkError),
+    /// The landing posture (the start seen from the other foot) lies outside
+    /// the IK's human range: no r2 in [0, 1] describes it.
+    LandingOutsideHumanRange,
+    /// The logistic's shape (k, t_c) is flat over [0, ts] or not finite.
+    FlatProfile,
+}
+
+impl core::fmt::Display for PeriodicError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Start(e) => write!(f, "start posture: {e}"),
+            Self::LandingOutsideHumanRange => {
+                f.write_str("the landing posture is outside the IK's human range")
+            }
+            Self::FlatProfile => f.write_str("the stance-shank logistic is flat over the step"),
+        }
+    }
 }
 
 impl<T: Real> StepCase<T> {
@@ -76,6 +185,7 @@ impl<T: Real> StepCase<T> {
                 },
                 r2_start: l(0.94),
                 phi3_start_rad: l(0.0),
+                end_posture: None,
             },
             PaperCase::StairUp => Self {
                 start_m: [l(-0.275), l(-0.0935)],
@@ -89,8 +199,71 @@ impl<T: Real> StepCase<T> {
                 },
                 r2_start: l(0.5),
                 phi3_start_rad: l(0.0),
+                end_posture: None,
             },
         }
+    }
+}
+
+impl<T: Real> StepCase<T> {
+    /// The periodic case of `p` for `model`: start (−spacing) and landing
+    /// (+spacing); the landing posture is the start posture with the legs
+    /// swapped, which fixes φ1(ts), r2(ts) and φ3(ts). The stance-shank
+    /// logistic keeps the shape (k, t_c) and its asymptotes are solved so
+    /// that φ1(0) and φ1(ts) are the two postures' stance-shank angles.
+    pub fn periodic(p: &PeriodicStep<T>, model: &BodyModel<T>) -> Result<Self, PeriodicError> {
+        let ik = IkSolver::new(model);
+        let [sx, sy] = p.spacing_m;
+        let start = ik
+            .solve(&IkTarget {
+                x5: -sx,
+                y5: -sy,
+                phi1: p.phi1_start_rad,
+                phi3: p.phi3_rad,
+                r2: p.r2_start,
+            })
+            .map_err(PeriodicError::Start)?;
+        let landing = swap_legs(&start.phi);
+        let [phi1_end, phi2_end, ..] = landing;
+        let (lo, hi) = ik
+            .phi2_range(sx, sy, phi1_end)
+            .map_err(|_| PeriodicError::LandingOutsideHumanRange)?;
+        let r2_end = if hi - lo > ik.tolerance {
+            (phi2_end - lo) / (hi - lo)
+        } else if (phi2_end - hi).abs() <= ik.tolerance {
+            T::one()
+        } else {
+            return Err(PeriodicError::LandingOutsideHumanRange);
+        };
+        if !(r2_end >= -ik.tolerance && r2_end <= T::one() + ik.tolerance) {
+            return Err(PeriodicError::LandingOutsideHumanRange);
+        }
+        let r2_end = r2_end.max(T::zero()).min(T::one());
+        let sigma = |t: T| T::one() / (T::one() + (-p.k_per_s * (t - p.t_c_s)).exp());
+        let (s0, s1) = (sigma(T::zero()), sigma(p.step_time_s));
+        let span = s1 - s0;
+        if !span.finite() || span.abs() < T::lit(1e-6) {
+            return Err(PeriodicError::FlatProfile);
+        }
+        let width = (phi1_end - p.phi1_start_rad) / span;
+        let a = p.phi1_start_rad - width * s0;
+        Ok(Self {
+            start_m: [-sx, -sy],
+            landing_m: [sx, sy],
+            step_time_s: p.step_time_s,
+            stance: StanceAnkleProfile {
+                a_rad: a,
+                b_rad: a + width,
+                k_per_s: p.k_per_s,
+                t_c_s: p.t_c_s,
+            },
+            r2_start: p.r2_start,
+            phi3_start_rad: p.phi3_rad,
+            end_posture: Some(EndPosture {
+                r2: r2_end,
+                phi3_rad: p.phi3_rad,
+            }),
+        })
     }
 }
 
@@ -104,6 +277,9 @@ pub struct Cost<T> {
     pub torque: T,
     /// v_p · max ‖Δp5‖/Δt.
     pub velocity: T,
+    /// The joint-speed term (0 without a [`JointSpeedLimit`], as in the
+    /// paper).
+    pub joint_speed: T,
     /// max_k ‖p5(k) − p5(k−1)‖/Δt, m/s.
     pub peak_ankle_speed_m_s: T,
     /// RMS of τ over the swing samples (c_k = 1), N·m.
@@ -151,6 +327,38 @@ impl core::fmt::Display for Infeasible {
     }
 }
 
+/// A soft limit on the hip and knee speeds of a step, for tables the device
+/// plays: the paper's cost does not see the last samples before the landing
+/// (c_k = 0 within 2 mm of it), so its optima may end with a joint snapping
+/// into place at 10–20 rad/s, beyond what the supervisor allows.
+///
+/// Term added to J: `weight · Σ_k Σ_joints max(0, |θ̇_j(k)| − limit)²` over
+/// the four hip and knee joints (θ2…θ5) at every dynamics sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointSpeedLimit<T> {
+    /// Speed above which the term grows, rad/s.
+    pub rad_s: T,
+    /// Weight, N²·m² per (rad/s)².
+    pub weight: T,
+}
+
+impl<T: Real> JointSpeedLimit<T> {
+    /// The term's contribution of one sample with absolute rates Φ̇.
+    pub fn penalty(&self, dphi: &[T; 5]) -> T {
+        // Θ̇ is the linear part of the map Φ → Θ applied to Φ̇ (the map's
+        // constant offsets cancel).
+        let zero = [T::zero(); 5];
+        let rates = crate::kinematics::theta_from_phi(dphi);
+        let offset = crate::kinematics::theta_from_phi(&zero);
+        let mut sum = T::zero();
+        for (r, o) in rates.iter().zip(&offset).skip(1) {
+            let excess = ((*r - *o).abs() - self.rad_s).max(T::zero());
+            sum += excess * excess;
+        }
+        self.weight * sum
+    }
+}
+
 /// The reference problem: a case, the model, the sampling and v_p.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PaperProblem<T> {
@@ -164,7 +372,13 @@ pub struct PaperProblem<T> {
     pub velocity_weight: T,
     /// Derivative scheme (paper: backward, eq. (ee2)).
     pub differences: Differences,
+    /// Soft joint-speed limit (`None` in paper mode).
+    pub joint_speed_limit: Option<JointSpeedLimit<T>>,
 }
+
+/// Rows of P holding r2(ts) and φ3(ts) (the last control point of each).
+const R2_END_ROW: usize = 4;
+const PHI3_END_ROW: usize = 9;
 
 /// Rows of P whose time column must be non-decreasing, per curve
 /// (r2: 0–4, φ3: 5–9, z: 15–18).
@@ -184,6 +398,7 @@ impl<T: Real> PaperProblem<T> {
             model,
             velocity_weight: T::lit(PAPER_VELOCITY_WEIGHT),
             differences: Differences::Backward,
+            joint_speed_limit: None,
         }
     }
 
@@ -197,7 +412,7 @@ impl<T: Real> PaperProblem<T> {
         let lift = T::lit(0.3);
         let top = T::lit(0.6);
         let tilt = T::lit(core::f64::consts::PI / 12.0);
-        let lo: ControlPoints<T> = [
+        let mut lo: ControlPoints<T> = [
             [z, c.r2_start],
             [z, z],
             [z, z],
@@ -218,7 +433,7 @@ impl<T: Real> PaperProblem<T> {
             [z, z],
             [ts, one],
         ];
-        let hi: ControlPoints<T> = [
+        let mut hi: ControlPoints<T> = [
             [z, c.r2_start],
             [ts, one],
             [ts, one],
@@ -239,6 +454,15 @@ impl<T: Real> PaperProblem<T> {
             [ts, one],
             [ts, one],
         ];
+        if let Some(end) = c.end_posture {
+            for (row, v) in [(R2_END_ROW, end.r2), (PHI3_END_ROW, end.phi3_rad)] {
+                for m in [&mut lo, &mut hi] {
+                    if let Some(cell) = m.get_mut(row).and_then(|r| r.get_mut(1)) {
+                        *cell = v;
+                    }
+                }
+            }
+        }
         (lo, hi)
     }
 
@@ -298,6 +522,8 @@ impl<T: Real> PaperProblem<T> {
         let mut prev: Option<[T; 2]> = None;
         let mut peak_speed = T::zero();
         let mut taus: heapless::Vec<([T; 2], T), MAX_SAMPLES> = heapless::Vec::new();
+        let mut joint_speed = T::zero();
+        let limit = self.joint_speed_limit;
         evaluate_step::<T, Infeasible>(&self.model, &step, self.differences, |ev| {
             match ev {
                 StepEvent::Sample(s) => {
@@ -312,6 +538,19 @@ impl<T: Real> PaperProblem<T> {
                     prev = Some(s.p5);
                 }
                 StepEvent::Dynamics(d) => {
+                    if let Some(l) = &limit {
+                        joint_speed += l.penalty(&d.dphi);
+                        // The first interval's rate is in no dynamics
+                        // sample; with backward differences it is
+                        // Φ̇(k−1) = Φ̇(k) − Φ̈(k)·Δt at the first one.
+                        if taus.is_empty() && self.differences == Differences::Backward {
+                            let mut first_rate = d.dphi;
+                            for (r, &a) in first_rate.iter_mut().zip(&d.ddphi) {
+                                *r -= a * dt;
+                            }
+                            joint_speed += l.penalty(&first_rate);
+                        }
+                    }
                     // Capacity was checked against N above.
                     let _ = taus.push((d.gait.p5, d.torque[0]));
                 }
@@ -341,9 +580,10 @@ impl<T: Real> PaperProblem<T> {
             T::zero()
         };
         Ok(Cost {
-            j: torque + velocity,
+            j: torque + velocity + joint_speed,
             torque,
             velocity,
+            joint_speed,
             peak_ankle_speed_m_s: peak_speed,
             tau_rms_nm: tau_rms,
             tau_peak_nm: peak_tau,
@@ -372,17 +612,21 @@ impl<T: Real> PaperProblem<T> {
         let half = T::lit(0.5);
         let r2 = c.r2_start;
         let p3 = c.phi3_start_rad;
+        // A fixed landing posture is reached by a linear blend of the
+        // values; otherwise they stay constant.
+        let (r2e, p3e) = c.end_posture.map_or((r2, p3), |e| (e.r2, e.phi3_rad));
+        let mix = |a: T, b: T, i: f64| a + T::lit(i / 4.0) * (b - a);
         [
             [q(0.0, 4.0), r2],
-            [q(1.0, 4.0), r2],
-            [q(2.0, 4.0), r2],
-            [q(3.0, 4.0), r2],
-            [ts, r2],
+            [q(1.0, 4.0), mix(r2, r2e, 1.0)],
+            [q(2.0, 4.0), mix(r2, r2e, 2.0)],
+            [q(3.0, 4.0), mix(r2, r2e, 3.0)],
+            [ts, r2e],
             [q(0.0, 4.0), p3],
-            [q(1.0, 4.0), p3],
-            [q(2.0, 4.0), p3],
-            [q(3.0, 4.0), p3],
-            [ts, p3],
+            [q(1.0, 4.0), mix(p3, p3e, 1.0)],
+            [q(2.0, 4.0), mix(p3, p3e, 2.0)],
+            [q(3.0, 4.0), mix(p3, p3e, 3.0)],
+            [ts, p3e],
             [x0, y0],
             [x0, y0 + lift],
             [(x0 + xs) * half, (y0 + ys) * half + lift],

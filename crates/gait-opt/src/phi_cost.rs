@@ -52,6 +52,8 @@ pub struct PhiSample {
     /// Joint torques T_Θ, N·m (None for k < 2, where eq. (ee2) has no
     /// second difference).
     pub torque: Option<[f64; 5]>,
+    /// Φ̇ by the backward difference (None for k = 0).
+    pub dphi: Option<Phi<f64>>,
 }
 
 /// Evaluates every sample of `phi` (positions and torques).
@@ -63,6 +65,7 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
     for p in phi {
         let p5 = forward_kinematics(&problem.model, p)[4];
         let mut torque = None;
+        let mut rates = None;
         if let Some(q) = prev {
             let mut dphi = [0.0; 5];
             for ((d, &a), &b) in dphi.iter_mut().zip(p).zip(q) {
@@ -80,10 +83,15 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
                     &ddphi,
                 )));
             }
+            rates = Some(dphi);
             prev_dphi = Some(dphi);
         }
         prev = Some(p);
-        out.push(PhiSample { p5, torque });
+        out.push(PhiSample {
+            p5,
+            torque,
+            dphi: rates,
+        });
     }
     out
 }
@@ -133,10 +141,17 @@ pub fn cost_from_phi(
     }
     let torque = sum_sq / (n.saturating_sub(1).max(1) as f64);
     let velocity = problem.velocity_weight * peak_speed;
+    let joint_speed: f64 = problem.joint_speed_limit.map_or(0.0, |l| {
+        samples
+            .iter()
+            .filter_map(|s| s.dphi.map(|d| l.penalty(&d)))
+            .sum()
+    });
     Ok(Cost {
-        j: torque + velocity,
+        j: torque + velocity + joint_speed,
         torque,
         velocity,
+        joint_speed,
         peak_ankle_speed_m_s: peak_speed,
         tau_rms_nm: if swing > 0 {
             (sum_sq / swing as f64).sqrt()

@@ -10,7 +10,7 @@ use gait_core::gait::{
 use gait_core::ik::IkSolver;
 use gait_core::kinematics::theta_from_phi;
 use gait_core::model::{BodyModel, JointLimits, Link};
-use gait_core::problem::{Cost, PaperCase, PaperProblem, StepCase};
+use gait_core::problem::{Cost, EndPosture, JointSpeedLimit, PaperCase, PaperProblem, StepCase};
 use serde::{Deserialize, Serialize};
 
 use crate::baseline::{Baseline, Source};
@@ -66,6 +66,9 @@ pub struct ProblemSpec {
     pub r2_start: f64,
     /// φ3 at the start (P[5][1]), rad.
     pub phi3_start_rad: f64,
+    /// (r2, φ3 rad) fixed at the landing (periodic steps); absent when free.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_posture: Option<[f64; 2]>,
     /// Δt, s.
     pub dt_s: f64,
     /// N (samples t_k = kΔt, k = 0…N).
@@ -74,6 +77,9 @@ pub struct ProblemSpec {
     pub grid: usize,
     /// v_p, N²·m² per (m/s).
     pub velocity_weight: f64,
+    /// (limit rad/s, weight) of the joint-speed term; absent in paper mode.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_speed_limit: Option<[f64; 2]>,
     /// "backward" (eq. (ee2)) or "central".
     pub differences: String,
     /// c_k = 0 within this distance of p5(0) or p5(N), m.
@@ -94,13 +100,16 @@ pub struct ProblemSpec {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CostFigures {
-    /// J = torque + velocity.
+    /// J = torque + velocity + joint speed.
     #[serde(rename = "J")]
     pub j: f64,
     /// (1/(N−1)) Σ c_k τ_k², N²·m².
     pub torque: f64,
     /// v_p · peak swing-ankle speed.
     pub velocity: f64,
+    /// The joint-speed term (0 in paper mode).
+    #[serde(default)]
+    pub joint_speed: f64,
     /// Peak swing-ankle speed, m/s.
     pub peak_ankle_speed_m_s: f64,
     /// RMS of τ over the swing samples, N·m.
@@ -119,6 +128,7 @@ impl From<Cost<f64>> for CostFigures {
             j: c.j,
             torque: c.torque,
             velocity: c.velocity,
+            joint_speed: c.joint_speed,
             peak_ankle_speed_m_s: c.peak_ankle_speed_m_s,
             tau_rms_nm: c.tau_rms_nm,
             tau_peak_nm: c.tau_peak_nm,
@@ -317,10 +327,12 @@ impl ProblemSpec {
             },
             r2_start: c.r2_start,
             phi3_start_rad: c.phi3_start_rad,
+            end_posture: c.end_posture.map(|e| [e.r2, e.phi3_rad]),
             dt_s: p.sampling.dt_s,
             intervals: p.sampling.intervals,
             grid: p.sampling.grid,
             velocity_weight: p.velocity_weight,
+            joint_speed_limit: p.joint_speed_limit.map(|l| [l.rad_s, l.weight]),
             differences: match p.differences {
                 Differences::Backward => "backward".into(),
                 Differences::Central => "central".into(),
@@ -400,6 +412,9 @@ impl ProblemSpec {
             },
             r2_start: self.r2_start,
             phi3_start_rad: self.phi3_start_rad,
+            end_posture: self
+                .end_posture
+                .map(|[r2, phi3_rad]| EndPosture { r2, phi3_rad }),
         };
         let problem = PaperProblem {
             case,
@@ -411,6 +426,9 @@ impl ProblemSpec {
             },
             velocity_weight: self.velocity_weight,
             differences,
+            joint_speed_limit: self
+                .joint_speed_limit
+                .map(|[rad_s, weight]| JointSpeedLimit { rad_s, weight }),
         };
         let (lo, hi) = problem.bounds();
         for (name, json, derived) in [
