@@ -3,16 +3,23 @@
 //! the firmware links into flash.
 //!
 //! Which gaits and why (until a clinically constrained table family exists):
-//! - **walk**: the paper's problem with the velocity weight raised from
-//!   1,000 to 8,000 N²·m² per (m/s). The paper-mode optimum lands at 2.2 m/s
-//!   and its last 0.2 s exceed the supervisor's joint-velocity limits; with
-//!   v_p = 8,000 the swing-ankle peak is 0.83 m/s and the closed-loop
-//!   simulation lands the foot within 3 cm of the planned point
-//!   (`host-tests`, `a_swing_lands_on_the_planned_point`).
-//! - **stair ascent**: the paper-mode optimum (peak swing-ankle speed
-//!   1.1 m/s).
-//! - **stair descent**: none yet (the paper defines no descent problem), so
-//!   the gait cannot be selected.
+//! every table is a **periodic** step (`gait_core::problem::PeriodicStep`):
+//! its landing posture, seen from the new stance foot, is its start posture,
+//! so steps chain with the legs alternating and the weight transfer between
+//! them moves no joint. The paper's own optima are not periodic: the walk
+//! lands with the new stance shank 0.3 rad ahead of the next start and the
+//! torso pitched 0.2 rad forward, and playing it step after step made every
+//! transfer pull the body backwards through the crutches.
+//! - **walk**: `PeriodicStep::walk` (the paper's step, r2(0) = 1) with the
+//!   velocity weight raised from 1,000 to 8,000 N²·m² per (m/s): the
+//!   paper-mode optimum lands at 2.2 m/s and exceeds the supervisor's
+//!   joint-velocity limits.
+//! - **stair ascent**: `PeriodicStep::stair_up` (the paper's stair), paper
+//!   v_p.
+//! - **stair descent**: none. A flat-footed reciprocal descent at the
+//!   paper's stair needs the trailing ankle beyond Table I's 20° of
+//!   dorsiflexion in every double-support posture (docs/model.md, "Stair
+//!   descent"), so the gait cannot be selected.
 //!
 //! Deterministic: the optimiser is seeded and budgeted by evaluation count,
 //! so regenerating gives the same bytes; a test checks that the committed
@@ -20,16 +27,27 @@
 
 use std::fmt::Write as _;
 
+use gait_core::BodyModel;
 use gait_core::gait::{ControlPoints, GaitError};
 use gait_core::ik::IkSolver;
 use gait_core::kinematics::Phi;
-use gait_core::problem::{PaperCase, PaperProblem};
+use gait_core::problem::{
+    JointSpeedLimit, PaperCase, PaperProblem, PeriodicError, PeriodicStep, StepCase,
+};
 use gait_core::tables::{GaitKind, TableError, encode, image_len};
 
 use crate::solver::{OptimizeConfig, OptimizeError, optimize_problem};
 
 /// Velocity weight of the flash walk table, N²·m² per (m/s).
 pub const WALK_VELOCITY_WEIGHT: f64 = 8000.0;
+/// Hip and knee speed above which a table's cost grows, rad/s: half the
+/// supervisor's hip limit (6 rad/s), so that tracking lag and landing
+/// transients keep clear of it.
+pub const TABLE_JOINT_SPEED_RAD_S: f64 = 3.0;
+/// Weight of the joint-speed term, N²·m² per (rad/s)² per sample: one
+/// sample 1 rad/s over the limit costs about as much as the whole torque
+/// part of a good step.
+pub const TABLE_JOINT_SPEED_WEIGHT: f64 = 1.0e4;
 /// Sample period of the tables, µs (the paper's Δt).
 pub const TABLE_PERIOD_US: u32 = 10_000;
 
@@ -42,6 +60,8 @@ pub enum TableGenError {
     Gait(GaitError),
     /// The samples do not fit the table format.
     Table(TableError),
+    /// The periodic case does not exist.
+    Periodic(PeriodicError),
 }
 
 impl std::fmt::Display for TableGenError {
@@ -50,6 +70,7 @@ impl std::fmt::Display for TableGenError {
             Self::Optimize(e) => write!(f, "optimiser: {e}"),
             Self::Gait(e) => write!(f, "sampling: {e}"),
             Self::Table(e) => write!(f, "table: {e}"),
+            Self::Periodic(e) => write!(f, "periodic case: {e}"),
         }
     }
 }
@@ -92,42 +113,74 @@ pub struct GeneratedTable {
     pub image: Vec<u8>,
 }
 
-fn optimised(
-    case: PaperCase,
+/// The problem a table is optimised on: the periodic case of `step` with
+/// Table III and the paper's sampling.
+pub fn table_problem(
+    step: &PeriodicStep<f64>,
     velocity_weight: Option<f64>,
-) -> Result<(Vec<Phi<f64>>, f64), TableGenError> {
-    let mut problem = PaperProblem::<f64>::paper(case);
-    let mut config = OptimizeConfig::new(case);
+) -> Result<PaperProblem<f64>, TableGenError> {
+    let model = BodyModel::paper_table_iii();
+    let case = StepCase::periodic(step, &model).map_err(TableGenError::Periodic)?;
+    let mut problem = PaperProblem::new(case, model);
     if let Some(vp) = velocity_weight {
         problem.velocity_weight = vp;
+    }
+    problem.joint_speed_limit = Some(JointSpeedLimit {
+        rad_s: TABLE_JOINT_SPEED_RAD_S,
+        weight: TABLE_JOINT_SPEED_WEIGHT,
+    });
+    Ok(problem)
+}
+
+fn optimised(
+    case: PaperCase,
+    step: &PeriodicStep<f64>,
+    velocity_weight: Option<f64>,
+) -> Result<(Vec<Phi<f64>>, String), TableGenError> {
+    let problem = table_problem(step, velocity_weight)?;
+    let mut config = OptimizeConfig::new(case);
+    if let Some(vp) = velocity_weight {
         config.explore_velocity_weight = 2.0 * vp;
     }
     let r = optimize_problem(&problem, &config, &mut |_| {}).map_err(TableGenError::Optimize)?;
     let phi = step_phi(&problem, &r.control_points).map_err(TableGenError::Gait)?;
-    Ok((phi, r.cost.j))
+    let c = r.cost;
+    let figures = format!(
+        "J = {:.1} (torque {:.1}, velocity {:.1}, joint speed {:.1}; τ RMS {:.1} N·m, \
+         peak swing-ankle speed {:.2} m/s)",
+        c.j, c.torque, c.velocity, c.joint_speed, c.tau_rms_nm, c.peak_ankle_speed_m_s
+    );
+    Ok((phi, figures))
 }
 
 /// The walk table (see the module documentation).
 pub fn walk_table() -> Result<GeneratedTable, TableGenError> {
-    let (phi, j) = optimised(PaperCase::Walk, Some(WALK_VELOCITY_WEIGHT))?;
+    let (phi, j) = optimised(
+        PaperCase::Walk,
+        &PeriodicStep::walk(),
+        Some(WALK_VELOCITY_WEIGHT),
+    )?;
     Ok(GeneratedTable {
         kind: GaitKind::Walk,
         ident: "WALK",
         provenance: format!(
-            "paper walk problem with v_p = {WALK_VELOCITY_WEIGHT} (paper: 1000), seed 1, \
-             20,000 evaluations; J = {j:.1} at that v_p"
+            "periodic walk (PeriodicStep::walk) with v_p = {WALK_VELOCITY_WEIGHT} \
+             (paper: 1000), seed 1, 20,000 evaluations; {j}"
         ),
         image: table_image(GaitKind::Walk, &phi).map_err(TableGenError::Table)?,
     })
 }
 
-/// The stair-ascent table (paper mode).
+/// The stair-ascent table (periodic, paper v_p).
 pub fn stair_up_table() -> Result<GeneratedTable, TableGenError> {
-    let (phi, j) = optimised(PaperCase::StairUp, None)?;
+    let (phi, j) = optimised(PaperCase::StairUp, &PeriodicStep::stair_up(), None)?;
     Ok(GeneratedTable {
         kind: GaitKind::StairUp,
         ident: "STAIR_UP",
-        provenance: format!("paper-mode stair-up optimum, seed 1, 20,000 evaluations; J = {j:.1}"),
+        provenance: format!(
+            "periodic stair ascent (PeriodicStep::stair_up), paper v_p, seed 1, \
+             20,000 evaluations; {j}"
+        ),
         image: table_image(GaitKind::StairUp, &phi).map_err(TableGenError::Table)?,
     })
 }
