@@ -239,6 +239,8 @@ impl<'t> Controller<'t> {
             joints_rad: joints,
             feet_n: [forces_n[0], forces_n[1]],
             crutches_n: [forces_n[2], forces_n[3]],
+            ankles_rad: [JOINTS, JOINTS + 1]
+                .map(|i| self.last_angle.get(i).copied().unwrap_or(f32::NAN)),
         };
         if !self.primed {
             // First tick: hold the posture the device is in.

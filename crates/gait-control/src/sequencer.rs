@@ -16,7 +16,7 @@
 //! whose length depends on data.
 
 use gait_core::ik::{IkSolver, IkTarget};
-use gait_core::kinematics::{Phi, forward_kinematics, wrap_pi};
+use gait_core::kinematics::{Phi, forward_kinematics, swap_legs};
 use gait_core::tables::GaitTable;
 use gait_core::{BodyModel, LINKS};
 
@@ -44,6 +44,12 @@ pub struct SequencerConfig {
     pub start_tolerance_rad: f32,
     /// Duration of the weight transfer between steps, s.
     pub transfer_s: f32,
+    /// The stance ankle must be within this of the table's stance-shank
+    /// angle at the start (φ1(0)) before a swing starts, rad: the body is
+    /// over the stance foot where the step was planned from. A swing that
+    /// starts with the shank elsewhere pitches the torso by the difference
+    /// (the joints follow the table, the pilot sets φ1).
+    pub start_ankle_tolerance_rad: f32,
     /// Duration of the ramp into a safe hold, s.
     pub hold_ramp_s: f32,
 }
@@ -52,7 +58,8 @@ impl SequencerConfig {
     /// Defaults for a 93 kg system: 60 N per crutch and 300 N on the stance
     /// foot to be "ready", 80 N of swing-foot force for contact, landing
     /// accepted after 60 % of the step, 1 s timeout, 0.15 rad start
-    /// tolerance, 0.4 s transfer, 0.3 s hold ramp.
+    /// tolerance, 0.4 s transfer, stance ankle within 0.05 rad (2.9°) of
+    /// the table's start, 0.3 s hold ramp.
     pub const DEFAULT: Self = Self {
         crutch_ready_n: 60.0,
         stance_foot_ready_n: 300.0,
@@ -61,6 +68,7 @@ impl SequencerConfig {
         landing_timeout_s: 1.0,
         start_tolerance_rad: 0.15,
         transfer_s: 0.4,
+        start_ankle_tolerance_rad: 0.05,
         hold_ramp_s: 0.3,
     };
 }
@@ -158,6 +166,8 @@ pub struct Sensed {
     pub feet_n: [f32; 2],
     /// Crutch forces (0 left, 1 right), N.
     pub crutches_n: [f32; 2],
+    /// Ankle dorsiflexion (0 left, 1 right), rad.
+    pub ankles_rad: [f32; 2],
 }
 
 /// What the joints should do this tick.
@@ -252,16 +262,8 @@ impl<'t> Sequencer<'t> {
     ) -> Option<TransferPlan> {
         let model = self.model.as_ref()?;
         let ik = IkSolver::new(model);
-        let pi = core::f32::consts::PI;
         // The same posture seen from the new stance foot (links swap roles).
-        let [p1, p2, p3, p4, p5] = *landing_phi;
-        let mirrored: Phi<f32> = [
-            wrap_pi(p5 - pi),
-            wrap_pi(p4 - pi),
-            p3,
-            pi + wrap_pi(p2),
-            pi + wrap_pi(p1),
-        ];
+        let mirrored = swap_legs(landing_phi);
         let params = |phi: &Phi<f32>| -> Option<[f32; 5]> {
             let [x5, y5] = forward_kinematics(model, phi).get(LINKS - 1).copied()?;
             let (lo, hi) = ik.phi2_range(x5, y5, phi[0]).ok()?;
@@ -566,7 +568,12 @@ impl<'t> Sequencer<'t> {
             .feet_n
             .get(stance.foot())
             .is_some_and(|&f| f >= c.stance_foot_ready_n);
-        crutches && foot
+        let planned = self.tables.get(self.gait).map(|t| t.first()[0]);
+        let ankle = match (planned, sensed.ankles_rad.get(stance.ankle())) {
+            (Some(p), Some(&a)) => (a - p).abs() <= c.start_ankle_tolerance_rad,
+            _ => false,
+        };
+        crutches && foot && ankle
     }
 
     fn table_reference(&self, stance: Side, t_s: f32) -> [f32; JOINTS] {

@@ -38,11 +38,16 @@ fn walk_image() -> Vec<u8> {
     buf
 }
 
+/// The walk table's stance-shank angle at the start (the paper profile's
+/// φ1(0)): both ankles read it unless a test says otherwise.
+const START_ANKLE: f32 = -0.0932;
+
 fn sensed(joints: [f32; JOINTS], feet: [f32; 2], crutches: [f32; 2]) -> Sensed {
     Sensed {
         joints_rad: joints,
         feet_n: feet,
         crutches_n: crutches,
+        ankles_rad: [START_ANKLE; 2],
     }
 }
 
@@ -108,6 +113,36 @@ fn start_needs_a_table_and_the_start_posture() {
         rig.seq.request_start(Gait::Walk, &s),
         SeqEvent::StartAccepted(Gait::Walk, Side::Right)
     );
+}
+
+#[test]
+fn swing_waits_for_the_stance_shank_at_the_planned_angle() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    rig.seq
+        .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
+    let tol = SequencerConfig::DEFAULT.start_ankle_tolerance_rad;
+    // Forces ready, but the body is ahead of the planned start (stance
+    // ankle dorsiflexed 0.1 rad more), or its ankle reading is NaN: wait.
+    for ankle in [START_ANKLE + 0.1, START_ANKLE - 1.5 * tol, f32::NAN] {
+        for _ in 0..200 {
+            let mut s = sensed(pose, READY_FEET, READY_CRUTCHES);
+            s.ankles_rad[Side::Left.ankle()] = ankle;
+            rig.step(&s);
+        }
+        assert!(
+            matches!(rig.seq.phase(), Phase::WaitingReady { .. }),
+            "{ankle}"
+        );
+    }
+    // The swing ankle's reading does not matter; the stance one within
+    // tolerance starts the swing.
+    let mut s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    s.ankles_rad[Side::Left.ankle()] = START_ANKLE + 0.8 * tol;
+    s.ankles_rad[Side::Right.ankle()] = f32::NAN;
+    rig.step(&s);
+    assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
 }
 
 #[test]
