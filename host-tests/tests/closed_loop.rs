@@ -219,7 +219,12 @@ fn a_swing_lands_on_the_planned_point() {
     // of the planned 0.3 m, and nothing faults until the landing.
     let mut rig = standing_rig(strong_pilot()).unwrap();
     Rig::press(&rig.go, 400, 1200);
-    rig.run_until(6000, |_| false).unwrap();
+    // Until 0.1 s into the weight transfer after the landing.
+    rig.run_until(
+        6000,
+        |s| matches!(s.report.phase, Phase::Transfer { t_s, .. } if t_s > 0.1),
+    )
+    .unwrap();
     let landing = *rig.plant.landings().first().expect("the swing foot landed");
     assert!(
         (landing.position_m[0] - 0.3).abs() < 0.03 && landing.position_m[1].abs() < 0.005,

@@ -4,8 +4,9 @@
 
 use gait_control::operator::Gait;
 use gait_control::sequencer::GaitTables;
+use gait_core::BodyModel;
 use gait_core::kinematics::forward_kinematics;
-use gait_core::problem::{PaperCase, PaperProblem};
+use gait_core::problem::{PeriodicStep, StepCase};
 
 use crate::closed_loop::{PilotBehaviour, Rig, RigError, RigSetup, heel_rocker_model};
 use crate::pilot::PilotConfig;
@@ -39,7 +40,10 @@ pub fn walk_rig(pilot: PilotConfig, tables: GaitTables<'static>) -> Result<Rig<'
         .as_ref()
         .map(|t| t.first().map(f64::from))
         .ok_or(RigError::Config("no verified walk table"))?;
-    let case = PaperProblem::<f64>::paper(PaperCase::Walk).case;
+    // The flash walk table is optimised on this case (gait-opt's tables):
+    // the pilot has learnt its stance-shank profile.
+    let case = StepCase::periodic(&PeriodicStep::walk(), &BodyModel::paper_table_iii())
+        .map_err(|_| RigError::Config("no periodic walk case"))?;
     let setup = RigSetup {
         plant: PlantConfig {
             model: heel_rocker_model(),

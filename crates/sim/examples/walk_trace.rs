@@ -1,0 +1,60 @@
+//! Prints a coarse trace of the closed-loop walk (every 50 ms): phase, the
+//! true Φ, the reference and measured joints, commands, pilot torque, foot
+//! and crutch forces. For diagnosing the closed loop:
+//! `cargo run --release -p sim --example walk_trace -- [STEPS] [SECONDS] [EVERY_MS]`.
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(2);
+    let secs: f64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(10.0);
+    let every: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(50);
+    let run = match sim::scenario::walk(secs, steps) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("walk_trace: {e}");
+            return;
+        }
+    };
+    println!("{}", run.summary);
+    println!("t phase | phi(5) | ref-meas(4) | cmd(4) | pilot | feet | crutches | ankles");
+    for (k, s) in run.rig.trace.iter().enumerate() {
+        if k % every != 0 {
+            continue;
+        }
+        let r = &s.report;
+        let st = &s.state;
+        let err: Vec<String> = r
+            .reference_rad
+            .iter()
+            .zip(&r.joints_rad)
+            .map(|(a, b)| format!("{:+.3}", a - b))
+            .collect();
+        let phase = format!("{:?}", r.phase);
+        println!(
+            "{:.3} {:<34} | {} | {} | {} | {:+6.1} | {:5.0} {:5.0} | {:4.0} {:4.0} | {:?}",
+            st.time_s,
+            &phase[..phase.len().min(34)],
+            st.phi
+                .iter()
+                .map(|v| format!("{v:+.3}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+            err.join(" "),
+            r.command_nm
+                .iter()
+                .map(|v| format!("{v:+6.1}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+            st.pilot_torque_nm,
+            st.foot_forces_n[0],
+            st.foot_forces_n[1],
+            st.crutch_forces_n[0],
+            st.crutch_forces_n[1],
+            st.ankle_dorsiflexion_rad
+                .map(|a| a.map(|v| (v * 1000.0).round() / 1000.0)),
+        );
+    }
+    if let Some(e) = run.ended_by {
+        println!("ended early: {e:?}");
+    }
+}
