@@ -236,6 +236,7 @@ pub fn setup(a: &OptimizeArgs, model: Option<BodyModel<f64>>) -> Result<Setup, S
         r2_start: base.r2_start,
         phi3_start_rad: base.phi3_start_rad,
         end_posture: None,
+        rest_at_ends: false,
     };
     let model = model.unwrap_or_else(BodyModel::paper_table_iii);
     Ok(Setup {

@@ -55,6 +55,12 @@ pub struct StepCase<T> {
     /// The posture the step must land in, when fixed (periodic steps);
     /// `None` in the paper's cases, where r2(ts) and φ3(ts) are free.
     pub end_posture: Option<EndPosture<T>>,
+    /// The step starts and ends at rest: r2, φ3 and the pace z have zero
+    /// rate at t = 0 and t = ts (their second and second-to-last control
+    /// values equal the end values), so the swing ankle's speed is zero at
+    /// lift-off and landing. `false` in the paper's cases, whose optima
+    /// leave the standing posture with a jump in joint speed.
+    pub rest_at_ends: bool,
 }
 
 /// r2 and φ3 at the landing, fixed by eq. (cons) with equal bounds.
@@ -186,6 +192,7 @@ impl<T: Real> StepCase<T> {
                 r2_start: l(0.94),
                 phi3_start_rad: l(0.0),
                 end_posture: None,
+                rest_at_ends: false,
             },
             PaperCase::StairUp => Self {
                 start_m: [l(-0.275), l(-0.0935)],
@@ -200,6 +207,7 @@ impl<T: Real> StepCase<T> {
                 r2_start: l(0.5),
                 phi3_start_rad: l(0.0),
                 end_posture: None,
+                rest_at_ends: false,
             },
         }
     }
@@ -263,6 +271,7 @@ impl<T: Real> StepCase<T> {
                 r2: r2_end,
                 phi3_rad: p.phi3_rad,
             }),
+            rest_at_ends: true,
         })
     }
 }
@@ -277,9 +286,9 @@ pub struct Cost<T> {
     pub torque: T,
     /// v_p · max ‖Δp5‖/Δt.
     pub velocity: T,
-    /// The joint-speed term (0 without a [`JointSpeedLimit`], as in the
+    /// The joint-motion term (0 without a [`JointMotionLimit`], as in the
     /// paper).
-    pub joint_speed: T,
+    pub joint_motion: T,
     /// max_k ‖p5(k) − p5(k−1)‖/Δt, m/s.
     pub peak_ankle_speed_m_s: T,
     /// RMS of τ over the swing samples (c_k = 1), N·m.
@@ -327,36 +336,50 @@ impl core::fmt::Display for Infeasible {
     }
 }
 
-/// A soft limit on the hip and knee speeds of a step, for tables the device
-/// plays: the paper's cost does not see the last samples before the landing
-/// (c_k = 0 within 2 mm of it), so its optima may end with a joint snapping
-/// into place at 10–20 rad/s, beyond what the supervisor allows.
+/// Soft limits on the hip and knee speeds and accelerations of a step, for
+/// tables the device plays. The paper's cost does not see the samples near
+/// the start and the landing (c_k = 0 within 2 mm of either), so its optima
+/// may finish with a joint snapping into place (10–20 rad/s), or, when the
+/// ankle comes to rest early, with the torso braking at 20 rad/s² — which
+/// asks the stance leg and the pilot for 600–800 N·m that J never counts.
 ///
-/// Term added to J: `weight · Σ_k Σ_joints max(0, |θ̇_j(k)| − limit)²` over
-/// the four hip and knee joints (θ2…θ5) at every dynamics sample.
+/// Term added to J, over the four hip and knee joints (θ2…θ5) at every
+/// dynamics sample: `speed_weight · Σ max(0, |θ̇| − speed)²
+/// + accel_weight · Σ max(0, |θ̈| − accel)²`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct JointSpeedLimit<T> {
+pub struct JointMotionLimit<T> {
     /// Speed above which the term grows, rad/s.
-    pub rad_s: T,
-    /// Weight, N²·m² per (rad/s)².
-    pub weight: T,
+    pub speed_rad_s: T,
+    /// Weight of the speed excess, N²·m² per (rad/s)².
+    pub speed_weight: T,
+    /// Acceleration above which the term grows, rad/s².
+    pub accel_rad_s2: T,
+    /// Weight of the acceleration excess, N²·m² per (rad/s²)².
+    pub accel_weight: T,
 }
 
-impl<T: Real> JointSpeedLimit<T> {
-    /// The term's contribution of one sample with absolute rates Φ̇.
-    pub fn penalty(&self, dphi: &[T; 5]) -> T {
-        // Θ̇ is the linear part of the map Φ → Θ applied to Φ̇ (the map's
-        // constant offsets cancel).
-        let zero = [T::zero(); 5];
-        let rates = crate::kinematics::theta_from_phi(dphi);
-        let offset = crate::kinematics::theta_from_phi(&zero);
-        let mut sum = T::zero();
-        for (r, o) in rates.iter().zip(&offset).skip(1) {
-            let excess = ((*r - *o).abs() - self.rad_s).max(T::zero());
-            sum += excess * excess;
-        }
-        self.weight * sum
+impl<T: Real> JointMotionLimit<T> {
+    /// The term's contribution of one sample with absolute rates Φ̇ and
+    /// accelerations Φ̈ (`None`: rates only, for the first interval).
+    pub fn penalty(&self, dphi: &[T; 5], ddphi: Option<&[T; 5]>) -> T {
+        let speed = excess_sq(dphi, self.speed_rad_s);
+        let accel = ddphi.map_or(T::zero(), |a| excess_sq(a, self.accel_rad_s2));
+        self.speed_weight * speed + self.accel_weight * accel
     }
+}
+
+/// Σ over θ2…θ5 of max(0, |θ̇_j| − limit)², with Θ̇ the linear part of the
+/// map Φ → Θ applied to Φ̇ (the map's constant offsets cancel).
+fn excess_sq<T: Real>(dphi: &[T; 5], limit: T) -> T {
+    let zero = [T::zero(); 5];
+    let rates = crate::kinematics::theta_from_phi(dphi);
+    let offset = crate::kinematics::theta_from_phi(&zero);
+    let mut sum = T::zero();
+    for (r, o) in rates.iter().zip(&offset).skip(1) {
+        let excess = ((*r - *o).abs() - limit).max(T::zero());
+        sum += excess * excess;
+    }
+    sum
 }
 
 /// The reference problem: a case, the model, the sampling and v_p.
@@ -372,8 +395,13 @@ pub struct PaperProblem<T> {
     pub velocity_weight: T,
     /// Derivative scheme (paper: backward, eq. (ee2)).
     pub differences: Differences,
-    /// Soft joint-speed limit (`None` in paper mode).
-    pub joint_speed_limit: Option<JointSpeedLimit<T>>,
+    /// Soft joint speed and acceleration limits (`None` in paper mode).
+    pub joint_motion_limit: Option<JointMotionLimit<T>>,
+    /// Count τ² at every sample, also within 2 mm of the start and the
+    /// landing (c_k = 1 throughout). `false` in paper mode. For steps that
+    /// start and end at rest the foot lingers near the ground, and with the
+    /// paper's c_k whatever the body does then is free.
+    pub count_every_sample: bool,
 }
 
 /// Rows of P holding r2(ts) and φ3(ts) (the last control point of each).
@@ -398,7 +426,8 @@ impl<T: Real> PaperProblem<T> {
             model,
             velocity_weight: T::lit(PAPER_VELOCITY_WEIGHT),
             differences: Differences::Backward,
-            joint_speed_limit: None,
+            joint_motion_limit: None,
+            count_every_sample: false,
         }
     }
 
@@ -454,14 +483,28 @@ impl<T: Real> PaperProblem<T> {
             [ts, one],
             [ts, one],
         ];
-        if let Some(end) = c.end_posture {
-            for (row, v) in [(R2_END_ROW, end.r2), (PHI3_END_ROW, end.phi3_rad)] {
-                for m in [&mut lo, &mut hi] {
-                    if let Some(cell) = m.get_mut(row).and_then(|r| r.get_mut(1)) {
-                        *cell = v;
-                    }
+        let mut pin = |row: usize, v: T| {
+            for m in [&mut lo, &mut hi] {
+                if let Some(cell) = m.get_mut(row).and_then(|r| r.get_mut(1)) {
+                    *cell = v;
                 }
             }
+        };
+        if let Some(end) = c.end_posture {
+            pin(R2_END_ROW, end.r2);
+            pin(PHI3_END_ROW, end.phi3_rad);
+            if c.rest_at_ends {
+                pin(R2_END_ROW - 1, end.r2);
+                pin(PHI3_END_ROW - 1, end.phi3_rad);
+            }
+        }
+        if c.rest_at_ends {
+            // Second control value = first: zero rate at t = 0; z's
+            // second-to-last = 1: zero pace at the landing.
+            pin(1, c.r2_start);
+            pin(6, c.phi3_start_rad);
+            pin(16, z);
+            pin(17, one);
         }
         (lo, hi)
     }
@@ -522,8 +565,8 @@ impl<T: Real> PaperProblem<T> {
         let mut prev: Option<[T; 2]> = None;
         let mut peak_speed = T::zero();
         let mut taus: heapless::Vec<([T; 2], T), MAX_SAMPLES> = heapless::Vec::new();
-        let mut joint_speed = T::zero();
-        let limit = self.joint_speed_limit;
+        let mut joint_motion = T::zero();
+        let limit = self.joint_motion_limit;
         evaluate_step::<T, Infeasible>(&self.model, &step, self.differences, |ev| {
             match ev {
                 StepEvent::Sample(s) => {
@@ -539,7 +582,7 @@ impl<T: Real> PaperProblem<T> {
                 }
                 StepEvent::Dynamics(d) => {
                     if let Some(l) = &limit {
-                        joint_speed += l.penalty(&d.dphi);
+                        joint_motion += l.penalty(&d.dphi, Some(&d.ddphi));
                         // The first interval's rate is in no dynamics
                         // sample; with backward differences it is
                         // Φ̇(k−1) = Φ̇(k) − Φ̈(k)·Δt at the first one.
@@ -548,7 +591,7 @@ impl<T: Real> PaperProblem<T> {
                             for (r, &a) in first_rate.iter_mut().zip(&d.ddphi) {
                                 *r -= a * dt;
                             }
-                            joint_speed += l.penalty(&first_rate);
+                            joint_motion += l.penalty(&first_rate, None);
                         }
                     }
                     // Capacity was checked against N above.
@@ -565,7 +608,8 @@ impl<T: Real> PaperProblem<T> {
         let mut peak_tau = T::zero();
         let mut swing = 0usize;
         for &(p5, tau) in &taus {
-            if contact_weight(p5, start, landing, threshold) > T::zero() {
+            if self.count_every_sample || contact_weight(p5, start, landing, threshold) > T::zero()
+            {
                 sum_sq += tau * tau;
                 peak_tau = peak_tau.max(tau.abs());
                 swing += 1;
@@ -580,10 +624,10 @@ impl<T: Real> PaperProblem<T> {
             T::zero()
         };
         Ok(Cost {
-            j: torque + velocity + joint_speed,
+            j: torque + velocity + joint_motion,
             torque,
             velocity,
-            joint_speed,
+            joint_motion,
             peak_ankle_speed_m_s: peak_speed,
             tau_rms_nm: tau_rms,
             tau_peak_nm: peak_tau,
@@ -615,17 +659,29 @@ impl<T: Real> PaperProblem<T> {
         // A fixed landing posture is reached by a linear blend of the
         // values; otherwise they stay constant.
         let (r2e, p3e) = c.end_posture.map_or((r2, p3), |e| (e.r2, e.phi3_rad));
-        let mix = |a: T, b: T, i: f64| a + T::lit(i / 4.0) * (b - a);
+        // Blend weights of the middle control values: linear, or flat at
+        // both ends when the step must start and end at rest.
+        let w: [f64; 3] = if c.rest_at_ends {
+            [0.0, 0.5, 1.0]
+        } else {
+            [0.25, 0.5, 0.75]
+        };
+        let mix = |a: T, b: T, i: usize| a + T::lit(w.get(i).copied().unwrap_or(0.5)) * (b - a);
+        let (z1, z2) = if c.rest_at_ends {
+            (T::zero(), T::one())
+        } else {
+            (T::lit(1.0 / 3.0), T::lit(2.0 / 3.0))
+        };
         [
             [q(0.0, 4.0), r2],
-            [q(1.0, 4.0), mix(r2, r2e, 1.0)],
-            [q(2.0, 4.0), mix(r2, r2e, 2.0)],
-            [q(3.0, 4.0), mix(r2, r2e, 3.0)],
+            [q(1.0, 4.0), mix(r2, r2e, 0)],
+            [q(2.0, 4.0), mix(r2, r2e, 1)],
+            [q(3.0, 4.0), mix(r2, r2e, 2)],
             [ts, r2e],
             [q(0.0, 4.0), p3],
-            [q(1.0, 4.0), mix(p3, p3e, 1.0)],
-            [q(2.0, 4.0), mix(p3, p3e, 2.0)],
-            [q(3.0, 4.0), mix(p3, p3e, 3.0)],
+            [q(1.0, 4.0), mix(p3, p3e, 0)],
+            [q(2.0, 4.0), mix(p3, p3e, 1)],
+            [q(3.0, 4.0), mix(p3, p3e, 2)],
             [ts, p3e],
             [x0, y0],
             [x0, y0 + lift],
@@ -633,8 +689,8 @@ impl<T: Real> PaperProblem<T> {
             [xs, ys + lift],
             [xs, ys],
             [T::zero(), T::zero()],
-            [q(1.0, 3.0), T::lit(1.0 / 3.0)],
-            [q(2.0, 3.0), T::lit(2.0 / 3.0)],
+            [q(1.0, 3.0), z1],
+            [q(2.0, 3.0), z2],
             [ts, T::one()],
         ]
     }

@@ -175,3 +175,78 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn periodic_cases_start_and_end_at_rest() {
+    // r2, φ3 and the pace z have zero rate at both ends: their second and
+    // second-to-last control values are pinned to the end values.
+    let m = BodyModel::<f64>::paper_table_iii();
+    let case = StepCase::periodic(&PeriodicStep::walk(), &m).expect("case");
+    assert!(case.rest_at_ends);
+    let problem = PaperProblem::new(case, m);
+    let (lo, hi) = problem.bounds();
+    let end = case.end_posture.expect("fixed");
+    for (row, v) in [
+        (1, case.r2_start),
+        (3, end.r2),
+        (6, case.phi3_start_rad),
+        (8, end.phi3_rad),
+        (16, 0.0),
+        (17, 1.0),
+    ] {
+        assert_eq!((lo[row][1], hi[row][1]), (v, v), "row {row}");
+    }
+    // So the swing ankle leaves and arrives with (nearly) zero speed.
+    let step = problem.step(&problem.initial_guess());
+    let mut p5 = Vec::new();
+    step.for_each_sample::<gait_core::gait::GaitError>(|s| {
+        p5.push(s.p5);
+        Ok(())
+    })
+    .expect("samples");
+    let dt = problem.sampling.dt_s;
+    let speed = |a: [f64; 2], b: [f64; 2]| (b[0] - a[0]).hypot(b[1] - a[1]) / dt;
+    let n = p5.len();
+    assert!(speed(p5[0], p5[1]) < 0.01, "{}", speed(p5[0], p5[1]));
+    assert!(speed(p5[n - 2], p5[n - 1]) < 0.01);
+    // The paper's cases are unchanged.
+    assert!(!StepCase::<f64>::paper(gait_core::problem::PaperCase::Walk).rest_at_ends);
+}
+
+#[test]
+fn the_joint_motion_term_counts_only_excess_and_every_sample_adds_torque() {
+    use gait_core::problem::JointMotionLimit;
+    let l: JointMotionLimit<f64> = JointMotionLimit {
+        speed_rad_s: 3.0,
+        speed_weight: 2.0,
+        accel_rad_s2: 30.0,
+        accel_weight: 0.5,
+    };
+    // Φ̇ moving only the torso: θ̇3 = φ̇3 − φ̇2 and θ̇4 = φ̇4 − φ̇3 both see it.
+    let calm: [f64; 5] = [0.1, 0.1, 1.0, 0.1, 0.1];
+    assert_eq!(l.penalty(&calm, Some(&[0.0; 5])), 0.0);
+    let fast: [f64; 5] = [0.0, 0.0, 4.0, 0.0, 0.0];
+    // Two joints 1 rad/s over: 2 · (1² + 1²).
+    assert!((l.penalty(&fast, None) - 4.0).abs() < 1e-12);
+    let jerk: [f64; 5] = [0.0, 0.0, 0.0, 0.0, 40.0];
+    // Only the swing knee θ5 = φ5 − φ4: 10 rad/s² over.
+    assert!((l.penalty(&[0.0; 5], Some(&jerk)) - 0.5 * 100.0).abs() < 1e-9);
+
+    // The term and c_k = 1 both only add to J.
+    let m = BodyModel::<f64>::paper_table_iii();
+    let case = StepCase::periodic(&PeriodicStep::walk(), &m).expect("case");
+    let mut problem = PaperProblem::new(case, m);
+    let p = problem.initial_guess();
+    let plain = problem.cost(&p).expect("cost");
+    assert_eq!(plain.joint_motion, 0.0);
+    problem.count_every_sample = true;
+    let all = problem.cost(&p).expect("cost");
+    assert!(all.torque > plain.torque && all.swing_samples > plain.swing_samples);
+    problem.joint_motion_limit = Some(JointMotionLimit {
+        speed_rad_s: 0.1,
+        ..l
+    });
+    let limited = problem.cost(&p).expect("cost");
+    assert!(limited.joint_motion > 0.0);
+    assert!((limited.j - (limited.torque + limited.velocity + limited.joint_motion)).abs() < 1e-6);
+}

@@ -54,6 +54,8 @@ pub struct PhiSample {
     pub torque: Option<[f64; 5]>,
     /// Φ̇ by the backward difference (None for k = 0).
     pub dphi: Option<Phi<f64>>,
+    /// Φ̈ by the backward difference (None for k < 2).
+    pub ddphi: Option<Phi<f64>>,
 }
 
 /// Evaluates every sample of `phi` (positions and torques).
@@ -66,6 +68,7 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
         let p5 = forward_kinematics(&problem.model, p)[4];
         let mut torque = None;
         let mut rates = None;
+        let mut accels = None;
         if let Some(q) = prev {
             let mut dphi = [0.0; 5];
             for ((d, &a), &b) in dphi.iter_mut().zip(p).zip(q) {
@@ -76,6 +79,7 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
                 for ((d, &a), &b) in ddphi.iter_mut().zip(&dphi).zip(&pd) {
                     *d = (a - b) * inv_dt;
                 }
+                accels = Some(ddphi);
                 torque = Some(joint_torques(&inverse_dynamics(
                     &problem.model,
                     p,
@@ -91,6 +95,7 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
             p5,
             torque,
             dphi: rates,
+            ddphi: accels,
         });
     }
     out
@@ -133,7 +138,9 @@ pub fn cost_from_phi(
     let mut swing = 0usize;
     for s in &samples {
         let Some(t) = s.torque else { continue };
-        if contact_weight(s.p5, start, landing, CONTACT_THRESHOLD_M) > 0.0 {
+        if problem.count_every_sample
+            || contact_weight(s.p5, start, landing, CONTACT_THRESHOLD_M) > 0.0
+        {
             sum_sq += t[0] * t[0];
             peak_tau = peak_tau.max(t[0].abs());
             swing += 1;
@@ -141,17 +148,17 @@ pub fn cost_from_phi(
     }
     let torque = sum_sq / (n.saturating_sub(1).max(1) as f64);
     let velocity = problem.velocity_weight * peak_speed;
-    let joint_speed: f64 = problem.joint_speed_limit.map_or(0.0, |l| {
+    let joint_motion: f64 = problem.joint_motion_limit.map_or(0.0, |l| {
         samples
             .iter()
-            .filter_map(|s| s.dphi.map(|d| l.penalty(&d)))
+            .filter_map(|s| s.dphi.map(|d| l.penalty(&d, s.ddphi.as_ref())))
             .sum()
     });
     Ok(Cost {
-        j: torque + velocity + joint_speed,
+        j: torque + velocity + joint_motion,
         torque,
         velocity,
-        joint_speed,
+        joint_motion,
         peak_ankle_speed_m_s: peak_speed,
         tau_rms_nm: if swing > 0 {
             (sum_sq / swing as f64).sqrt()

@@ -10,7 +10,7 @@ use gait_core::gait::{
 use gait_core::ik::IkSolver;
 use gait_core::kinematics::theta_from_phi;
 use gait_core::model::{BodyModel, JointLimits, Link};
-use gait_core::problem::{Cost, EndPosture, JointSpeedLimit, PaperCase, PaperProblem, StepCase};
+use gait_core::problem::{Cost, EndPosture, JointMotionLimit, PaperCase, PaperProblem, StepCase};
 use serde::{Deserialize, Serialize};
 
 use crate::baseline::{Baseline, Source};
@@ -69,6 +69,9 @@ pub struct ProblemSpec {
     /// (r2, φ3 rad) fixed at the landing (periodic steps); absent when free.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub end_posture: Option<[f64; 2]>,
+    /// Whether the step starts and ends at rest (periodic device tables).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub rest_at_ends: bool,
     /// Δt, s.
     pub dt_s: f64,
     /// N (samples t_k = kΔt, k = 0…N).
@@ -77,9 +80,13 @@ pub struct ProblemSpec {
     pub grid: usize,
     /// v_p, N²·m² per (m/s).
     pub velocity_weight: f64,
-    /// (limit rad/s, weight) of the joint-speed term; absent in paper mode.
+    /// (speed rad/s, its weight, acceleration rad/s², its weight) of the
+    /// joint-motion term; absent in paper mode.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub joint_speed_limit: Option<[f64; 2]>,
+    pub joint_motion_limit: Option<[f64; 4]>,
+    /// τ² counted at every sample (c_k = 1 throughout; device tables).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub count_every_sample: bool,
     /// "backward" (eq. (ee2)) or "central".
     pub differences: String,
     /// c_k = 0 within this distance of p5(0) or p5(N), m.
@@ -100,16 +107,16 @@ pub struct ProblemSpec {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CostFigures {
-    /// J = torque + velocity + joint speed.
+    /// J = torque + velocity + joint motion.
     #[serde(rename = "J")]
     pub j: f64,
     /// (1/(N−1)) Σ c_k τ_k², N²·m².
     pub torque: f64,
     /// v_p · peak swing-ankle speed.
     pub velocity: f64,
-    /// The joint-speed term (0 in paper mode).
+    /// The joint-motion term (0 in paper mode).
     #[serde(default)]
-    pub joint_speed: f64,
+    pub joint_motion: f64,
     /// Peak swing-ankle speed, m/s.
     pub peak_ankle_speed_m_s: f64,
     /// RMS of τ over the swing samples, N·m.
@@ -128,7 +135,7 @@ impl From<Cost<f64>> for CostFigures {
             j: c.j,
             torque: c.torque,
             velocity: c.velocity,
-            joint_speed: c.joint_speed,
+            joint_motion: c.joint_motion,
             peak_ankle_speed_m_s: c.peak_ankle_speed_m_s,
             tau_rms_nm: c.tau_rms_nm,
             tau_peak_nm: c.tau_peak_nm,
@@ -328,11 +335,20 @@ impl ProblemSpec {
             r2_start: c.r2_start,
             phi3_start_rad: c.phi3_start_rad,
             end_posture: c.end_posture.map(|e| [e.r2, e.phi3_rad]),
+            rest_at_ends: c.rest_at_ends,
             dt_s: p.sampling.dt_s,
             intervals: p.sampling.intervals,
             grid: p.sampling.grid,
             velocity_weight: p.velocity_weight,
-            joint_speed_limit: p.joint_speed_limit.map(|l| [l.rad_s, l.weight]),
+            joint_motion_limit: p.joint_motion_limit.map(|l| {
+                [
+                    l.speed_rad_s,
+                    l.speed_weight,
+                    l.accel_rad_s2,
+                    l.accel_weight,
+                ]
+            }),
+            count_every_sample: p.count_every_sample,
             differences: match p.differences {
                 Differences::Backward => "backward".into(),
                 Differences::Central => "central".into(),
@@ -415,6 +431,7 @@ impl ProblemSpec {
             end_posture: self
                 .end_posture
                 .map(|[r2, phi3_rad]| EndPosture { r2, phi3_rad }),
+            rest_at_ends: self.rest_at_ends,
         };
         let problem = PaperProblem {
             case,
@@ -426,9 +443,15 @@ impl ProblemSpec {
             },
             velocity_weight: self.velocity_weight,
             differences,
-            joint_speed_limit: self
-                .joint_speed_limit
-                .map(|[rad_s, weight]| JointSpeedLimit { rad_s, weight }),
+            joint_motion_limit: self.joint_motion_limit.map(
+                |[speed_rad_s, speed_weight, accel_rad_s2, accel_weight]| JointMotionLimit {
+                    speed_rad_s,
+                    speed_weight,
+                    accel_rad_s2,
+                    accel_weight,
+                },
+            ),
+            count_every_sample: self.count_every_sample,
         };
         let (lo, hi) = problem.bounds();
         for (name, json, derived) in [

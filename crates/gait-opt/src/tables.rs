@@ -32,7 +32,7 @@ use gait_core::gait::{ControlPoints, GaitError};
 use gait_core::ik::IkSolver;
 use gait_core::kinematics::Phi;
 use gait_core::problem::{
-    JointSpeedLimit, PaperCase, PaperProblem, PeriodicError, PeriodicStep, StepCase,
+    JointMotionLimit, PaperCase, PaperProblem, PeriodicError, PeriodicStep, StepCase,
 };
 use gait_core::tables::{GaitKind, TableError, encode, image_len};
 
@@ -44,10 +44,16 @@ pub const WALK_VELOCITY_WEIGHT: f64 = 8000.0;
 /// supervisor's hip limit (6 rad/s), so that tracking lag and landing
 /// transients keep clear of it.
 pub const TABLE_JOINT_SPEED_RAD_S: f64 = 3.0;
-/// Weight of the joint-speed term, N²·m² per (rad/s)² per sample: one
-/// sample 1 rad/s over the limit costs about as much as the whole torque
-/// part of a good step.
+/// Weight of the speed excess, N²·m² per (rad/s)² per sample: one sample
+/// 1 rad/s over the limit costs about as much as the whole torque part of a
+/// good step.
 pub const TABLE_JOINT_SPEED_WEIGHT: f64 = 1.0e4;
+/// Hip and knee acceleration above which a table's cost grows, rad/s²
+/// (the drives' 12 N·m per ms slew and the feed-forward's 10 ms
+/// differences both want smooth references).
+pub const TABLE_JOINT_ACCEL_RAD_S2: f64 = 30.0;
+/// Weight of the acceleration excess, N²·m² per (rad/s²)² per sample.
+pub const TABLE_JOINT_ACCEL_WEIGHT: f64 = 10.0;
 /// Sample period of the tables, µs (the paper's Δt).
 pub const TABLE_PERIOD_US: u32 = 10_000;
 
@@ -125,10 +131,13 @@ pub fn table_problem(
     if let Some(vp) = velocity_weight {
         problem.velocity_weight = vp;
     }
-    problem.joint_speed_limit = Some(JointSpeedLimit {
-        rad_s: TABLE_JOINT_SPEED_RAD_S,
-        weight: TABLE_JOINT_SPEED_WEIGHT,
+    problem.joint_motion_limit = Some(JointMotionLimit {
+        speed_rad_s: TABLE_JOINT_SPEED_RAD_S,
+        speed_weight: TABLE_JOINT_SPEED_WEIGHT,
+        accel_rad_s2: TABLE_JOINT_ACCEL_RAD_S2,
+        accel_weight: TABLE_JOINT_ACCEL_WEIGHT,
     });
+    problem.count_every_sample = true;
     Ok(problem)
 }
 
@@ -146,9 +155,9 @@ fn optimised(
     let phi = step_phi(&problem, &r.control_points).map_err(TableGenError::Gait)?;
     let c = r.cost;
     let figures = format!(
-        "J = {:.1} (torque {:.1}, velocity {:.1}, joint speed {:.1}; τ RMS {:.1} N·m, \
+        "J = {:.1} (torque {:.1}, velocity {:.1}, joint motion {:.1}; τ RMS {:.1} N·m, \
          peak swing-ankle speed {:.2} m/s)",
-        c.j, c.torque, c.velocity, c.joint_speed, c.tau_rms_nm, c.peak_ankle_speed_m_s
+        c.j, c.torque, c.velocity, c.joint_motion, c.tau_rms_nm, c.peak_ankle_speed_m_s
     );
     Ok((phi, figures))
 }
