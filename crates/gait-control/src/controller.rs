@@ -542,13 +542,21 @@ impl<'t> Controller<'t> {
             match swing.and_then(|(g, s, t)| self.seq.tables().get(g).map(|tb| (tb, s, t))) {
                 Some((tb, s, t)) => {
                     let h = tb.period_s();
-                    let (a, b, c) = (tb.at_time(t - h), tb.at_time(t), tb.at_time(t + h));
+                    // Derivatives from samples inside the table: past either
+                    // end, at_time clamps, and a central difference across
+                    // the clamp reads the last rate as a stop within one
+                    // period (φ1 still moving at 0.14 rad/s at the landing
+                    // became a 1,200 N·m ankle and 600 N·m knee demand).
+                    let tc = t.max(h).min(tb.duration_s() - h);
+                    let (a, c) = (tb.at_time(tc - h), tb.at_time(tc + h));
+                    let mid = tb.at_time(tc);
+                    let b = tb.at_time(t);
                     let mut d1 = [0.0f32; LINKS];
                     let mut d2 = [0.0f32; LINKS];
                     for (((o1, o2), (&x0, &x1)), &x2) in d1
                         .iter_mut()
                         .zip(d2.iter_mut())
-                        .zip(a.iter().zip(&b))
+                        .zip(a.iter().zip(&mid))
                         .zip(&c)
                     {
                         *o1 = (x2 - x0) / (2.0 * h);
