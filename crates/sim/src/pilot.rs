@@ -45,6 +45,12 @@ pub struct PilotConfig {
     pub kp_nm_per_rad: f64,
     /// Derivative gain, N·m·s/rad.
     pub kd_nm_s_per_rad: f64,
+    /// Share (0–1) of the static ankle torque of the present posture the
+    /// pilot supplies without waiting for an error: a pilot who has learnt
+    /// the gait knows how hard to lean (0: a pure PD, which lags a body
+    /// that tips forward and settles short of its target by the gravity
+    /// moment over kp).
+    pub gravity_compensation: f64,
     /// Largest ankle torque the pilot can supply through the crutches, N·m.
     pub torque_limit_nm: f64,
     /// Horizontal lever between the stance ankle and the crutch tips, m:
@@ -62,6 +68,7 @@ impl Default for PilotConfig {
         Self {
             kp_nm_per_rad: 2500.0,
             kd_nm_s_per_rad: 400.0,
+            gravity_compensation: 0.0,
             torque_limit_nm: 120.0,
             crutch_lever_m: 0.45,
             baseline_crutch_load_n: 100.0,
@@ -89,12 +96,25 @@ impl PilotTarget {
 
 impl PilotConfig {
     /// The pilot's torque on the ankle-dorsiflexion coordinate (N·m, positive
-    /// tips the shank forward), limited.
-    pub fn torque_nm(&self, desired: Option<(f64, f64)>, phi1: f64, dphi1: f64) -> f64 {
+    /// tips the shank forward), limited. `static_nm`: the torque on that
+    /// coordinate that would hold the present posture still (scaled by
+    /// [`PilotConfig::gravity_compensation`]).
+    pub fn torque_nm(
+        &self,
+        desired: Option<(f64, f64)>,
+        phi1: f64,
+        dphi1: f64,
+        static_nm: f64,
+    ) -> f64 {
         match desired {
             None => 0.0,
             Some((q, dq)) => {
-                let t = self.kp_nm_per_rad * (q - phi1) + self.kd_nm_s_per_rad * (dq - dphi1);
+                let ff = if static_nm.is_finite() {
+                    self.gravity_compensation * static_nm
+                } else {
+                    0.0
+                };
+                let t = self.kp_nm_per_rad * (q - phi1) + self.kd_nm_s_per_rad * (dq - dphi1) + ff;
                 t.clamp(-self.torque_limit_nm, self.torque_limit_nm)
             }
         }
@@ -104,5 +124,31 @@ impl PilotConfig {
     pub fn crutch_forces_n(&self, pilot_torque_nm: f64) -> [f64; 2] {
         let total = pilot_torque_nm.abs() / self.crutch_lever_m + self.baseline_crutch_load_n;
         [0.5 * total, 0.5 * total]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gravity_compensation_adds_the_static_torque_within_the_limit() {
+        let target = Some((0.1, 0.0));
+        let pd = PilotConfig {
+            torque_limit_nm: 300.0,
+            ..PilotConfig::default()
+        };
+        // On target and still: a pure PD gives nothing, whatever gravity
+        // asks; a compensating pilot supplies the static torque.
+        assert_eq!(pd.torque_nm(target, 0.1, 0.0, 150.0), 0.0);
+        let learnt = PilotConfig {
+            gravity_compensation: 1.0,
+            ..pd
+        };
+        assert!((learnt.torque_nm(target, 0.1, 0.0, 150.0) - 150.0).abs() < 1e-12);
+        // Still limited, NaN ignored, nothing when the pilot is off.
+        assert_eq!(learnt.torque_nm(target, 0.1, 0.0, 1e4), 300.0);
+        assert_eq!(learnt.torque_nm(target, 0.1, 0.0, f64::NAN), 0.0);
+        assert_eq!(learnt.torque_nm(None, 0.1, 0.0, 150.0), 0.0);
     }
 }

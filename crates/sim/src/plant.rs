@@ -36,7 +36,9 @@
 //!   lever rule on the centre of mass's x between the two ankles.
 
 use gait_core::dynamics::{self, DynamicsError};
-use gait_core::kinematics::{Phi, anatomical_angles, forward_kinematics, link_com, theta_from_phi};
+use gait_core::kinematics::{
+    Phi, anatomical_angles, forward_kinematics, joint_torques, link_com, theta_from_phi,
+};
 use gait_core::model::{BodyModel, GRAVITY_M_S2, LINKS};
 
 use crate::pilot::{PilotConfig, PilotTarget};
@@ -539,7 +541,7 @@ impl Plant {
     /// pilot, joint stops; mapped to T_Φ.
     fn forces(&self, phi: &Phi<f64>, dphi: &Phi<f64>, t_s: f64) -> Forces {
         let (q, dq) = role_angles(phi, dphi);
-        let (pilot, spring) = self.ankle_torques_at(t_s, phi[0], dphi[0]);
+        let (pilot, spring) = self.ankle_torques_at(t_s, phi, dphi[0]);
         let lim = self.cfg.model.limits();
         let bounds = [
             (lim.ankle_plantarflexion_rad, lim.ankle_dorsiflexion_rad),
@@ -597,10 +599,25 @@ impl Plant {
     }
 
     /// (pilot, spring) torques on the ankle-dorsiflexion coordinate at `t_s`.
-    fn ankle_torques_at(&self, t_s: f64, phi1: f64, dphi1: f64) -> (f64, f64) {
+    fn ankle_torques_at(&self, t_s: f64, phi: &Phi<f64>, dphi1: f64) -> (f64, f64) {
+        let phi1 = phi[0];
         let desired = self.pilot_target.desired(t_s, t_s - self.last_swap_s);
-        let pilot = self.cfg.pilot.torque_nm(desired, phi1, dphi1);
         let spring = -self.cfg.ankle_stiffness_nm_per_rad * (phi1 - self.cfg.ankle_rest_rad);
+        // What would hold this posture still on the dorsiflexion coordinate
+        // (T_θ1 = −that), less what the spring already gives.
+        let static_nm = if self.cfg.pilot.gravity_compensation != 0.0 {
+            let zero = [0.0; LINKS];
+            let t_theta = joint_torques(&dynamics::inverse_dynamics(
+                &self.cfg.model,
+                phi,
+                &zero,
+                &zero,
+            ));
+            -t_theta[0] - spring
+        } else {
+            0.0
+        };
+        let pilot = self.cfg.pilot.torque_nm(desired, phi1, dphi1, static_nm);
         (pilot, spring)
     }
 
