@@ -274,3 +274,58 @@ fn the_main_job_reports_a_step() {
     let _ = std::fs::remove_file(&path);
     assert!(svg.starts_with("<svg") && svg.contains("polyline") && svg.len() > 10_000);
 }
+
+#[test]
+fn walks_four_steps_with_the_legs_alternating_and_no_fault() {
+    // The flash walk table is periodic: each landing posture is the next
+    // step's start, so the controller chains steps (landing → transfer →
+    // wait for the pilot → swing) with the legs alternating.
+    let run = sim::scenario::walk(20.0, 4).unwrap();
+    assert!(run.ended_by.is_none(), "{:?}", run.ended_by);
+    let rig = &run.rig;
+    let landings = rig.plant.landings();
+    assert!(landings.len() >= 4, "{} landings", landings.len());
+    for (n, l) in landings.iter().take(4).enumerate() {
+        // The right leg swings first (left stance), then they alternate;
+        // each foot lands 0.3 m ahead of the other.
+        let expected_side = if n % 2 == 0 {
+            sim::plant::Side::Right
+        } else {
+            sim::plant::Side::Left
+        };
+        assert_eq!(l.side, expected_side, "landing {n}");
+        let planned = 0.3 * (n as f64 + 1.0);
+        assert!(
+            (l.position_m[0] - planned).abs() < 0.02 && l.position_m[1].abs() < 0.005,
+            "landing {n} at {:?}, planned x = {planned}",
+            l.position_m
+        );
+        assert!(
+            l.descent_speed_m_s < 0.3,
+            "landing {n}: {} m/s",
+            l.descent_speed_m_s
+        );
+    }
+    // Nothing faulted, and the joints tracked the tables closely through
+    // every swing.
+    assert!(
+        rig.trace
+            .iter()
+            .all(|s| s.report.reaction == Reaction::None)
+    );
+    assert!(rig.faults().is_empty());
+    for s in &rig.trace {
+        if matches!(s.report.phase, Phase::Swing { .. }) {
+            for (r, m) in s.report.reference_rad.iter().zip(&s.report.joints_rad) {
+                assert!(
+                    (r - m).abs() < 0.05,
+                    "tracking {} rad at {} s",
+                    r - m,
+                    s.state.time_s
+                );
+            }
+        }
+    }
+    // Every step's crutch load went into the on-board log.
+    assert!(rig.controller.crutch_load().log().count() >= 3);
+}

@@ -5,17 +5,30 @@
 
 use std::path::PathBuf;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
+use gait_control::operator::Gait;
+
+/// Which gait to simulate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SimGait {
+    /// Level walking.
+    Walk,
+    /// Stair ascent on the paper's staircase (rise 93.5 mm, tread 275 mm).
+    StairUp,
+}
 
 /// Options of `exogait simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
+    /// The gait (with the table the firmware carries for it).
+    #[arg(long, value_enum, default_value_t = SimGait::Walk)]
+    pub gait: SimGait,
     /// Simulated time at most, s (the run also stops 1.5 s after the last
     /// landing asked for, or 1 s into a safe hold).
     #[arg(long, default_value_t = 12.0)]
     pub seconds: f64,
     /// Steps (landings) to walk.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 4)]
     pub steps: usize,
     /// Write a plot of the run (.svg or .png).
     #[arg(long, value_name = "FILE")]
@@ -34,7 +47,11 @@ pub fn run(args: &SimulateArgs) -> u8 {
         eprintln!("exogait simulate: --steps must be in 1..=20");
         return 2;
     }
-    let run = match sim::scenario::walk(args.seconds, args.steps) {
+    let (gait, label) = match args.gait {
+        SimGait::Walk => (Gait::Walk, "walking"),
+        SimGait::StairUp => (Gait::StairUp, "climbing stairs"),
+    };
+    let run = match sim::scenario::run_gait(gait, args.seconds, args.steps) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("exogait simulate: {e}");
@@ -42,7 +59,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
         }
     };
     println!(
-        "exogait closed loop: walking {} step(s), flash walk table",
+        "exogait closed loop: {label}, {} step(s), the flash table",
         args.steps
     );
     println!("{}", run.summary);

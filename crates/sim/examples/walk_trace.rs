@@ -1,14 +1,18 @@
 //! Prints a coarse trace of the closed-loop walk (every 50 ms): phase, the
 //! true Φ, the reference and measured joints, commands, pilot torque, foot
 //! and crutch forces. For diagnosing the closed loop:
-//! `cargo run --release -p sim --example walk_trace -- [STEPS] [SECONDS] [EVERY_MS]`.
+//! `cargo run --release -p sim --example walk_trace -- [STEPS] [SECONDS] [EVERY_MS] [walk|stair-up]`.
 
 fn main() {
     let mut args = std::env::args().skip(1);
     let steps: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(2);
     let secs: f64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(10.0);
     let every: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(50);
-    let run = match sim::scenario::walk(secs, steps) {
+    let gait = match args.next().as_deref() {
+        Some("stair-up") => gait_control::operator::Gait::StairUp,
+        _ => gait_control::operator::Gait::Walk,
+    };
+    let run = match sim::scenario::run_gait(gait, secs, steps) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("walk_trace: {e}");
@@ -16,7 +20,9 @@ fn main() {
         }
     };
     println!("{}", run.summary);
-    println!("t phase | phi(5) | ref-meas(4) | cmd(4) | pilot | feet | crutches | ankles");
+    println!(
+        "t phase | phi(5) | ref-meas(4) | cmd(feed-forward)(4) | pilot | feet | crutches | ankles"
+    );
     for (k, s) in run.rig.trace.iter().enumerate() {
         if k % every != 0 {
             continue;
@@ -42,7 +48,8 @@ fn main() {
             err.join(" "),
             r.command_nm
                 .iter()
-                .map(|v| format!("{v:+6.1}"))
+                .zip(&r.feedforward_nm)
+                .map(|(v, f)| format!("{v:+6.1}({f:+6.1})"))
                 .collect::<Vec<_>>()
                 .join(" "),
             st.pilot_torque_nm,

@@ -157,10 +157,13 @@ where
     root.fill(&WHITE).map_err(draw_err)?;
     let title = match &summary.landing {
         Some(l) => format!(
-            "exogait closed loop: walk step, landed at x = {:.3} m (plan {:.3} m), crutch load F = {:.0} N·s",
-            l.position_m[0], summary.planned_landing_x_m, summary.crutch_impulse_ns
+            "exogait closed loop: {} landing(s); first at x = {:.3} m (plan {:.3} m), crutch load F = {:.0} N·s",
+            summary.landings,
+            l.position_m[0],
+            summary.planned_landing_x_m,
+            summary.crutch_impulse_ns
         ),
-        None => "exogait closed loop: walk step (no landing)".to_string(),
+        None => "exogait closed loop: no landing".to_string(),
     };
     let root = root.titled(&title, ("sans-serif", 22)).map_err(draw_err)?;
     let panels = root.split_evenly((2, 2));

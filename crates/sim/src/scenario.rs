@@ -12,6 +12,7 @@ use crate::closed_loop::{PilotBehaviour, Rig, RigError, RigSetup, heel_rocker_mo
 use crate::pilot::PilotConfig;
 use crate::plant::{PlantConfig, Side, SimError};
 use crate::summary::{RunSummary, summarise};
+use crate::terrain::Terrain;
 
 /// The tables the firmware carries (`gait_core::flash_tables`), verified.
 pub fn flash_tables() -> GaitTables<'static> {
@@ -27,6 +28,7 @@ pub fn flash_tables() -> GaitTables<'static> {
 pub fn strong_pilot() -> PilotConfig {
     PilotConfig {
         torque_limit_nm: 300.0,
+        gravity_compensation: 1.0,
         ..PilotConfig::default()
     }
 }
@@ -35,26 +37,54 @@ pub fn strong_pilot() -> PilotConfig {
 /// left leg in front as stance, the pilot following the plan, the plant held
 /// still for the first 60 ms while the drives soft-start (40 ms).
 pub fn walk_rig(pilot: PilotConfig, tables: GaitTables<'static>) -> Result<Rig<'static>, RigError> {
+    gait_rig(Gait::Walk, pilot, tables)
+}
+
+/// The paper's staircase (rise 0.0935 m, tread 0.275 m, 12 steps), its first
+/// riser halfway between the feet of the stair-ascent start posture: the
+/// stance foot at x = 0 stands on the first step, the trailing foot on the
+/// floor 0.275 m behind.
+pub const PAPER_STAIRS: Terrain = Terrain::Stairs {
+    start_x_m: -0.1375,
+    rise_m: 0.0935,
+    tread_m: 0.275,
+    steps: 12,
+};
+
+/// The device standing in `gait`'s start posture, left leg in front as
+/// stance (on the first step for stair ascent, see [`PAPER_STAIRS`]), the
+/// pilot following the plan the table was optimised with, the plant held
+/// still for the first 60 ms while the drives soft-start (40 ms).
+pub fn gait_rig(
+    gait: Gait,
+    pilot: PilotConfig,
+    tables: GaitTables<'static>,
+) -> Result<Rig<'static>, RigError> {
     let first = tables
-        .walk
-        .as_ref()
+        .get(gait)
         .map(|t| t.first().map(f64::from))
-        .ok_or(RigError::Config("no verified walk table"))?;
-    // The flash walk table is optimised on this case (gait-opt's tables):
-    // the pilot has learnt its stance-shank profile.
-    let case = StepCase::periodic(&PeriodicStep::walk(), &BodyModel::paper_table_iii())
-        .map_err(|_| RigError::Config("no periodic walk case"))?;
+        .ok_or(RigError::Config("no verified table for the gait"))?;
+    // The flash tables are optimised on these cases (gait-opt's tables):
+    // the pilot has learnt their stance-shank profiles.
+    let (step, terrain, foot_y) = match gait {
+        Gait::Walk => (PeriodicStep::walk(), Terrain::Level, 0.0),
+        Gait::StairUp => (PeriodicStep::stair_up(), PAPER_STAIRS, 0.0935),
+        Gait::StairDown => return Err(RigError::Config("no stair-descent table")),
+    };
+    let case = StepCase::periodic(&step, &BodyModel::paper_table_iii())
+        .map_err(|_| RigError::Config("no periodic case for the gait"))?;
     let setup = RigSetup {
         plant: PlantConfig {
             model: heel_rocker_model(),
             pilot,
+            terrain,
             ..PlantConfig::default()
         },
         phi: first,
         stance: Side::Left,
-        stance_foot_m: [0.0, 0.0],
+        stance_foot_m: [0.0, foot_y],
         pilot: PilotBehaviour::FollowsPlan(case.stance),
-        gait: Gait::Walk,
+        gait,
         support_ticks: 60,
     };
     Rig::new(&setup, tables)
@@ -85,13 +115,20 @@ pub fn walk_step(max_s: f64) -> Result<StepRun, RigError> {
 
 /// See [`walk_step`]; `steps` landings.
 pub fn walk(max_s: f64, steps: usize) -> Result<StepRun, RigError> {
+    run_gait(Gait::Walk, max_s, steps)
+}
+
+/// `gait` from standing (see [`gait_rig`]): GO, then steps until `steps`
+/// landings have happened and 1.5 s more (or a safe hold has lasted 1 s, or
+/// `max_s` in all).
+pub fn run_gait(gait: Gait, max_s: f64, steps: usize) -> Result<StepRun, RigError> {
     let tables = flash_tables();
-    let planned_landing_x_m = tables.walk.as_ref().map_or(0.0, |t| {
+    let planned_landing_x_m = tables.get(gait).map_or(0.0, |t| {
         let m = heel_rocker_model();
         let last = t.last().map(f64::from);
         forward_kinematics(&m, &last)[4][0]
     });
-    let mut rig = walk_rig(strong_pilot(), tables)?;
+    let mut rig = gait_rig(gait, strong_pilot(), tables)?;
     Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
     let max_ticks = (max_s * 1000.0) as u64;
     let mut landed_at: Option<usize> = None;

@@ -21,6 +21,11 @@ pub struct RunSummary {
     pub landing: Option<Landing>,
     /// Every landing (steps completed).
     pub landings: usize,
+    /// Each landing: the leg and where its ankle came down (world x, m).
+    pub landing_points: Vec<(crate::plant::Side, f64)>,
+    /// Mean progression speed from the first swing's start to the last
+    /// landing, m/s (with ≥ 2 landings).
+    pub progression_m_s: Option<f64>,
     /// Swings started (the controller entered `Phase::Swing`).
     pub swings_started: usize,
     /// Planned landing x in the world frame, m.
@@ -106,6 +111,13 @@ pub fn summarise(
         swing_start_s,
         landing: landings.first().copied(),
         landings: landings.len(),
+        landing_points: landings.iter().map(|l| (l.side, l.position_m[0])).collect(),
+        progression_m_s: match (swing_start_s, landings.last()) {
+            (Some(t0), Some(last)) if landings.len() >= 2 && last.time_s > t0 => {
+                Some(last.position_m[0] / (last.time_s - t0))
+            }
+            _ => None,
+        },
         swings_started,
         planned_landing_x_m,
         foot_clearance_m,
@@ -149,6 +161,26 @@ impl std::fmt::Display for RunSummary {
             "steps                    {} swing(s) started, {} landing(s)",
             self.swings_started, self.landings
         )?;
+        if self.landing_points.len() > 1 {
+            let points: Vec<String> = self
+                .landing_points
+                .iter()
+                .map(|(side, x)| {
+                    let leg = match side {
+                        crate::plant::Side::Left => "L",
+                        crate::plant::Side::Right => "R",
+                    };
+                    format!("{leg} {x:.3}")
+                })
+                .collect();
+            writeln!(f, "landings (leg, x m)      {}", points.join(", "))?;
+        }
+        if let Some(v) = self.progression_m_s {
+            writeln!(
+                f,
+                "progression              {v:.3} m/s (first swing start to last landing)"
+            )?;
+        }
         writeln!(
             f,
             "foot clearance           {:.3} m (first swing)",
