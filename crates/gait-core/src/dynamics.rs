@@ -117,6 +117,91 @@ pub fn ankle_torque<T: Real>(
     -t.iter().fold(T::zero(), |acc, &x| acc + x)
 }
 
+/// Holding a posture with both feet on the ground: the ground force on the
+/// swing ankle and the joint torques that go with it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DoubleSupportStatics<T> {
+    /// Ground reaction on the swing (second) foot, (x, y), N.
+    pub reaction_n: [T; 2],
+    /// Joint torques T_Θ (ankle first), N·m.
+    pub torques: [T; LINKS],
+}
+
+/// Friction coefficient assumed between a foot and the ground when sharing
+/// the load in double support (a conservative value for a rubber sole).
+pub const FOOT_FRICTION: f64 = 0.5;
+
+/// Statics of a double-support posture Φ at rest: the chain is held by the
+/// stance ankle and by a ground force F on the swing ankle, so the joint
+/// torques are T_Θ(F) = Aᵀ (G_req(Φ) − Jᵀ F) with J = ∂p5/∂Φ. One posture,
+/// many F: this picks the F that minimises Σ T_Θi² over all five joints
+/// (the motors' effort and the pilot's ankle torque alike), then keeps it
+/// physical — pushing, not pulling (F_y ≥ 0), inside the friction cone
+/// |F_x| ≤ μ F_y, at most `max_load_n` — by clamping.
+///
+/// Why: with the single-stance model the whole body hangs on the stance
+/// knee; at the stair-ascent start posture (stance knee 43°) that is
+/// 208 N·m, more than the drives have, while the straight trailing leg
+/// could carry most of it.
+pub fn double_support_statics<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    max_load_n: T,
+) -> DoubleSupportStatics<T> {
+    let zero = [T::zero(); LINKS];
+    let c0 = joint_torques(&inverse_dynamics(model, phi, &zero, &zero));
+    let l = model.lengths();
+    // Jᵀ e_x and Jᵀ e_y: ∂p5/∂φ_i = l_i (cos φ_i, −sin φ_i) for the links
+    // between the stance ankle and the swing ankle (not the torso).
+    let mut jx = [T::zero(); LINKS];
+    let mut jy = [T::zero(); LINKS];
+    for (i, ((x, y), (&li, &p))) in jx
+        .iter_mut()
+        .zip(jy.iter_mut())
+        .zip(l.iter().zip(phi))
+        .enumerate()
+    {
+        if i != 2 {
+            let (s, c) = p.sin_cos_fast();
+            *x = li * c;
+            *y = -li * s;
+        }
+    }
+    let mx = joint_torques(&jx);
+    let my = joint_torques(&jy);
+    // T_Θ = c0 − Fx mx − Fy my; least squares over F.
+    let dot =
+        |a: &[T; LINKS], b: &[T; LINKS]| a.iter().zip(b).fold(T::zero(), |s, (&u, &v)| s + u * v);
+    let (a11, a12, a22) = (dot(&mx, &mx), dot(&mx, &my), dot(&my, &my));
+    let (b1, b2) = (dot(&c0, &mx), dot(&c0, &my));
+    let det = a11 * a22 - a12 * a12;
+    let (mut fx, mut fy) = if det.abs() > T::lit(1e-12) * (a11 * a22).max(T::lit(1e-12)) {
+        ((b1 * a22 - b2 * a12) / det, (a11 * b2 - a12 * b1) / det)
+    } else {
+        (T::zero(), T::zero())
+    };
+    if !(fx.finite() && fy.finite()) {
+        fx = T::zero();
+        fy = T::zero();
+    }
+    let max = if max_load_n.finite() {
+        max_load_n.max(T::zero())
+    } else {
+        T::zero()
+    };
+    fy = fy.max(T::zero()).min(max);
+    let mu = T::lit(FOOT_FRICTION) * fy;
+    fx = fx.max(-mu).min(mu);
+    let mut torques = c0;
+    for ((t, &x), &y) in torques.iter_mut().zip(&mx).zip(&my) {
+        *t = *t - fx * x - fy * y;
+    }
+    DoubleSupportStatics {
+        reaction_n: [fx, fy],
+        torques,
+    }
+}
+
 /// Forward dynamics Φ̈ = D⁻¹ (T_Φ − H Φ̇ − G), by Cholesky (D is symmetric
 /// positive definite for any valid model).
 pub fn forward_dynamics<T: Real>(

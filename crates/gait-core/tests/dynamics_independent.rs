@@ -246,3 +246,67 @@ fn energy_matches_independent_kinetic_and_potential() {
     let e = k + potential(&m, &q);
     assert!((energy(&m, &q, &w) - e).abs() < 1e-9 * e.abs());
 }
+
+/// Double-support statics by virtual work, independently of the Jacobian
+/// the function uses: moving the chain with both feet fixed (the IK keeps
+/// the swing ankle where it is while φ1, φ3 and r2 change), the joint
+/// torques' work Σ T_θi δθ_i equals the rise in potential energy — the
+/// foot's reaction does no work on a fixed foot. Checked along each of the
+/// three closed-chain directions, at the start postures of the walk and
+/// the stair ascent.
+#[test]
+fn double_support_statics_satisfy_virtual_work() {
+    use gait_core::dynamics::{FOOT_FRICTION, double_support_statics};
+    use gait_core::ik::{IkSolver, IkTarget};
+    use gait_core::kinematics::theta_from_phi;
+    let m = BodyModel::<f64>::paper_table_iii();
+    let ik = IkSolver::new(&m);
+    let weight = m.total_mass_kg() * GRAVITY_M_S2;
+    for (x5, y5, phi1, r2) in [
+        (-0.3, 0.0, -0.0932, 1.0 - 1e-3),
+        (-0.275, -0.0935, 0.0017, 0.5),
+    ] {
+        let target = IkTarget {
+            x5,
+            y5,
+            phi1,
+            phi3: 0.0,
+            r2,
+        };
+        let phi = ik.solve(&target).unwrap().phi;
+        let s = double_support_statics(&m, &phi, weight);
+        let [fx, fy] = s.reaction_n;
+        assert!(fy > 0.0 && fy <= weight && fx.abs() <= FOOT_FRICTION * fy + 1e-9);
+        let h = 1e-6;
+        for dir in 0..3 {
+            let shifted = |sign: f64| {
+                let mut t = target;
+                match dir {
+                    0 => t.phi1 += sign * h,
+                    1 => t.phi3 += sign * h,
+                    _ => t.r2 += sign * h,
+                }
+                ik.solve(&t).unwrap().phi
+            };
+            let (plus, minus) = (shifted(1.0), shifted(-1.0));
+            let (tp, tm) = (theta_from_phi(&plus), theta_from_phi(&minus));
+            let work: f64 = (0..LINKS).map(|i| s.torques[i] * (tp[i] - tm[i])).sum();
+            let zero = [0.0; LINKS];
+            let dv = energy(&m, &plus, &zero) - energy(&m, &minus, &zero);
+            assert!(
+                (work - dv).abs() < 1e-6 * (1.0 + dv.abs()) + 1e-9,
+                "direction {dir}: work {work} vs ΔV {dv}"
+            );
+        }
+        // Without a load on the second foot: the single-stance statics.
+        let single = double_support_statics(&m, &phi, 0.0);
+        let expect = joint_torques(&inverse_dynamics(&m, &phi, &[0.0; LINKS], &[0.0; LINKS]));
+        assert_eq!(single.reaction_n, [0.0, 0.0]);
+        for (a, b) in single.torques.iter().zip(&expect) {
+            assert!((a - b).abs() < 1e-9);
+        }
+        // Sharing never costs more effort than standing on one leg.
+        let effort = |t: &[f64; LINKS]| t.iter().map(|v| v * v).sum::<f64>();
+        assert!(effort(&s.torques) <= effort(&single.torques));
+    }
+}
