@@ -18,7 +18,8 @@
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;
 use embedded_hal::spi::SpiDevice;
-use gait_core::dynamics::inverse_dynamics_joint;
+use gait_core::dynamics::{double_support_statics, inverse_dynamics_joint};
+use gait_core::model::GRAVITY_M_S2;
 use gait_core::{BodyModel, LINKS};
 
 use crate::crutch_load::CrutchLoad;
@@ -302,7 +303,23 @@ impl<'t> Controller<'t> {
             .get(JOINTS + plan.stance.ankle())
             .copied()
             .unwrap_or(0.0);
-        let feedforward = self.feedforward(&plan.angle_rad, plan.swing, plan.stance, stance_ankle);
+        // Both feet carry the body between steps, and whenever the other
+        // foot's sensor reads ground contact (a hold after a landing).
+        let other_foot = forces_n
+            .get(plan.stance.other().foot())
+            .copied()
+            .unwrap_or(f32::NAN);
+        let double_support = matches!(
+            self.seq.phase(),
+            Phase::Standing | Phase::WaitingReady { .. } | Phase::Transfer { .. }
+        ) || other_foot >= self.cfg.sequencer.landing_contact_n;
+        let feedforward = self.feedforward(
+            &plan.angle_rad,
+            plan.swing,
+            plan.stance,
+            stance_ankle,
+            double_support,
+        );
         let mut command = [0.0f32; JOINTS];
         let mut saturated = [false; JOINTS];
         for i in 0..JOINTS {
@@ -529,13 +546,16 @@ impl<'t> Controller<'t> {
 
     /// The model's joint torques along the reference: during a swing from
     /// the table's Φ and its rates (central differences over one table
-    /// period); otherwise static (gravity) torques of the reference posture.
+    /// period); otherwise static torques of the reference posture, with the
+    /// load shared between the feet in double support
+    /// ([`double_support_statics`]) and on the stance leg alone otherwise.
     fn feedforward(
         &self,
         reference: &[f32; JOINTS],
         swing: Option<(crate::operator::Gait, Side, f32)>,
         stance: Side,
         stance_ankle: f32,
+        double_support: bool,
     ) -> [f32; JOINTS] {
         let model = &self.cfg.model;
         let (phi, dphi, ddphi, side) =
@@ -564,12 +584,14 @@ impl<'t> Controller<'t> {
                     }
                     (b, d1, d2, s)
                 }
-                None => (
-                    phi_from_joints(reference, stance_ankle, stance),
-                    [0.0; LINKS],
-                    [0.0; LINKS],
-                    stance,
-                ),
+                None => {
+                    let phi = phi_from_joints(reference, stance_ankle, stance);
+                    let weight = model.total_mass_kg() * GRAVITY_M_S2 as f32;
+                    let load = if double_support { weight } else { 0.0 };
+                    let statics = double_support_statics(model, &phi, load);
+                    let ff = joint_torques_from_theta_torques(&statics.torques, stance);
+                    return ff.map(|v| if v.is_finite() { v } else { 0.0 });
+                }
             };
         let t_theta = inverse_dynamics_joint(model, &phi, &dphi, &ddphi);
         let ff = joint_torques_from_theta_torques(&t_theta, side);
