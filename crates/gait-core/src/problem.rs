@@ -505,6 +505,21 @@ impl<T: Real> PaperProblem<T> {
             pin(6, c.phi3_start_rad);
             pin(16, z);
             pin(17, one);
+            // The rate is zero at an end only if the neighbouring time
+            // control point is away from it (with t1 = t0 the ratio of the
+            // two derivatives is 0/0 and its limit is not zero); keep the
+            // neighbours a tenth of the step inside.
+            let margin = ts * T::lit(0.1);
+            for row in [1, 6, 16] {
+                if let Some(cell) = lo.get_mut(row).and_then(|r| r.get_mut(0)) {
+                    *cell = margin;
+                }
+            }
+            for row in [3, 8, 17] {
+                if let Some(cell) = hi.get_mut(row).and_then(|r| r.get_mut(0)) {
+                    *cell = ts - margin;
+                }
+            }
         }
         (lo, hi)
     }
