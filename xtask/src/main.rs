@@ -89,7 +89,7 @@ usage: cargo xtask <task>
 
   ci        everything CI checks: fmt, clippy (host and both boards, warnings
             denied), host tests, firmware builds, QEMU self-test, size report
-  run       the main job: a closed-loop walking step (metrics + plot)
+  run       the main job: four closed-loop walking steps (metrics + plot)
   firmware  build the firmware for every board (release)
   qemu      build the QEMU image and run its self-test and benchmarks
   size      flash/RAM use per board
@@ -135,7 +135,7 @@ fn regenerate_tables() -> Result {
     ]))
 }
 
-/// The main job: one closed-loop walking step of the real controller on the
+/// The main job: four closed-loop walking steps of the real controller on the
 /// simulated exoskeleton (flash walk table), its metrics on stdout and a plot
 /// in `target/sim/walk-step.svg` (or the path given).
 fn run_main_job(args: &[String]) -> Result {

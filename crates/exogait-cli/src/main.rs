@@ -61,9 +61,10 @@ enum Command {
         #[arg(value_name = "FILE.json")]
         file: PathBuf,
     },
-    /// Closed-loop walking: the real controller on the simulated exoskeleton
-    /// and pilot, with the flash walk table; prints the metrics (exit 1 if
-    /// the first step did not land within 5 cm of the plan).
+    /// Closed loop: the real controller on the simulated exoskeleton and
+    /// pilot, with the flash table of the gait (walk, or stair ascent on the
+    /// paper's staircase); prints the metrics (exit 1 if the first step did
+    /// not land within 5 cm of the plan).
     Simulate(simulate::SimulateArgs),
 }
 
