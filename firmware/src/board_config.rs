@@ -265,10 +265,13 @@ pub fn operator_config(tables: &GaitTables<'_>) -> Result<OperatorConfig, BoardE
     })
 }
 
-/// The supervisor: the paper's Table I envelope with the default margins
+/// The supervisor: Table I with the heel rocker (12° of ankle
+/// plantarflexion) as the envelope, with the default margins
 /// and detection bounds.
 pub fn supervisor() -> Result<Supervisor, BoardError> {
-    let mut cfg = SupervisorConfig::paper();
+    // The device's ankles roll on the heel: the walk starts with the stance
+    // shank 5.3° behind vertical, outside Table I's 0° plantarflexion.
+    let mut cfg = SupervisorConfig::default_for(&gait_core::JointLimits::paper_with_heel_rocker());
     cfg.dt_s = DT_S;
     Supervisor::new(cfg).map_err(BoardError::Supervisor)
 }

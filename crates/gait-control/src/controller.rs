@@ -18,7 +18,7 @@
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;
 use embedded_hal::spi::SpiDevice;
-use gait_core::dynamics::{double_support_statics, inverse_dynamics_joint};
+use gait_core::dynamics::{inverse_dynamics_joint, share_load};
 use gait_core::model::GRAVITY_M_S2;
 use gait_core::{BodyModel, LINKS};
 
@@ -240,8 +240,10 @@ impl<'t> Controller<'t> {
             joints_rad: joints,
             feet_n: [forces_n[0], forces_n[1]],
             crutches_n: [forces_n[2], forces_n[3]],
+            // This tick's readings (NaN unless the encoder answered well):
+            // a held last-good value must not count as "ready".
             ankles_rad: [JOINTS, JOINTS + 1]
-                .map(|i| self.last_angle.get(i).copied().unwrap_or(f32::NAN)),
+                .map(|i| encoders.get(i).map_or(f32::NAN, |e| e.angle_rad)),
         };
         if !self.primed {
             // First tick: hold the posture the device is in.
@@ -303,22 +305,31 @@ impl<'t> Controller<'t> {
             .get(JOINTS + plan.stance.ankle())
             .copied()
             .unwrap_or(0.0);
-        // Both feet carry the body between steps, and whenever the other
-        // foot's sensor reads ground contact (a hold after a landing).
+        // What the other foot may carry: the whole body between steps
+        // (planned double support); otherwise what its sensor reads, so the
+        // load leaves it as the foot lifts at the start of a swing, and
+        // comes back as it lands (NaN: nothing).
+        let weight = self.cfg.model.total_mass_kg() * GRAVITY_M_S2 as f32;
         let other_foot = forces_n
             .get(plan.stance.other().foot())
             .copied()
             .unwrap_or(f32::NAN);
-        let double_support = matches!(
+        let other_load = if matches!(
             self.seq.phase(),
             Phase::Standing | Phase::WaitingReady { .. } | Phase::Transfer { .. }
-        ) || other_foot >= self.cfg.sequencer.landing_contact_n;
+        ) {
+            weight
+        } else if other_foot.is_finite() {
+            other_foot.max(0.0).min(weight)
+        } else {
+            0.0
+        };
         let feedforward = self.feedforward(
             &plan.angle_rad,
             plan.swing,
             plan.stance,
             stance_ankle,
-            double_support,
+            other_load,
         );
         let mut command = [0.0f32; JOINTS];
         let mut saturated = [false; JOINTS];
@@ -546,55 +557,63 @@ impl<'t> Controller<'t> {
 
     /// The model's joint torques along the reference: during a swing from
     /// the table's Φ and its rates (central differences over one table
-    /// period); otherwise static torques of the reference posture, with the
-    /// load shared between the feet in double support
-    /// ([`double_support_statics`]) and on the stance leg alone otherwise.
+    /// period; at rest once the table has ended and the reference is held);
+    /// otherwise static torques of the reference posture. In both, the
+    /// other foot takes up to `other_load_n` of the load where that lowers
+    /// the effort ([`share_load`]).
     fn feedforward(
         &self,
         reference: &[f32; JOINTS],
         swing: Option<(crate::operator::Gait, Side, f32)>,
         stance: Side,
         stance_ankle: f32,
-        double_support: bool,
+        other_load_n: f32,
     ) -> [f32; JOINTS] {
         let model = &self.cfg.model;
-        let (phi, dphi, ddphi, side) =
-            match swing.and_then(|(g, s, t)| self.seq.tables().get(g).map(|tb| (tb, s, t))) {
-                Some((tb, s, t)) => {
-                    let h = tb.period_s();
-                    // Derivatives from samples inside the table: past either
-                    // end, at_time clamps, and a central difference across
-                    // the clamp reads the last rate as a stop within one
-                    // period (φ1 still moving at 0.14 rad/s at the landing
-                    // became a 1,200 N·m ankle and 600 N·m knee demand).
-                    let tc = t.max(h).min(tb.duration_s() - h);
-                    let (a, c) = (tb.at_time(tc - h), tb.at_time(tc + h));
-                    let mid = tb.at_time(tc);
-                    let b = tb.at_time(t);
-                    let mut d1 = [0.0f32; LINKS];
-                    let mut d2 = [0.0f32; LINKS];
-                    for (((o1, o2), (&x0, &x1)), &x2) in d1
-                        .iter_mut()
-                        .zip(d2.iter_mut())
-                        .zip(a.iter().zip(&mid))
-                        .zip(&c)
-                    {
-                        *o1 = (x2 - x0) / (2.0 * h);
-                        *o2 = (x2 - 2.0 * x1 + x0) / (h * h);
-                    }
-                    (b, d1, d2, s)
+        // Past the table's end (waiting for the landing) the reference holds
+        // the last posture: statics, not the table's final rates.
+        let playing = swing.and_then(|(g, s, t)| {
+            self.seq
+                .tables()
+                .get(g)
+                .filter(|tb| t <= tb.duration_s())
+                .map(|tb| (tb, s, t))
+        });
+        let (phi, dphi, ddphi, side) = match playing {
+            Some((tb, s, t)) => {
+                let h = tb.period_s();
+                // Derivatives from samples inside the table: past either
+                // end, at_time clamps, and a central difference across
+                // the clamp reads the last rate as a stop within one
+                // period (φ1 still moving at 0.14 rad/s at the landing
+                // became a 1,200 N·m ankle and 600 N·m knee demand).
+                let tc = t.max(h).min(tb.duration_s() - h);
+                let (a, c) = (tb.at_time(tc - h), tb.at_time(tc + h));
+                let mid = tb.at_time(tc);
+                let b = tb.at_time(t);
+                let mut d1 = [0.0f32; LINKS];
+                let mut d2 = [0.0f32; LINKS];
+                for (((o1, o2), (&x0, &x1)), &x2) in d1
+                    .iter_mut()
+                    .zip(d2.iter_mut())
+                    .zip(a.iter().zip(&mid))
+                    .zip(&c)
+                {
+                    *o1 = (x2 - x0) / (2.0 * h);
+                    *o2 = (x2 - 2.0 * x1 + x0) / (h * h);
                 }
-                None => {
-                    let phi = phi_from_joints(reference, stance_ankle, stance);
-                    let weight = model.total_mass_kg() * GRAVITY_M_S2 as f32;
-                    let load = if double_support { weight } else { 0.0 };
-                    let statics = double_support_statics(model, &phi, load);
-                    let ff = joint_torques_from_theta_torques(&statics.torques, stance);
-                    return ff.map(|v| if v.is_finite() { v } else { 0.0 });
-                }
-            };
-        let t_theta = inverse_dynamics_joint(model, &phi, &dphi, &ddphi);
-        let ff = joint_torques_from_theta_torques(&t_theta, side);
+                (b, d1, d2, s)
+            }
+            None => (
+                phi_from_joints(reference, stance_ankle, stance),
+                [0.0; LINKS],
+                [0.0; LINKS],
+                stance,
+            ),
+        };
+        let single = inverse_dynamics_joint(model, &phi, &dphi, &ddphi);
+        let shared = share_load(model, &phi, &single, other_load_n);
+        let ff = joint_torques_from_theta_torques(&shared.torques, side);
         ff.map(|v| if v.is_finite() { v } else { 0.0 })
     }
 }

@@ -134,10 +134,7 @@ pub const FOOT_FRICTION: f64 = 0.5;
 /// Statics of a double-support posture Φ at rest: the chain is held by the
 /// stance ankle and by a ground force F on the swing ankle, so the joint
 /// torques are T_Θ(F) = Aᵀ (G_req(Φ) − Jᵀ F) with J = ∂p5/∂Φ. One posture,
-/// many F: this picks the F that minimises Σ T_Θi² over all five joints
-/// (the motors' effort and the pilot's ankle torque alike), then keeps it
-/// physical — pushing, not pulling (F_y ≥ 0), inside the friction cone
-/// |F_x| ≤ μ F_y, at most `max_load_n` — by clamping.
+/// many F: [`share_load`] picks the least-effort one.
 ///
 /// Why: with the single-stance model the whole body hangs on the stance
 /// knee; at the stair-ascent start posture (stance knee 43°) that is
@@ -149,7 +146,26 @@ pub fn double_support_statics<T: Real>(
     max_load_n: T,
 ) -> DoubleSupportStatics<T> {
     let zero = [T::zero(); LINKS];
-    let c0 = joint_torques(&inverse_dynamics(model, phi, &zero, &zero));
+    let single = joint_torques(&inverse_dynamics(model, phi, &zero, &zero));
+    share_load(model, phi, &single, max_load_n)
+}
+
+/// Given the joint torques `single` that a motion needs with the stance
+/// foot alone (T_Θ from [`inverse_dynamics`]), the ground force F on the
+/// second foot (at most `max_load_n` upwards) that minimises Σ T_θi² over
+/// all five joints — the motors' effort and the pilot's ankle torque alike —
+/// and the joint torques with it, T_Θ(F) = single − Aᵀ Jᵀ F.
+///
+/// F is kept physical: pushing (F_y ≥ 0), at most `max_load_n`, inside the
+/// friction cone |F_x| ≤ μ F_y. When a bound is active the other component
+/// is re-optimised on it (the box/cone minimum of a convex quadratic in two
+/// unknowns, found exactly: interior, then each active edge).
+pub fn share_load<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    single: &[T; LINKS],
+    max_load_n: T,
+) -> DoubleSupportStatics<T> {
     let l = model.lengths();
     // Jᵀ e_x and Jᵀ e_y: ∂p5/∂φ_i = l_i (cos φ_i, −sin φ_i) for the links
     // between the stance ankle and the swing ankle (not the torso).
@@ -169,30 +185,61 @@ pub fn double_support_statics<T: Real>(
     }
     let mx = joint_torques(&jx);
     let my = joint_torques(&jy);
-    // T_Θ = c0 − Fx mx − Fy my; least squares over F.
     let dot =
         |a: &[T; LINKS], b: &[T; LINKS]| a.iter().zip(b).fold(T::zero(), |s, (&u, &v)| s + u * v);
+    // Effort E(F) = |c − Fx mx − Fy my|²: a convex quadratic.
     let (a11, a12, a22) = (dot(&mx, &mx), dot(&mx, &my), dot(&my, &my));
-    let (b1, b2) = (dot(&c0, &mx), dot(&c0, &my));
-    let det = a11 * a22 - a12 * a12;
-    let (mut fx, mut fy) = if det.abs() > T::lit(1e-12) * (a11 * a22).max(T::lit(1e-12)) {
-        ((b1 * a22 - b2 * a12) / det, (a11 * b2 - a12 * b1) / det)
-    } else {
-        (T::zero(), T::zero())
-    };
-    if !(fx.finite() && fy.finite()) {
-        fx = T::zero();
-        fy = T::zero();
-    }
+    let (b1, b2) = (dot(single, &mx), dot(single, &my));
     let max = if max_load_n.finite() {
         max_load_n.max(T::zero())
     } else {
         T::zero()
     };
-    fy = fy.max(T::zero()).min(max);
-    let mu = T::lit(FOOT_FRICTION) * fy;
-    fx = fx.max(-mu).min(mu);
-    let mut torques = c0;
+    let mu = T::lit(FOOT_FRICTION);
+    let effort = |fx: T, fy: T| {
+        a11 * fx * fx + T::lit(2.0) * a12 * fx * fy + a22 * fy * fy
+            - T::lit(2.0) * (b1 * fx + b2 * fy)
+    };
+    let feasible = |fx: T, fy: T| {
+        fx.finite()
+            && fy.finite()
+            && fy >= T::zero()
+            && fy <= max
+            && fx.abs() <= mu * fy + T::lit(1e-9) * (T::one() + fy)
+    };
+    // Candidates: the interior minimum; the minimum along each edge of the
+    // region (fy = max with fx free; the two cone edges fx = ±μ fy), each
+    // clamped to its segment; and the corner at the origin.
+    let mut best = (T::zero(), T::zero());
+    let mut best_e = effort(T::zero(), T::zero());
+    let mut consider = |fx: T, fy: T| {
+        if feasible(fx, fy) {
+            let e = effort(fx, fy);
+            if e < best_e {
+                best_e = e;
+                best = (fx, fy);
+            }
+        }
+    };
+    let det = a11 * a22 - a12 * a12;
+    if det.abs() > T::lit(1e-12) * (a11 * a22).max(T::lit(1e-12)) {
+        consider((b1 * a22 - b2 * a12) / det, (a11 * b2 - a12 * b1) / det);
+    }
+    if a11 > T::zero() {
+        let fx = ((b1 - a12 * max) / a11).max(-mu * max).min(mu * max);
+        consider(fx, max);
+    }
+    for sign in [T::one(), -T::one()] {
+        // fx = sign μ fy: E is a parabola in fy.
+        let k = sign * mu;
+        let curv = a11 * k * k + T::lit(2.0) * a12 * k + a22;
+        if curv > T::zero() {
+            let fy = ((b1 * k + b2) / curv).max(T::zero()).min(max);
+            consider(k * fy, fy);
+        }
+    }
+    let (fx, fy) = best;
+    let mut torques = *single;
     for ((t, &x), &y) in torques.iter_mut().zip(&mx).zip(&my) {
         *t = *t - fx * x - fy * y;
     }

@@ -53,6 +53,9 @@ pub struct JointLimits<T> {
     pub ankle_plantarflexion_rad: T,
 }
 
+/// How far the stance shank may lean back over the heel (heel rocker), deg.
+pub const HEEL_ROCKER_PLANTARFLEXION_DEG: f64 = 12.0;
+
 impl<T: Real> JointLimits<T> {
     /// Table I of the paper: hip 100° flexion / 80° extension, knee 100° / 0°,
     /// ankle 20° dorsiflexion / 0° plantarflexion.
@@ -65,6 +68,23 @@ impl<T: Real> JointLimits<T> {
             knee_extension_rad: deg(0.0),
             ankle_dorsiflexion_rad: deg(20.0),
             ankle_plantarflexion_rad: deg(0.0),
+        }
+    }
+
+    /// Table I with the stance ankle allowed [`HEEL_ROCKER_PLANTARFLEXION_DEG`]
+    /// of "plantarflexion": the shank leaning back over the heel.
+    ///
+    /// Table I gives the ankle 0° of plantarflexion, yet the paper's own
+    /// walking profile starts the stance shank at −0.093 rad (−5.3°): with
+    /// the foot flat that is plantarflexion, and a real foot reaches it by
+    /// rolling on its heel, which the 5-link model does not describe. The
+    /// device's supervisor and the simulator's ankle stop both use these
+    /// limits, so that the start posture of the walk table is inside the
+    /// envelope on the board as it is in simulation.
+    pub fn paper_with_heel_rocker() -> Self {
+        Self {
+            ankle_plantarflexion_rad: T::lit(HEEL_ROCKER_PLANTARFLEXION_DEG.to_radians()),
+            ..Self::paper_table_i()
         }
     }
 

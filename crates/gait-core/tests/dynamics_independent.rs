@@ -298,6 +298,28 @@ fn double_support_statics_satisfy_virtual_work() {
                 "direction {dir}: work {work} vs ΔV {dv}"
             );
         }
+        // And the reaction enters through the true Jacobian of the swing
+        // ankle (finite differences of the forward kinematics).
+        let single_t = joint_torques(&inverse_dynamics(&m, &phi, &[0.0; LINKS], &[0.0; LINKS]));
+        let mut jt_f = [0.0; LINKS];
+        for (i, out) in jt_f.iter_mut().enumerate() {
+            let mut a = phi;
+            let mut b = phi;
+            a[i] += 1e-7;
+            b[i] -= 1e-7;
+            let pa = gait_core::kinematics::forward_kinematics(&m, &a)[4];
+            let pb = gait_core::kinematics::forward_kinematics(&m, &b)[4];
+            *out = ((pa[0] - pb[0]) * fx + (pa[1] - pb[1]) * fy) / 2e-7;
+        }
+        let via_fd = joint_torques(&jt_f);
+        for i in 0..LINKS {
+            let expect = single_t[i] - via_fd[i];
+            assert!(
+                (s.torques[i] - expect).abs() < 1e-4,
+                "joint {i}: {} vs {expect}",
+                s.torques[i]
+            );
+        }
         // Without a load on the second foot: the single-stance statics.
         let single = double_support_statics(&m, &phi, 0.0);
         let expect = joint_torques(&inverse_dynamics(&m, &phi, &[0.0; LINKS], &[0.0; LINKS]));
@@ -309,4 +331,68 @@ fn double_support_statics_satisfy_virtual_work() {
         let effort = |t: &[f64; LINKS]| t.iter().map(|v| v * v).sum::<f64>();
         assert!(effort(&s.torques) <= effort(&single.torques));
     }
+}
+
+/// With the load capped below what the posture would like, the reaction is
+/// still the least-effort one inside the region (push only, friction cone,
+/// cap): no point of a fine grid over the region does better.
+#[test]
+fn shared_load_is_the_constrained_optimum() {
+    use gait_core::dynamics::{FOOT_FRICTION, share_load};
+    use gait_core::ik::{IkSolver, IkTarget};
+    let m = BodyModel::<f64>::paper_table_iii();
+    let ik = IkSolver::new(&m);
+    let phi = ik
+        .solve(&IkTarget {
+            x5: -0.275,
+            y5: -0.0935,
+            phi1: 0.0017,
+            phi3: 0.0,
+            r2: 0.5,
+        })
+        .unwrap()
+        .phi;
+    // A motion, not only statics: some accelerations.
+    let ddphi = [0.5, -2.0, 3.0, 4.0, -5.0];
+    let single = joint_torques(&inverse_dynamics(&m, &phi, &[0.0; LINKS], &ddphi));
+    let effort = |t: &[f64; LINKS]| t.iter().map(|v| v * v).sum::<f64>();
+    let (ex, ey) = (
+        share_probe(&m, &phi, 1.0, 0.0),
+        share_probe(&m, &phi, 0.0, 1.0),
+    );
+    for cap in [0.0, 50.0, 300.0, 2000.0] {
+        let s = share_load(&m, &phi, &single, cap);
+        let [fx, fy] = s.reaction_n;
+        assert!(fy >= 0.0 && fy <= cap + 1e-9 && fx.abs() <= FOOT_FRICTION * fy + 1e-6);
+        let best = effort(&s.torques);
+        for i in 0..=40 {
+            for j in 0..=40 {
+                let gy = cap * f64::from(i) / 40.0;
+                let gx = FOOT_FRICTION * gy * (2.0 * f64::from(j) / 40.0 - 1.0);
+                let moved: [f64; LINKS] =
+                    std::array::from_fn(|k| single[k] - gx * ex[k] - gy * ey[k]);
+                assert!(
+                    effort(&moved) >= best - 1e-6 * (1.0 + best),
+                    "cap {cap}: ({gx}, {gy}) beats {:?}",
+                    s.reaction_n
+                );
+            }
+        }
+    }
+}
+
+/// The joint torques a unit ground force (ux, uy) on the swing ankle takes
+/// away, by finite differences of the forward kinematics (Aᵀ Jᵀ u).
+fn share_probe(m: &BodyModel<f64>, phi: &[f64; LINKS], ux: f64, uy: f64) -> [f64; LINKS] {
+    let mut jt = [0.0; LINKS];
+    for (i, out) in jt.iter_mut().enumerate() {
+        let mut a = *phi;
+        let mut b = *phi;
+        a[i] += 1e-7;
+        b[i] -= 1e-7;
+        let pa = gait_core::kinematics::forward_kinematics(m, &a)[4];
+        let pb = gait_core::kinematics::forward_kinematics(m, &b)[4];
+        *out = ((pa[0] - pb[0]) * ux + (pa[1] - pb[1]) * uy) / 2e-7;
+    }
+    joint_torques(&jt)
 }

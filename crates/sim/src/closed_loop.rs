@@ -342,19 +342,12 @@ pub enum PilotBehaviour {
     FollowsPlan(StanceAnkleProfile<f64>),
 }
 
-/// Table III with the stance ankle allowed 12° of "plantarflexion" (the
-/// shank leaning back over the heel).
-///
-/// Table I gives the ankle 0° of plantarflexion, yet the paper's own walking
-/// profile starts the stance shank at −0.093 rad (−5.3°): with the foot flat
-/// that is plantarflexion, and a real foot reaches it by rolling on the heel,
-/// which the 5-link model does not describe. The plant's ankle stop and the
-/// supervisor's ankle envelope both use this model's limits.
+/// Table III with the heel-rocker ankle limits
+/// ([`gait_core::JointLimits::paper_with_heel_rocker`]): the plant's ankle
+/// stop and the supervisor's ankle envelope both use them, as the board does.
 pub fn heel_rocker_model() -> BodyModel<f64> {
     let m = BodyModel::<f64>::paper_table_iii();
-    let mut limits = *m.limits();
-    limits.ankle_plantarflexion_rad = 12f64.to_radians();
-    BodyModel::new(*m.links(), limits).unwrap_or(m)
+    BodyModel::new(*m.links(), gait_core::JointLimits::paper_with_heel_rocker()).unwrap_or(m)
 }
 
 impl<'t> Rig<'t> {
