@@ -70,7 +70,10 @@ fn tables_leave_and_reach_the_standing_posture_slowly() {
             let tb = theta_from_phi(&t.sample(b).expect("in range"));
             for j in 1..5 {
                 let rate = (tb[j] - ta[j]).abs() / dt;
-                assert!(rate < bound, "{name}: joint {j} between samples {a} and {b}: {rate} rad/s");
+                assert!(
+                    rate < bound,
+                    "{name}: joint {j} between samples {a} and {b}: {rate} rad/s"
+                );
             }
         }
     }

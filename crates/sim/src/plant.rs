@@ -541,7 +541,8 @@ impl Plant {
     /// pilot, joint stops; mapped to T_Φ.
     fn forces(&self, phi: &Phi<f64>, dphi: &Phi<f64>, t_s: f64) -> Forces {
         let (q, dq) = role_angles(phi, dphi);
-        let (pilot, spring) = self.ankle_torques_at(t_s, phi, dphi[0]);
+        let contact_n = self.contact_force(phi, dphi);
+        let (pilot, spring) = self.ankle_torques_at(t_s, phi, dphi[0], contact_n);
         let lim = self.cfg.model.limits();
         let bounds = [
             (lim.ankle_plantarflexion_rad, lim.ankle_dorsiflexion_rad),
@@ -582,7 +583,6 @@ impl Plant {
         stops_nm[hip_w] = stops[3];
         stops_nm[knee_w] = stops[4];
         let mut t_phi = t_phi_from_t_theta(&t_theta);
-        let contact_n = self.contact_force(phi, dphi);
         // Generalised forces of a force F at the swing ankle: Jᵀ F with
         // ∂p5/∂φ_i = l_i (cos φ_i, −sin φ_i) for links 1, 2, 4, 5.
         let l = self.cfg.model.lengths();
@@ -599,21 +599,27 @@ impl Plant {
     }
 
     /// (pilot, spring) torques on the ankle-dorsiflexion coordinate at `t_s`.
-    fn ankle_torques_at(&self, t_s: f64, phi: &Phi<f64>, dphi1: f64) -> (f64, f64) {
+    fn ankle_torques_at(
+        &self,
+        t_s: f64,
+        phi: &Phi<f64>,
+        dphi1: f64,
+        contact_n: [f64; 2],
+    ) -> (f64, f64) {
         let phi1 = phi[0];
         let desired = self.pilot_target.desired(t_s, t_s - self.last_swap_s);
         let spring = -self.cfg.ankle_stiffness_nm_per_rad * (phi1 - self.cfg.ankle_rest_rad);
         // What would hold this posture still on the dorsiflexion coordinate
-        // (T_θ1 = −that), less what the spring already gives.
+        // (T_θ1 = −that), less what the spring already gives and what the
+        // ground under the other foot takes (its generalised forces Jᵀ F).
         let static_nm = if self.cfg.pilot.gravity_compensation != 0.0 {
             let zero = [0.0; LINKS];
-            let t_theta = joint_torques(&dynamics::inverse_dynamics(
-                &self.cfg.model,
-                phi,
-                &zero,
-                &zero,
-            ));
-            -t_theta[0] - spring
+            let mut required = dynamics::inverse_dynamics(&self.cfg.model, phi, &zero, &zero);
+            let l = self.cfg.model.lengths();
+            for i in [0, 1, 3, 4] {
+                required[i] -= l[i] * (phi[i].cos() * contact_n[0] - phi[i].sin() * contact_n[1]);
+            }
+            -joint_torques(&required)[0] - spring
         } else {
             0.0
         };
