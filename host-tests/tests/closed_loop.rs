@@ -12,7 +12,7 @@
 use gait_control::faults::{FaultCode, Reaction};
 use gait_control::sequencer::Phase;
 use host_tests::{standing_rig, strong_pilot};
-use sim::closed_loop::Rig;
+use sim::closed_loop::{DRIVE_TORQUE_LIMIT_NM, Rig};
 use sim::mcp3208::ChannelFault;
 use sim::pilot::PilotConfig;
 use sim::wiring::INJECTED_SPI_ERROR;
@@ -203,10 +203,16 @@ fn commands_stay_within_limits_under_sensor_garbage() {
             Err(_) => break, // the pilot may fall once the device holds still
         };
         for &c in &s.report.command_nm {
-            assert!(c.is_finite() && c.abs() <= 200.0 + 1e-3, "command {c}");
+            assert!(
+                c.is_finite() && c.abs() <= DRIVE_TORQUE_LIMIT_NM + 1e-3,
+                "command {c}"
+            );
         }
         for t in rig.wiring.motor_torques_nm() {
-            assert!(t.abs() <= 200.0 + 0.1, "bridge torque {t}");
+            assert!(
+                t.abs() <= f64::from(DRIVE_TORQUE_LIMIT_NM) + 0.1,
+                "bridge torque {t}"
+            );
         }
     }
     assert!(rig.worst_reaction() >= Reaction::SafeHold);
@@ -328,4 +334,41 @@ fn walks_four_steps_with_the_legs_alternating_and_no_fault() {
     }
     // Every step's crutch load went into the on-board log.
     assert!(rig.controller.crutch_load().log().count() >= 3);
+}
+
+#[test]
+fn climbs_four_stairs_with_the_legs_alternating_and_no_fault() {
+    // The flash stair-ascent table on the paper's staircase (rise 93.5 mm,
+    // tread 275 mm), starting with the left foot on the first step and the
+    // right one on the floor: each landing is one tread ahead and one step
+    // up from the last.
+    let run = sim::scenario::run_gait(gait_control::operator::Gait::StairUp, 20.0, 4).unwrap();
+    assert!(run.ended_by.is_none(), "{:?}", run.ended_by);
+    let rig = &run.rig;
+    let landings = rig.plant.landings();
+    assert!(landings.len() >= 4, "{} landings", landings.len());
+    for (n, l) in landings.iter().take(4).enumerate() {
+        let expected_side = if n % 2 == 0 {
+            sim::plant::Side::Right
+        } else {
+            sim::plant::Side::Left
+        };
+        assert_eq!(l.side, expected_side, "landing {n}");
+        let (x, y) = (0.275 * (n as f64 + 1.0), 0.0935 * (n as f64 + 2.0));
+        assert!(
+            (l.position_m[0] - x).abs() < 0.02 && (l.position_m[1] - y).abs() < 0.005,
+            "landing {n} at {:?}, planned ({x}, {y})",
+            l.position_m
+        );
+        assert!(
+            (l.ground_m - y).abs() < 1e-9,
+            "landing {n} on the wrong step"
+        );
+    }
+    assert!(
+        rig.trace
+            .iter()
+            .all(|s| s.report.reaction == Reaction::None)
+    );
+    assert!(rig.faults().is_empty());
 }

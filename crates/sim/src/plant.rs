@@ -109,7 +109,8 @@ pub struct PlantConfig {
     /// Swing-ankle height above ground counted as touching down, m.
     pub landing_tolerance_m: f64,
     /// Height the swing ankle must rise above the ground before a landing
-    /// can be registered, m.
+    /// can be registered, m (default 1 cm; the closed-loop rigs use 3 cm,
+    /// see `scenario::gait_rig`).
     pub lift_clearance_m: f64,
     /// The swing foot carries load while within this height of the ground, m.
     pub contact_tolerance_m: f64,

@@ -78,6 +78,12 @@ pub fn gait_rig(
             model: heel_rocker_model(),
             pilot,
             terrain,
+            // After an impact the trailing foot lifts off by a centimetre or
+            // two and hovers through the weight transfer; with the default
+            // 1 cm its settling back onto a stair tread counted as a landing
+            // and swapped the legs back at the start of the next swing.
+            // Swings clear 16 cm.
+            lift_clearance_m: 0.03,
             ..PlantConfig::default()
         },
         phi: first,

@@ -30,7 +30,7 @@ pub mod channel {
 /// Default motor bridge: PWM resolution and joint torque at 100 % duty.
 pub const MAX_DUTY: u16 = 4200;
 /// Joint torque at 100 % duty, N·m.
-pub const FULL_SCALE_TORQUE_NM: f64 = 250.0;
+pub const FULL_SCALE_TORQUE_NM: f64 = 400.0;
 
 /// Encoder mountings used by [`Wiring::new`]: arbitrary offsets and one
 /// reversed encoder per leg, so calibration mistakes show up.
