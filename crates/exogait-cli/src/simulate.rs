@@ -25,7 +25,7 @@ pub struct SimulateArgs {
     pub gait: SimGait,
     /// Simulated time at most, s (the run also stops 1.5 s after the last
     /// landing asked for, or 1 s into a safe hold).
-    #[arg(long, default_value_t = 12.0)]
+    #[arg(long, default_value_t = 20.0)]
     pub seconds: f64,
     /// Steps (landings) to walk.
     #[arg(long, default_value_t = 4)]

@@ -25,7 +25,7 @@ use cortex_m_semihosting::{debug, hprintln};
 use firmware::{board_config, qemu_rig, selftest};
 use gait_control::faults::Reaction;
 use gait_core::BodyModel;
-use gait_core::dynamics::inverse_dynamics;
+use gait_core::dynamics::{inverse_dynamics, share_load};
 use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::scalar::sin_cos_f32;
 
@@ -172,7 +172,17 @@ fn bench(ctr: &mut InstrCounter) {
             black_box(inverse_dynamics(&m, &sol.phi, &w, &dd));
         }
     });
+    let share = ctr.per_call(1000, |i| {
+        let a = i as f32 * 1e-4;
+        let phi = [0.0 + a, -0.74, 0.0, 2.98, 3.30];
+        let single = [-208.0, -208.0, 5.0, 5.0, -2.0];
+        black_box(share_load(&m, &phi, &single, 912.0));
+    });
     hprintln!("bench: loop_overhead instr={}", base);
+    hprintln!(
+        "bench: share_load_f32 instr={}",
+        share.saturating_sub(base)
+    );
     hprintln!("bench: ik_f32 instr={}", ik_only.saturating_sub(base));
     hprintln!(
         "bench: ik_plus_inverse_dynamics_f32 instr={}",
