@@ -179,10 +179,7 @@ fn bench(ctr: &mut InstrCounter) {
         black_box(share_load(&m, &phi, &single, 912.0));
     });
     hprintln!("bench: loop_overhead instr={}", base);
-    hprintln!(
-        "bench: share_load_f32 instr={}",
-        share.saturating_sub(base)
-    );
+    hprintln!("bench: share_load_f32 instr={}", share.saturating_sub(base));
     hprintln!("bench: ik_f32 instr={}", ik_only.saturating_sub(base));
     hprintln!(
         "bench: ik_plus_inverse_dynamics_f32 instr={}",
