@@ -372,3 +372,49 @@ fn climbs_four_stairs_with_the_legs_alternating_and_no_fault() {
     );
     assert!(rig.faults().is_empty());
 }
+
+#[test]
+fn a_go_press_during_a_step_stops_after_it_with_both_feet_down() {
+    // The clinician's stop: a short GO press during the second swing. The
+    // step finishes (landing, weight transfer), then the device stands; no
+    // third swing starts, nothing faults, both feet carry the body.
+    let mut rig = standing_rig(strong_pilot()).unwrap();
+    Rig::press(&rig.go, sim::scenario::GO_AT_TICK, sim::scenario::GO_TICKS);
+    let swings = |rig: &Rig<'_>| {
+        rig.trace
+            .windows(2)
+            .filter(|w| {
+                matches!(w[1].report.phase, Phase::Swing { .. })
+                    && !matches!(w[0].report.phase, Phase::Swing { .. })
+            })
+            .count()
+    };
+    // Into the second swing.
+    rig.run_until(10_000, |s| {
+        matches!(
+            s.report.phase,
+            Phase::Swing { stance: gait_control::posture::Side::Right, t_s } if t_s > 0.5
+        )
+    })
+    .unwrap();
+    assert_eq!(swings(&rig), 2);
+    let now = rig.now();
+    Rig::press(&rig.go, now + 1, 150);
+    rig.run_until(6_000, |_| false).unwrap();
+    assert_eq!(swings(&rig), 2, "a third swing started after the stop");
+    assert_eq!(rig.plant.landings().len(), 2);
+    assert!(matches!(rig.phase(), Phase::Standing));
+    assert!(
+        rig.trace
+            .iter()
+            .all(|s| s.report.reaction == Reaction::None)
+    );
+    let last = rig.trace.last().unwrap();
+    assert!(last.report.motors_enabled);
+    // Standing in double support: the trailing foot carries weight too.
+    assert!(
+        last.state.foot_forces_n.iter().all(|&f| f > 50.0),
+        "{:?}",
+        last.state.foot_forces_n
+    );
+}
