@@ -17,6 +17,34 @@ use sim::mcp3208::ChannelFault;
 use sim::pilot::PilotConfig;
 use sim::wiring::INJECTED_SPI_ERROR;
 
+/// The first `steps` landings alternate legs (right first: the rigs start on
+/// the left leg), each `spacing` (x, y) ahead of the last, from a stance
+/// foot at (0, `start_y`), within 2 cm along and 5 mm up, on the ground the
+/// terrain has there.
+fn assert_alternating_landings(rig: &Rig<'_>, steps: usize, spacing: [f64; 2], start_y: f64) {
+    let landings = rig.plant.landings();
+    assert!(landings.len() >= steps, "{} landings", landings.len());
+    for (n, l) in landings.iter().take(steps).enumerate() {
+        let expected_side = if n % 2 == 0 {
+            sim::plant::Side::Right
+        } else {
+            sim::plant::Side::Left
+        };
+        assert_eq!(l.side, expected_side, "landing {n}");
+        let k = n as f64 + 1.0;
+        let (x, y) = (spacing[0] * k, start_y + spacing[1] * k);
+        assert!(
+            (l.position_m[0] - x).abs() < 0.02 && (l.position_m[1] - y).abs() < 0.005,
+            "landing {n} at {:?}, planned ({x}, {y})",
+            l.position_m
+        );
+        assert!(
+            (l.ground_m - y).abs() < 1e-9,
+            "landing {n} on the wrong ground"
+        );
+    }
+}
+
 /// Largest deviation of the given joints from their angles at tick `from`.
 fn drift_of(rig: &Rig<'_>, from: usize, joints: &[usize]) -> f64 {
     let start = rig.trace[from].state.joint_angles_rad;
@@ -289,28 +317,11 @@ fn walks_four_steps_with_the_legs_alternating_and_no_fault() {
     let run = sim::scenario::walk(20.0, 4).unwrap();
     assert!(run.ended_by.is_none(), "{:?}", run.ended_by);
     let rig = &run.rig;
-    let landings = rig.plant.landings();
-    assert!(landings.len() >= 4, "{} landings", landings.len());
-    for (n, l) in landings.iter().take(4).enumerate() {
-        // The right leg swings first (left stance), then they alternate;
-        // each foot lands 0.3 m ahead of the other.
-        let expected_side = if n % 2 == 0 {
-            sim::plant::Side::Right
-        } else {
-            sim::plant::Side::Left
-        };
-        assert_eq!(l.side, expected_side, "landing {n}");
-        let planned = 0.3 * (n as f64 + 1.0);
-        assert!(
-            (l.position_m[0] - planned).abs() < 0.02 && l.position_m[1].abs() < 0.005,
-            "landing {n} at {:?}, planned x = {planned}",
-            l.position_m
-        );
-        assert!(
-            l.descent_speed_m_s < 0.3,
-            "landing {n}: {} m/s",
-            l.descent_speed_m_s
-        );
+    // The right leg swings first (left stance), then they alternate; each
+    // foot lands 0.3 m ahead of the other, slowly.
+    assert_alternating_landings(rig, 4, [0.3, 0.0], 0.0);
+    for l in rig.plant.landings() {
+        assert!(l.descent_speed_m_s < 0.3, "{l:?}");
     }
     // Nothing faulted, and the joints tracked the tables closely through
     // every swing.
@@ -345,26 +356,7 @@ fn climbs_four_stairs_with_the_legs_alternating_and_no_fault() {
     let run = sim::scenario::run_gait(gait_control::operator::Gait::StairUp, 20.0, 4).unwrap();
     assert!(run.ended_by.is_none(), "{:?}", run.ended_by);
     let rig = &run.rig;
-    let landings = rig.plant.landings();
-    assert!(landings.len() >= 4, "{} landings", landings.len());
-    for (n, l) in landings.iter().take(4).enumerate() {
-        let expected_side = if n % 2 == 0 {
-            sim::plant::Side::Right
-        } else {
-            sim::plant::Side::Left
-        };
-        assert_eq!(l.side, expected_side, "landing {n}");
-        let (x, y) = (0.275 * (n as f64 + 1.0), 0.0935 * (n as f64 + 2.0));
-        assert!(
-            (l.position_m[0] - x).abs() < 0.02 && (l.position_m[1] - y).abs() < 0.005,
-            "landing {n} at {:?}, planned ({x}, {y})",
-            l.position_m
-        );
-        assert!(
-            (l.ground_m - y).abs() < 1e-9,
-            "landing {n} on the wrong step"
-        );
-    }
+    assert_alternating_landings(rig, 4, [0.275, 0.0935], 0.0935);
     assert!(
         rig.trace
             .iter()

@@ -7,7 +7,6 @@
 //! Debian paths (`fonts-dejavu-core`).
 
 use std::path::Path;
-use std::sync::OnceLock;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -34,29 +33,8 @@ impl std::fmt::Display for PlotError {
 
 impl std::error::Error for PlotError {}
 
-const FONT_PATHS: [&str; 3] = [
-    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-    "/usr/share/fonts/TTF/DejaVuSans.ttf",
-];
-
 fn ensure_font() -> Result<(), PlotError> {
-    static FONT: OnceLock<Result<(), String>> = OnceLock::new();
-    FONT.get_or_init(|| {
-        let mut paths: Vec<String> = std::env::var("EXOGAIT_FONT").into_iter().collect();
-        paths.extend(FONT_PATHS.iter().map(|s| s.to_string()));
-        for p in &paths {
-            if let Ok(bytes) = std::fs::read(p) {
-                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                if plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok() {
-                    return Ok(());
-                }
-            }
-        }
-        Err(format!("tried $EXOGAIT_FONT and {}", FONT_PATHS.join(", ")))
-    })
-    .clone()
-    .map_err(PlotError::NoFont)
+    plot_font::ensure_font().map_err(PlotError::NoFont)
 }
 
 fn draw_err<E: std::fmt::Display>(e: E) -> PlotError {
