@@ -410,3 +410,38 @@ fn a_go_press_during_a_step_stops_after_it_with_both_feet_down() {
         last.state.foot_forces_n
     );
 }
+
+#[test]
+fn walks_with_noisy_sensors_without_false_faults() {
+    // Real converters are noisy: ±3 counts on every encoder (0.07°, about
+    // the AS5048A's output noise) and ±10 counts on the force ADC (about
+    // 6 N on a foot sensor, 2 N on a crutch). The supervisor's debounce and
+    // the rate filter must not turn that into faults, and the walk must stay
+    // on plan.
+    let mut rig = standing_rig(strong_pilot()).unwrap();
+    rig.set_sensor_noise(3, 10, 2026);
+    Rig::press(&rig.go, sim::scenario::GO_AT_TICK, sim::scenario::GO_TICKS);
+    // Runs until the pilot would fall (after a hold) or 20 s.
+    let _ = rig.run_until(20_000, |_| false);
+    // The noise reached the controller.
+    let readings: Vec<f32> = rig.trace[100..200]
+        .iter()
+        .map(|s| s.report.forces_n[2])
+        .collect();
+    assert!(
+        readings.windows(2).any(|w| w[0] != w[1]),
+        "no noise on the crutch sensor"
+    );
+    assert!(
+        rig.plant.landings().len() >= 4,
+        "{} landings",
+        rig.plant.landings().len()
+    );
+    assert_alternating_landings(&rig, 4, [0.3, 0.0], 0.0);
+    assert!(
+        rig.trace
+            .iter()
+            .all(|s| s.report.reaction == Reaction::None)
+    );
+    assert!(rig.faults().is_empty());
+}

@@ -33,6 +33,10 @@ pub struct SimulateArgs {
     /// Write a plot of the run (.svg or .png).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
+    /// Sensor noise: uniform ±ENC counts on every encoder (of 16,384 per
+    /// turn) and ±ADC counts on the force ADC (of 4,096), e.g. `3,10`.
+    #[arg(long, value_name = "ENC,ADC", value_parser = parse_noise)]
+    pub sensor_noise: Option<(u16, u16)>,
 }
 
 /// Runs the step; exit status 0 when the swing foot landed within 5 cm of
@@ -51,7 +55,12 @@ pub fn run(args: &SimulateArgs) -> u8 {
         SimGait::Walk => (Gait::Walk, "walking"),
         SimGait::StairUp => (Gait::StairUp, "climbing stairs"),
     };
-    let run = match sim::scenario::run_gait(gait, args.seconds, args.steps) {
+    let noise = args.sensor_noise;
+    let run = match sim::scenario::run_gait_with(gait, args.seconds, args.steps, |rig| {
+        if let Some((enc, adc)) = noise {
+            rig.set_sensor_noise(enc, adc, 2026);
+        }
+    }) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("exogait simulate: {e}");
@@ -80,4 +89,36 @@ pub fn run(args: &SimulateArgs) -> u8 {
         .landing
         .is_some_and(|l| (l.position_m[0] - run.summary.planned_landing_x_m).abs() < 0.05);
     if landed_on_plan { 0 } else { 1 }
+}
+
+/// `ENC,ADC` → counts of noise on the encoders and the ADC (each ≤ 1,000).
+fn parse_noise(text: &str) -> Result<(u16, u16), String> {
+    let (enc, adc) = text
+        .split_once(',')
+        .ok_or_else(|| format!("expected ENC,ADC (two counts), got {text:?}"))?;
+    let count = |s: &str, what: &str| -> Result<u16, String> {
+        let v: u16 = s
+            .trim()
+            .parse()
+            .map_err(|_| format!("{what} noise must be a whole number of counts, got {s:?}"))?;
+        if v > 1000 {
+            return Err(format!("{what} noise {v} is beyond 1,000 counts"));
+        }
+        Ok(v)
+    };
+    Ok((count(enc, "encoder")?, count(adc, "ADC")?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_noise;
+
+    #[test]
+    fn noise_option_parses_and_refuses_clearly() {
+        assert_eq!(parse_noise("3,10"), Ok((3, 10)));
+        assert_eq!(parse_noise(" 0 , 0 "), Ok((0, 0)));
+        for bad in ["3", "a,1", "1,-2", "1,2000", "", "1,2,3"] {
+            assert!(parse_noise(bad).is_err(), "{bad:?} accepted");
+        }
+    }
 }

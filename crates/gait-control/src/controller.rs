@@ -306,23 +306,28 @@ impl<'t> Controller<'t> {
             .copied()
             .unwrap_or(0.0);
         // What the other foot may carry: the whole body between steps
-        // (planned double support); otherwise what its sensor reads, so the
-        // load leaves it as the foot lifts at the start of a swing, and
-        // comes back as it lands (NaN: nothing).
+        // (planned double support); at the start of a swing a share that
+        // falls to nothing over SWING_UNLOAD_S, as the foot is unloaded and
+        // lifts; then nothing. Not from the foot's sensor during a swing: a
+        // swing foot brushing the ground then switched the model's load on
+        // and off, and the feed-forward bounced the foot (with ±6 N of
+        // sensor noise the third step faulted). In a safe hold, what the
+        // sensor reads (NaN: nothing).
         let weight = self.cfg.model.total_mass_kg() * GRAVITY_M_S2 as f32;
-        let other_foot = forces_n
-            .get(plan.stance.other().foot())
-            .copied()
-            .unwrap_or(f32::NAN);
-        let other_load = if matches!(
-            self.seq.phase(),
-            Phase::Standing | Phase::WaitingReady { .. } | Phase::Transfer { .. }
-        ) {
-            weight
-        } else if other_foot.is_finite() {
-            other_foot.max(0.0).min(weight)
-        } else {
-            0.0
+        let other_load = match self.seq.phase() {
+            Phase::Standing | Phase::WaitingReady { .. } | Phase::Transfer { .. } => weight,
+            Phase::Swing { t_s, .. } => weight * (1.0 - t_s / SWING_UNLOAD_S).clamp(0.0, 1.0),
+            Phase::SafeHold { .. } => {
+                let other_foot = forces_n
+                    .get(plan.stance.other().foot())
+                    .copied()
+                    .unwrap_or(f32::NAN);
+                if other_foot.is_finite() {
+                    other_foot.max(0.0).min(weight)
+                } else {
+                    0.0
+                }
+            }
         };
         let feedforward = self.feedforward(
             &plan.angle_rad,
@@ -617,6 +622,10 @@ impl<'t> Controller<'t> {
         ff.map(|v| if v.is_finite() { v } else { 0.0 })
     }
 }
+
+/// Time over which the feed-forward moves the load off the swing foot at
+/// the start of a swing, s.
+const SWING_UNLOAD_S: f32 = 0.15;
 
 const BAD_ENCODER: EncoderSense = EncoderSense {
     status: EncoderStatus::BusError,

@@ -12,7 +12,16 @@ fn main() {
         Some("stair-up") => gait_control::operator::Gait::StairUp,
         _ => gait_control::operator::Gait::Walk,
     };
-    let run = match sim::scenario::run_gait(gait, secs, steps) {
+    // EXO_NOISE="ENC,ADC": sensor noise in counts.
+    let noise: Option<(u16, u16)> = std::env::var("EXO_NOISE").ok().and_then(|v| {
+        let (a, b) = v.split_once(',')?;
+        Some((a.parse().ok()?, b.parse().ok()?))
+    });
+    let run = match sim::scenario::run_gait_with(gait, secs, steps, |rig| {
+        if let Some((e, a)) = noise {
+            rig.set_sensor_noise(e, a, 2026);
+        }
+    }) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("walk_trace: {e}");

@@ -116,6 +116,7 @@ struct Chip {
     frozen: Option<u16>,
     jump_counts: i64,
     transactions: u64,
+    noise: crate::noise::Noise,
 }
 
 impl Chip {
@@ -140,6 +141,7 @@ impl Chip {
             frozen: None,
             jump_counts: 0,
             transactions: 0,
+            noise: crate::noise::Noise::none(),
         }
     }
 
@@ -160,7 +162,9 @@ impl Chip {
             Mounting::Positive => (a * per_rad).round() as i64,
             Mounting::Negative => -(a * per_rad).round() as i64,
         };
-        let c = (i64::from(self.mount.zero_counts) + signed + self.jump_counts).rem_euclid(COUNTS);
+        let c =
+            (i64::from(self.mount.zero_counts) + signed + self.jump_counts + self.noise.sample())
+                .rem_euclid(COUNTS);
         u16::try_from(c).unwrap_or(0)
     }
 
@@ -377,6 +381,12 @@ impl SimAs5048a {
     /// Fault: the reading jumps by `counts` and stays offset (cumulative).
     pub fn jump(&self, counts: i32) {
         self.0.borrow_mut().jump(counts);
+    }
+
+    /// Measurement noise: every reading off by a uniform ±`counts` (the
+    /// datasheet's output noise is about 0.06° RMS, 3 counts peak), seeded.
+    pub fn set_noise(&self, counts: u16, seed: u64) {
+        self.0.borrow_mut().noise = crate::noise::Noise::new(counts, seed);
     }
 
     /// Fault: the magnet is too far (weak field: COMP high, low magnitude,

@@ -506,6 +506,22 @@ impl<'t> Rig<'t> {
         }
     }
 
+    /// Measurement noise on every encoder (±`encoder_counts` of 16,384 per
+    /// turn) and on the force ADC (±`adc_counts` of 4,096), seeded per
+    /// device from `seed`.
+    pub fn set_sensor_noise(&self, encoder_counts: u16, adc_counts: u16, seed: u64) {
+        for (i, e) in self
+            .joint_encoders
+            .iter()
+            .chain(&self.ankle_encoders)
+            .enumerate()
+        {
+            e.set_noise(encoder_counts, seed.wrapping_add(i as u64 * 7919));
+        }
+        self.adc
+            .set_noise(adc_counts, seed.wrapping_mul(31).wrapping_add(17));
+    }
+
     /// The current tick number (= the simulated clock).
     pub fn now(&self) -> u64 {
         self.wiring.clock.now()

@@ -12,7 +12,8 @@
 //! Modules: [`plant`] (chain, world, landing), [`impact`] (the landing's
 //! velocity map), [`pilot`] (balancing and crutch load), [`terrain`];
 //! peripherals [`as5048a`], [`mcp3208`], [`motor`], [`pins`], their common
-//! SPI plumbing [`spi`]; [`shared`] cells and clock; [`wiring`].
+//! SPI plumbing [`spi`] and measurement [`noise`]; [`shared`] cells and
+//! clock; [`wiring`].
 //!
 //! std only, single-threaded (`Rc` handles): a harness steps everything in
 //! lock-step at 1 kHz.
@@ -22,6 +23,7 @@ pub mod closed_loop;
 pub mod impact;
 pub mod mcp3208;
 pub mod motor;
+pub mod noise;
 pub mod pilot;
 pub mod pins;
 pub mod plant;

@@ -92,6 +92,7 @@ struct Chip {
     bus_errors: u32,
     bus_error_kind: spi::ErrorKind,
     conversions: u64,
+    noise: crate::noise::Noise,
 }
 
 impl Chip {
@@ -102,6 +103,7 @@ impl Chip {
             bus_errors: 0,
             bus_error_kind: spi::ErrorKind::Other,
             conversions: 0,
+            noise: crate::noise::Noise::none(),
         }
     }
 
@@ -117,9 +119,22 @@ impl Chip {
         }
     }
 
+    /// A conversion: the input's counts plus measurement noise (not on a
+    /// faulted or unconnected input: those sit at a rail).
+    fn noisy_counts(&self, channel: usize) -> u16 {
+        let c = self.counts(channel);
+        match self.inputs.get(channel) {
+            Some(Some(input)) if input.fault.is_none() => {
+                let v = (i64::from(c) + self.noise.sample()).clamp(0, i64::from(FULL_SCALE));
+                u16::try_from(v).unwrap_or(c)
+            }
+            _ => c,
+        }
+    }
+
     fn convert(&self, single: bool, d: usize) -> u16 {
         if single {
-            self.counts(d)
+            self.noisy_counts(d)
         } else {
             // Pairs (0,1), (2,3), …; odd code swaps polarity.
             let pair = d & !1;
@@ -128,7 +143,7 @@ impl Chip {
             } else {
                 (pair + 1, pair)
             };
-            self.counts(p).saturating_sub(self.counts(n))
+            self.noisy_counts(p).saturating_sub(self.noisy_counts(n))
         }
     }
 
@@ -194,6 +209,13 @@ impl SimMcp3208 {
         if let Some(Some(input)) = self.0.borrow_mut().inputs.get_mut(channel) {
             input.fault = fault;
         }
+    }
+
+    /// Measurement noise on every conversion of a connected, healthy
+    /// input: a uniform ±`counts` (the datasheet's INL/DNL and input noise
+    /// are about ±1 LSB; force sensors and their wiring add more), seeded.
+    pub fn set_noise(&self, counts: u16, seed: u64) {
+        self.0.borrow_mut().noise = crate::noise::Noise::new(counts, seed);
     }
 
     /// Fault: the next `n` transactions fail on the bus with `kind`.

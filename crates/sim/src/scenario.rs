@@ -128,6 +128,17 @@ pub fn walk(max_s: f64, steps: usize) -> Result<StepRun, RigError> {
 /// landings have happened and 1.5 s more (or a safe hold has lasted 1 s, or
 /// `max_s` in all).
 pub fn run_gait(gait: Gait, max_s: f64, steps: usize) -> Result<StepRun, RigError> {
+    run_gait_with(gait, max_s, steps, |_| {})
+}
+
+/// [`run_gait`], with `prepare` applied to the rig before the first tick
+/// (sensor noise, fault injection, other button scripts).
+pub fn run_gait_with(
+    gait: Gait,
+    max_s: f64,
+    steps: usize,
+    prepare: impl FnOnce(&mut Rig<'static>),
+) -> Result<StepRun, RigError> {
     let tables = flash_tables();
     let planned_landing_x_m = tables.get(gait).map_or(0.0, |t| {
         let m = heel_rocker_model();
@@ -136,6 +147,7 @@ pub fn run_gait(gait: Gait, max_s: f64, steps: usize) -> Result<StepRun, RigErro
     });
     let mut rig = gait_rig(gait, strong_pilot(), tables)?;
     Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
+    prepare(&mut rig);
     let max_ticks = (max_s * 1000.0) as u64;
     let mut landed_at: Option<usize> = None;
     let mut held_since: Option<usize> = None;
