@@ -1,12 +1,13 @@
 //! Host benchmarks of the per-sample work: IK, inverse dynamics, both
-//! together, in f32 and f64; and one paper-mode cost evaluation (the
-//! optimiser's inner loop). `cargo bench -p gait-core`.
+//! together, and the feed-forward's load sharing between the feet, in f32
+//! and f64; and one paper-mode cost evaluation (the optimiser's inner loop).
+//! `cargo bench -p gait-core`.
 #![allow(missing_docs, clippy::unwrap_used)]
 
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use gait_core::dynamics::inverse_dynamics;
+use gait_core::dynamics::{inverse_dynamics, share_load};
 use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::problem::{PaperCase, PaperProblem};
 use gait_core::{BodyModel, Real};
@@ -30,6 +31,10 @@ fn per_sample<T: Real>(c: &mut Criterion, name: &str) {
     });
     c.bench_function(&format!("inverse_dynamics_{name}"), |b| {
         b.iter(|| inverse_dynamics(&m, black_box(&phi), black_box(&w), black_box(&a)))
+    });
+    let single = [-208.0, -208.0, 5.0, 5.0, -2.0].map(l);
+    c.bench_function(&format!("share_load_{name}"), |b| {
+        b.iter(|| share_load(&m, black_box(&phi), black_box(&single), l(912.0)))
     });
     c.bench_function(&format!("ik_plus_inverse_dynamics_{name}"), |b| {
         b.iter(|| {
