@@ -1,4 +1,5 @@
-//! The font for plot text. plotters' ab_glyph backend draws text from a TTF
+//! The font for plot text, and the error both plotting crates report.
+//! plotters' ab_glyph backend draws text from a TTF
 //! registered at run time (no fontconfig, nothing to install but the font),
 //! and both the optimiser's report plots (gait-opt) and the closed-loop
 //! plots (sim) need the same one, found the same way: `$EXOGAIT_FONT`, else
@@ -35,4 +36,35 @@ pub fn ensure_font() -> Result<(), String> {
         Err(format!("tried $EXOGAIT_FONT and {}", FONT_PATHS.join(", ")))
     })
     .clone()
+}
+
+/// Why a plot could not be drawn (gait-opt's report plots and sim's
+/// closed-loop plots alike).
+#[derive(Debug)]
+pub enum PlotError {
+    /// No usable TTF font was found (the message lists where we looked).
+    NoFont(String),
+    /// The drawing backend failed.
+    Draw(String),
+}
+
+impl std::fmt::Display for PlotError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NoFont(m) => write!(f, "no font for plot text: {m}"),
+            Self::Draw(m) => write!(f, "plot: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for PlotError {}
+
+/// [`ensure_font`] as a [`PlotError`].
+pub fn font_ready() -> Result<(), PlotError> {
+    ensure_font().map_err(PlotError::NoFont)
+}
+
+/// Any backend error as a [`PlotError`].
+pub fn draw_err<E: std::fmt::Display>(e: E) -> PlotError {
+    PlotError::Draw(e.to_string())
 }

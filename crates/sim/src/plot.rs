@@ -14,33 +14,8 @@ use plotters::prelude::*;
 use crate::closed_loop::Sample;
 use crate::summary::RunSummary;
 
-/// Why a plot could not be drawn.
-#[derive(Debug)]
-pub enum PlotError {
-    /// No usable TTF font was found.
-    NoFont(String),
-    /// The drawing backend failed.
-    Draw(String),
-}
-
-impl std::fmt::Display for PlotError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::NoFont(m) => write!(f, "no font for plot text: {m}"),
-            Self::Draw(m) => write!(f, "plot: {m}"),
-        }
-    }
-}
-
-impl std::error::Error for PlotError {}
-
-fn ensure_font() -> Result<(), PlotError> {
-    plot_font::ensure_font().map_err(PlotError::NoFont)
-}
-
-fn draw_err<E: std::fmt::Display>(e: E) -> PlotError {
-    PlotError::Draw(e.to_string())
-}
+pub use plot_font::PlotError;
+use plot_font::{draw_err, font_ready as ensure_font};
 
 /// Draws a run to `path` (SVG or PNG by extension), 1400×900 pixels.
 pub fn plot_run(trace: &[Sample], summary: &RunSummary, path: &Path) -> Result<(), PlotError> {
