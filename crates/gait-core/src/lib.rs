@@ -18,6 +18,7 @@ pub mod anthropometry;
 pub mod bezier;
 pub mod dynamics;
 pub mod flash_tables;
+pub mod foot;
 pub mod gait;
 pub mod ik;
 pub mod kinematics;

@@ -1,0 +1,429 @@
+//! The stance foot's toe rocker: once the stance shank leans past the
+//! ankle's dorsiflexion stop, the heel lifts and the chain pivots about the
+//! ball of the foot instead of the ankle.
+//!
+//! Why: the paper's model pins the stance ankle with the foot flat, which
+//! cannot describe stair descent. In a descent the trailing leg stands on
+//! the upper tread while the other foot lands on the lower one; with both
+//! feet flat the trailing ankle would need 29–35° of dorsiflexion, past
+//! Table I's 20° (test `paper_stair_descent_needs_more_ankle_than_table_i_allows`).
+//! People (and passive exoskeleton ankles at their stop) lift the heel.
+//!
+//! Model (documented in `docs/model.md`, "Toe rocker"):
+//! - the foot is massless and rigid; the ankle is free below the stop
+//!   `heel_off_rad` and locked at it above (the stop carries the torque);
+//! - for φ1 ≤ heel_off the ankle is fixed at the origin (the paper's model);
+//!   for φ1 > heel_off the foot pitches by ψ = φ1 − heel_off about the toe
+//!   pivot, which stays on the ground, so the ankle moves on a circle:
+//!   a(φ1) = toe + R(−ψ)(a₀ − toe). φ1 stays the coordinate: it is still
+//!   the stance shank's absolute angle.
+//! - the torque the pilot must supply (through the crutches) is the
+//!   generalised force of the whole chain about the current pivot,
+//!   T_θ1 = −Σ T_φi: the ankle torque while flat, the toe torque on the toe.
+//!
+//! With the base moving as a(φ1), the centre of mass of every link gains
+//! a(φ1), so (virtual work; M total mass, c the fixed-base centre of mass,
+//! c = Σ_k w_k u(φ_k), u = (sin, cos)):
+//! T'_j = T_j + M w_j u'(φ_j)·ä + [j = 1] M a'(φ1)·(ä + c̈ + g ŷ),
+//! ä = a' φ̈1 + a'' φ̇1². Checked in `tests/toe_rocker.rs` against the
+//! Lagrangian of an explicitly built kinetic energy, by energy conservation
+//! across heel-off, and by the impact maps' conserved momenta.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::dynamics::{self, DynamicsError, DynamicsTerms, TPhi};
+use crate::kinematics::{Phi, Point, forward_kinematics, link_com};
+use crate::model::{BodyModel, CARRIED, GRAVITY_M_S2, LINKS};
+use crate::scalar::Real;
+
+/// Ankle to the ball of the foot (the toe pivot), m: about 0.53 of a
+/// 0.266 m foot (Winter's foot length 0.152 H for H = 1.75 m, the ankle
+/// 0.05 m ahead of the heel, the metatarsal heads at 0.73 of the length).
+pub const TOE_M: f64 = 0.14;
+/// Ankle joint above the sole, m (Winter: 0.039 H).
+pub const ANKLE_HEIGHT_M: f64 = 0.07;
+
+/// Geometry and stop of the stance foot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StanceFoot<T> {
+    /// Horizontal distance from the ankle to the toe pivot (ball of the
+    /// foot), m.
+    pub toe_m: T,
+    /// Height of the ankle above the sole, m.
+    pub ankle_height_m: T,
+    /// Dorsiflexion (stance-shank angle φ1) at which the heel lifts: the
+    /// ankle's stop, rad.
+    pub heel_off_rad: T,
+}
+
+/// The stance ankle's position as a function of φ1 and its first two
+/// derivatives, relative to where it is with the foot flat, m.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnklePlacement<T> {
+    /// a(φ1), m.
+    pub position_m: Point<T>,
+    /// ∂a/∂φ1, m/rad.
+    pub d1: Point<T>,
+    /// ∂²a/∂φ1², m/rad².
+    pub d2: Point<T>,
+}
+
+impl<T: Real> StanceFoot<T> {
+    /// The device's foot: [`TOE_M`], [`ANKLE_HEIGHT_M`], heel-off at the
+    /// model's dorsiflexion limit (Table I: 20°).
+    pub fn for_model(model: &BodyModel<T>) -> Self {
+        Self {
+            toe_m: T::lit(TOE_M),
+            ankle_height_m: T::lit(ANKLE_HEIGHT_M),
+            heel_off_rad: model.limits().ankle_dorsiflexion_rad,
+        }
+    }
+
+    /// The foot's pitch (heel up, rad): max(φ1 − heel_off, 0).
+    pub fn pitch(&self, phi1: T) -> T {
+        (phi1 - self.heel_off_rad).max(T::zero())
+    }
+
+    /// Whether the heel is off the ground at φ1.
+    pub fn on_toe(&self, phi1: T) -> bool {
+        phi1 > self.heel_off_rad
+    }
+
+    /// What the ankle's encoder reads: φ1, or the stop once on the toe.
+    pub fn dorsiflexion(&self, phi1: T) -> T {
+        phi1.min(self.heel_off_rad)
+    }
+
+    /// The toe pivot, in the flat foot's frame (ankle at the origin), m.
+    pub fn toe(&self) -> Point<T> {
+        [self.toe_m, -self.ankle_height_m]
+    }
+
+    /// The point the stance leg pivots about at φ1: the ankle while flat,
+    /// the toe once the heel is up.
+    pub fn pivot(&self, phi1: T) -> Point<T> {
+        if self.on_toe(phi1) {
+            self.toe()
+        } else {
+            [T::zero(); 2]
+        }
+    }
+
+    /// The ankle's position and its φ1-derivatives.
+    pub fn ankle(&self, phi1: T) -> AnklePlacement<T> {
+        let zero = [T::zero(); 2];
+        if !self.on_toe(phi1) {
+            return AnklePlacement {
+                position_m: zero,
+                d1: zero,
+                d2: zero,
+            };
+        }
+        let (s, c) = self.pitch(phi1).sin_cos_fast();
+        // r0 = a₀ − toe; the heel rising is a clockwise turn by ψ.
+        let (rx, ry) = (-self.toe_m, self.ankle_height_m);
+        let rot = [rx * c + ry * s, -rx * s + ry * c];
+        let [tx, ty] = self.toe();
+        AnklePlacement {
+            position_m: [tx + rot[0], ty + rot[1]],
+            d1: [-rx * s + ry * c, -rx * c - ry * s],
+            d2: [-rot[0], -rot[1]],
+        }
+    }
+
+    /// Forward kinematics with this foot: [`forward_kinematics`]'s points
+    /// shifted by the ankle's position (the flat foot's frame: ankle at the
+    /// origin while the foot is flat).
+    pub fn points(&self, model: &BodyModel<T>, phi: &Phi<T>) -> [Point<T>; LINKS] {
+        let a = self.ankle(first(phi)).position_m;
+        forward_kinematics(model, phi).map(|p| [p[0] + a[0], p[1] + a[1]])
+    }
+
+    /// Link centres of mass with this foot, flat foot's frame, m.
+    pub fn link_com(&self, model: &BodyModel<T>, phi: &Phi<T>) -> [Point<T>; LINKS] {
+        let a = self.ankle(first(phi)).position_m;
+        link_com(model, phi).map(|p| [p[0] + a[0], p[1] + a[1]])
+    }
+}
+
+/// The fixed-base centre of mass as c = Σ_k w_k u(φ_k), u = (sin φ, cos φ):
+/// w_k = (m_k d_k + l_k · mass carried by link k) / M, m.
+pub fn com_weights<T: Real>(model: &BodyModel<T>) -> [T; LINKS] {
+    let links = model.links();
+    let total = model.total_mass_kg();
+    let mut w = [T::zero(); LINKS];
+    for ((wk, link), carried) in w.iter_mut().zip(links).zip(CARRIED.iter()) {
+        let beyond = links
+            .iter()
+            .zip(carried)
+            .fold(T::zero(), |s, (l, &c)| if c { s + l.mass_kg } else { s });
+        *wk = (link.mass_kg * link.com_m + link.length_m * beyond) / total;
+    }
+    w
+}
+
+/// Per-link (u, u') = ((sin φ, cos φ), (cos φ, −sin φ)).
+fn units<T: Real>(phi: &Phi<T>) -> [(Point<T>, Point<T>); LINKS] {
+    phi.map(|x| {
+        let (s, c) = x.sin_cos_fast();
+        ([s, c], [c, -s])
+    })
+}
+
+fn dot<T: Real>(a: Point<T>, b: Point<T>) -> T {
+    a[0] * b[0] + a[1] * b[1]
+}
+
+/// Inverse dynamics on this foot: T'_Φ (see the module docs). Equal to
+/// [`dynamics::inverse_dynamics`] while the foot is flat.
+pub fn inverse_dynamics<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> TPhi<T> {
+    let mut out = dynamics::inverse_dynamics(model, phi, dphi, ddphi);
+    if !foot.on_toe(first(phi)) {
+        return out;
+    }
+    let a = foot.ankle(first(phi));
+    let mass = model.total_mass_kg();
+    let w = com_weights(model);
+    let u = units(phi);
+    let (w1, a1) = (first(dphi), first(ddphi));
+    let base_acc = [
+        a.d1[0] * a1 + a.d2[0] * w1 * w1,
+        a.d1[1] * a1 + a.d2[1] * w1 * w1,
+    ];
+    let mut com_acc = [T::zero(); 2];
+    for ((&(uk, dk), &wk), (&qd, &qdd)) in u.iter().zip(&w).zip(dphi.iter().zip(ddphi)) {
+        com_acc[0] += wk * (dk[0] * qdd - uk[0] * qd * qd);
+        com_acc[1] += wk * (dk[1] * qdd - uk[1] * qd * qd);
+    }
+    for ((o, &(_, dk)), &wk) in out.iter_mut().zip(&u).zip(&w) {
+        *o += mass * wk * dot(base_acc, dk);
+    }
+    let g = T::lit(GRAVITY_M_S2);
+    let [o1, ..] = &mut out;
+    *o1 += mass
+        * dot(
+            a.d1,
+            [base_acc[0] + com_acc[0], base_acc[1] + com_acc[1] + g],
+        );
+    out
+}
+
+/// D'(Φ), H'Φ̇ and G'(Φ) on this foot (the module docs' equation split by
+/// its dependence on Φ̈).
+pub fn terms<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+) -> DynamicsTerms<T> {
+    let mut t = dynamics::terms(model, phi, dphi);
+    if !foot.on_toe(first(phi)) {
+        return t;
+    }
+    let a = foot.ankle(first(phi));
+    let mass = model.total_mass_kg();
+    let w = com_weights(model);
+    let u = units(phi);
+    let w1 = first(dphi);
+    // Column k of the coupling M w_k (a'·u'_k), and the base's centripetal
+    // push M w_k (a''·u'_k) φ̇1².
+    let mut coupling = SVector::<T, LINKS>::zeros();
+    let mut base_push = SVector::<T, LINKS>::zeros();
+    for (((c, b), &(_, dk)), &wk) in coupling
+        .iter_mut()
+        .zip(base_push.iter_mut())
+        .zip(&u)
+        .zip(&w)
+    {
+        *c = mass * wk * dot(a.d1, dk);
+        *b = mass * wk * dot(a.d2, dk) * w1 * w1;
+    }
+    let mut centripetal = [T::zero(); 2];
+    for ((&(uk, _), &wk), &qd) in u.iter().zip(&w).zip(dphi) {
+        centripetal[0] -= wk * uk[0] * qd * qd;
+        centripetal[1] -= wk * uk[1] * qd * qd;
+    }
+    let e1 = SVector::<T, LINKS>::from([T::one(), T::zero(), T::zero(), T::zero(), T::zero()]);
+    t.d += coupling * e1.transpose()
+        + e1 * coupling.transpose()
+        + e1 * e1.transpose() * (mass * dot(a.d1, a.d1));
+    let row1 = mass
+        * dot(
+            a.d1,
+            [
+                a.d2[0] * w1 * w1 + centripetal[0],
+                a.d2[1] * w1 * w1 + centripetal[1],
+            ],
+        );
+    t.h_dphi += base_push + e1 * row1;
+    t.g += e1 * (mass * T::lit(GRAVITY_M_S2) * a.d1[1]);
+    t
+}
+
+/// Forward dynamics on this foot: Φ̈ = D'⁻¹ (T_Φ − H'Φ̇ − G').
+pub fn forward_dynamics<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    t_phi: &TPhi<T>,
+) -> Result<Phi<T>, DynamicsError> {
+    if !phi
+        .iter()
+        .chain(dphi.iter())
+        .chain(t_phi.iter())
+        .all(|x| x.finite())
+    {
+        return Err(DynamicsError::NonFinite);
+    }
+    let t = terms(model, foot, phi, dphi);
+    let rhs = SVector::<T, LINKS>::from(*t_phi) - t.h_dphi - t.g;
+    let chol = t.d.cholesky().ok_or(DynamicsError::SingularMassMatrix)?;
+    let acc = chol.solve(&rhs);
+    if acc.iter().all(|x| x.finite()) {
+        Ok(acc.into())
+    } else {
+        Err(DynamicsError::NonFinite)
+    }
+}
+
+/// Kinetic plus gravitational energy on this foot (heights from the flat
+/// foot's ankle), J.
+pub fn energy<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+) -> T {
+    let t = terms(model, foot, phi, dphi);
+    let w = SVector::<T, LINKS>::from(*dphi);
+    let kinetic = w.dot(&(t.d * w)) * T::lit(0.5);
+    let potential = phi
+        .iter()
+        .zip(model.g())
+        .fold(T::zero(), |acc, (&x, &gi)| acc + gi * x.sin_cos_fast().1);
+    let lift = model.total_mass_kg() * T::lit(GRAVITY_M_S2) * foot.ankle(first(phi)).position_m[1];
+    kinetic + potential + lift
+}
+
+/// Linear momentum of the chain, kg·m/s.
+fn linear_momentum<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+) -> Point<T> {
+    let a = foot.ankle(first(phi));
+    let w = com_weights(model);
+    let mut v = [a.d1[0] * first(dphi), a.d1[1] * first(dphi)];
+    for ((&(_, dk), &wk), &qd) in units(phi).iter().zip(&w).zip(dphi) {
+        v[0] += wk * dk[0] * qd;
+        v[1] += wk * dk[1] * qd;
+    }
+    let m = model.total_mass_kg();
+    [m * v[0], m * v[1]]
+}
+
+/// The instant the heel lifts or lands: the velocities after the switch.
+///
+/// Heel-off (the ankle meets its stop; the ground pushes only at the toe)
+/// conserves the angular momentum about the toe; heel strike (the heel
+/// lands; the ankle is free again) conserves it about the ankle. Both keep
+/// every sub-chain's angular momentum about the knee and hip joints (no
+/// impulsive joint torque), i.e. T_φj-momenta for j ≥ 2. With
+/// L_toe = L_ankle + (a − toe) × P, the switch changes only p_φ1 (= −L for
+/// the whole chain): p'_φ1 = p_φ1 ∓ (a − toe) × P. The velocities then
+/// solve D' Φ̇⁺ = p'. `to_toe` picks the direction; Φ is the switching
+/// posture (on either side of heel-off: the masses use the new contact).
+pub fn contact_switch_velocities<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    to_toe: bool,
+) -> Result<Phi<T>, DynamicsError> {
+    // The posture just before and just after (the switch is at heel_off;
+    // the moving ankle's Jacobian differs on the two sides).
+    let nudge = T::lit(1e-9);
+    let (before, after) = {
+        let [q1, q2, q3, q4, q5] = *phi;
+        let on = [q1.max(foot.heel_off_rad + nudge), q2, q3, q4, q5];
+        let flat = [q1.min(foot.heel_off_rad), q2, q3, q4, q5];
+        if to_toe { (flat, on) } else { (on, flat) }
+    };
+    let pre = terms(model, foot, &before, dphi);
+    let mut p = pre.d * SVector::<T, LINKS>::from(*dphi);
+    let momentum = linear_momentum(model, foot, &before, dphi);
+    let ankle = foot.ankle(first(phi)).position_m;
+    let toe = foot.toe();
+    let r = [ankle[0] - toe[0], ankle[1] - toe[1]];
+    let cross = r[0] * momentum[1] - r[1] * momentum[0];
+    if let Some(p1) = p.get_mut(0) {
+        *p1 += if to_toe { -cross } else { cross };
+    }
+    let post = terms(model, foot, &after, dphi);
+    let chol = post.d.cholesky().ok_or(DynamicsError::SingularMassMatrix)?;
+    let v: SMatrix<T, LINKS, 1> = chol.solve(&p);
+    if v.iter().all(|x| x.finite()) {
+        Ok(v.into())
+    } else {
+        Err(DynamicsError::NonFinite)
+    }
+}
+
+/// Like [`crate::dynamics::rk4_step`] on this foot (constant generalised
+/// forces over `h`); a step that crosses heel-off applies
+/// [`contact_switch_velocities`] at its end.
+pub fn rk4_step<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    t_phi: &TPhi<T>,
+    h: T,
+) -> Result<(Phi<T>, Phi<T>), DynamicsError> {
+    let f = |q: &Phi<T>, w: &Phi<T>| forward_dynamics(model, foot, q, w, t_phi);
+    let half = h * T::lit(0.5);
+    let axpy = |a: &Phi<T>, b: &Phi<T>, s: T| -> Phi<T> {
+        let mut o = *a;
+        for (oi, &bi) in o.iter_mut().zip(b) {
+            *oi += s * bi;
+        }
+        o
+    };
+    let k1w = f(phi, dphi)?;
+    let k2q = axpy(dphi, &k1w, half);
+    let k2w = f(&axpy(phi, dphi, half), &k2q)?;
+    let k3q = axpy(dphi, &k2w, half);
+    let k3w = f(&axpy(phi, &k2q, half), &k3q)?;
+    let k4q = axpy(dphi, &k3w, h);
+    let k4w = f(&axpy(phi, &k3q, h), &k4q)?;
+    let sixth = h / T::lit(6.0);
+    let two = T::lit(2.0);
+    let mut q = *phi;
+    let mut w = *dphi;
+    for ((((qi, &a), &b), &c), &d) in q.iter_mut().zip(dphi).zip(&k2q).zip(&k3q).zip(&k4q) {
+        *qi += sixth * (a + two * b + two * c + d);
+    }
+    for ((((wi, &a), &b), &c), &d) in w.iter_mut().zip(&k1w).zip(&k2w).zip(&k3w).zip(&k4w) {
+        *wi += sixth * (a + two * b + two * c + d);
+    }
+    let (was, is) = (foot.on_toe(first(phi)), foot.on_toe(first(&q)));
+    if was != is {
+        w = contact_switch_velocities(model, foot, &q, &w, is)?;
+    }
+    Ok((q, w))
+}
+
+/// φ1 of an angle array.
+fn first<T: Real>(a: &Phi<T>) -> T {
+    let [x, ..] = *a;
+    x
+}

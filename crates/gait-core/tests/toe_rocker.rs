@@ -1,0 +1,404 @@
+//! The toe rocker (`gait_core::foot`) checked against derivations that
+//! share no code with it: the ankle's circle written as an angle about the
+//! toe, centre-of-mass Jacobians built here, the Lagrangian of that kinetic
+//! energy by numerical differentiation, angular momenta summed link by
+//! link, and energy conservation of the free chain on its toe.
+#![allow(
+    clippy::unwrap_used,
+    clippy::indexing_slicing,
+    clippy::needless_range_loop,
+    missing_docs
+)]
+
+use gait_core::dynamics;
+use gait_core::foot::{self, StanceFoot};
+use gait_core::kinematics::forward_kinematics;
+use gait_core::model::GRAVITY_M_S2;
+use gait_core::{BodyModel, LINKS};
+use proptest::prelude::*;
+
+const PARENT: [Option<usize>; LINKS] = [None, Some(0), Some(1), Some(1), Some(3)];
+
+fn model() -> (BodyModel<f64>, StanceFoot<f64>) {
+    let m = BodyModel::<f64>::paper_table_iii();
+    let f = StanceFoot::for_model(&m);
+    (m, f)
+}
+
+/// The ankle on its circle about the toe, written as radius and angle
+/// (clockwise from vertical): ρ(sin(α0 + ψ), cos(α0 + ψ)) from the toe,
+/// and its derivative. `on_toe` forces the branch (ψ may be negative).
+fn ankle(f: &StanceFoot<f64>, phi1: f64, on_toe: bool) -> ([f64; 2], [f64; 2]) {
+    if !on_toe {
+        return ([0.0; 2], [0.0; 2]);
+    }
+    let rho = f.toe_m.hypot(f.ankle_height_m);
+    let alpha0 = (-f.toe_m).atan2(f.ankle_height_m);
+    let a = alpha0 + phi1 - f.heel_off_rad;
+    (
+        [f.toe_m + rho * a.sin(), -f.ankle_height_m + rho * a.cos()],
+        [rho * a.cos(), -rho * a.sin()],
+    )
+}
+
+/// COM of link k and ∂c_k/∂φ, the base included.
+fn com_and_jacobian(
+    m: &BodyModel<f64>,
+    f: &StanceFoot<f64>,
+    phi: &[f64; LINKS],
+    k: usize,
+    on_toe: bool,
+) -> ([f64; 2], [[f64; LINKS]; 2]) {
+    let links = m.links();
+    let (a, da) = ankle(f, phi[0], on_toe);
+    let mut c = a;
+    let mut j = [[0.0; LINKS]; 2];
+    j[0][0] += da[0];
+    j[1][0] += da[1];
+    let mut cur = PARENT[k];
+    while let Some(p) = cur {
+        let l = links[p].length_m;
+        c[0] += l * phi[p].sin();
+        c[1] += l * phi[p].cos();
+        j[0][p] += l * phi[p].cos();
+        j[1][p] -= l * phi[p].sin();
+        cur = PARENT[p];
+    }
+    let d = links[k].com_m;
+    c[0] += d * phi[k].sin();
+    c[1] += d * phi[k].cos();
+    j[0][k] += d * phi[k].cos();
+    j[1][k] -= d * phi[k].sin();
+    (c, j)
+}
+
+fn mass_matrix(
+    m: &BodyModel<f64>,
+    f: &StanceFoot<f64>,
+    phi: &[f64; LINKS],
+    on_toe: bool,
+) -> [[f64; LINKS]; LINKS] {
+    let mut d = [[0.0; LINKS]; LINKS];
+    for (k, link) in m.links().iter().enumerate() {
+        let (_, jac) = com_and_jacobian(m, f, phi, k, on_toe);
+        for a in 0..LINKS {
+            for b in 0..LINKS {
+                d[a][b] += link.mass_kg * (jac[0][a] * jac[0][b] + jac[1][a] * jac[1][b]);
+            }
+        }
+        d[k][k] += link.inertia_kgm2;
+    }
+    d
+}
+
+fn potential(m: &BodyModel<f64>, f: &StanceFoot<f64>, phi: &[f64; LINKS]) -> f64 {
+    (0..LINKS)
+        .map(|k| m.links()[k].mass_kg * GRAVITY_M_S2 * com_and_jacobian(m, f, phi, k, true).0[1])
+        .sum()
+}
+
+/// T = D q̈ + Christoffel terms + ∂P/∂q, all from the explicit energy.
+fn lagrange_torques(
+    m: &BodyModel<f64>,
+    f: &StanceFoot<f64>,
+    q: &[f64; LINKS],
+    w: &[f64; LINKS],
+    a: &[f64; LINKS],
+) -> [f64; LINKS] {
+    let h = 1e-6;
+    let d = mass_matrix(m, f, q, true);
+    let mut dd = [[[0.0; LINKS]; LINKS]; LINKS];
+    let mut dp = [0.0; LINKS];
+    for k in 0..LINKS {
+        let (mut qp, mut qm) = (*q, *q);
+        qp[k] += h;
+        qm[k] -= h;
+        let (dpk, dmk) = (mass_matrix(m, f, &qp, true), mass_matrix(m, f, &qm, true));
+        for i in 0..LINKS {
+            for j in 0..LINKS {
+                dd[k][i][j] = (dpk[i][j] - dmk[i][j]) / (2.0 * h);
+            }
+        }
+        dp[k] = (potential(m, f, &qp) - potential(m, f, &qm)) / (2.0 * h);
+    }
+    let mut t = [0.0; LINKS];
+    for i in 0..LINKS {
+        let mut s = dp[i];
+        for j in 0..LINKS {
+            s += d[i][j] * a[j];
+            for k in 0..LINKS {
+                s += (dd[k][i][j] - 0.5 * dd[i][j][k]) * w[j] * w[k];
+            }
+        }
+        t[i] = s;
+    }
+    t
+}
+
+/// Angular momentum (anticlockwise) of the links in `set` about `point`.
+fn angular_momentum(
+    m: &BodyModel<f64>,
+    f: &StanceFoot<f64>,
+    phi: &[f64; LINKS],
+    dphi: &[f64; LINKS],
+    on_toe: bool,
+    set: &[usize],
+    point: [f64; 2],
+) -> f64 {
+    let mut l = 0.0;
+    for &k in set {
+        let link = m.links()[k];
+        let (c, j) = com_and_jacobian(m, f, phi, k, on_toe);
+        let v = [
+            (0..LINKS).map(|i| j[0][i] * dphi[i]).sum::<f64>(),
+            (0..LINKS).map(|i| j[1][i] * dphi[i]).sum::<f64>(),
+        ];
+        let r = [c[0] - point[0], c[1] - point[1]];
+        l += link.mass_kg * (r[0] * v[1] - r[1] * v[0]) - link.inertia_kgm2 * dphi[k];
+    }
+    l
+}
+
+/// The joints' sub-chain momenta: links 2–5 about the stance knee, 3–5 and
+/// 4–5 about the hip, 5 about the swing knee (the joints' points on this
+/// branch).
+fn joint_momenta(
+    m: &BodyModel<f64>,
+    f: &StanceFoot<f64>,
+    phi: &[f64; LINKS],
+    dphi: &[f64; LINKS],
+    on_toe: bool,
+) -> [f64; 4] {
+    let (a, _) = ankle(f, phi[0], on_toe);
+    let p = forward_kinematics(m, phi).map(|p| [p[0] + a[0], p[1] + a[1]]);
+    [
+        angular_momentum(m, f, phi, dphi, on_toe, &[1, 2, 3, 4], p[0]),
+        angular_momentum(m, f, phi, dphi, on_toe, &[2, 3, 4], p[1]),
+        angular_momentum(m, f, phi, dphi, on_toe, &[3, 4], p[1]),
+        angular_momentum(m, f, phi, dphi, on_toe, &[4], p[3]),
+    ]
+}
+
+fn kinetic(d: &[[f64; LINKS]; LINKS], w: &[f64; LINKS]) -> f64 {
+    let mut k = 0.0;
+    for i in 0..LINKS {
+        for j in 0..LINKS {
+            k += 0.5 * w[i] * d[i][j] * w[j];
+        }
+    }
+    k
+}
+
+/// Postures with the stance shank on the toe (φ1 past the 20° stop).
+fn toe_state() -> impl Strategy<Value = ([f64; LINKS], [f64; LINKS], [f64; LINKS])> {
+    let ang = (
+        0.36f64..0.9,
+        -1.0f64..1.0,
+        -0.6f64..0.6,
+        2.0f64..4.2,
+        2.0f64..4.2,
+    )
+        .prop_map(|(a, b, c, d, e)| [a, b, c, d, e]);
+    let vel = prop::array::uniform5(-3.0f64..3.0);
+    let acc = prop::array::uniform5(-20.0f64..20.0);
+    (ang, vel, acc)
+}
+
+#[test]
+fn ankle_rolls_on_a_circle_about_the_toe_and_starts_where_it_stood() {
+    let (_, f) = model();
+    let rho = f.toe_m.hypot(f.ankle_height_m);
+    for i in 0..=40 {
+        let phi1 = f.heel_off_rad - 0.2 + 0.02 * f64::from(i);
+        let a = f.ankle(phi1);
+        let (expect, dexpect) = ankle(&f, phi1, phi1 > f.heel_off_rad);
+        for c in 0..2 {
+            assert!((a.position_m[c] - expect[c]).abs() < 1e-12, "{phi1}");
+            assert!((a.d1[c] - dexpect[c]).abs() < 1e-12, "{phi1}");
+        }
+        if f.on_toe(phi1) {
+            let toe = f.toe();
+            let r = (a.position_m[0] - toe[0]).hypot(a.position_m[1] - toe[1]);
+            assert!((r - rho).abs() < 1e-12);
+            // The second derivative by differencing the first.
+            let h = 1e-6;
+            let (p, q) = (f.ankle(phi1 + h), f.ankle(phi1 - h));
+            for c in 0..2 {
+                assert!(((p.d1[c] - q.d1[c]) / (2.0 * h) - a.d2[c]).abs() < 1e-6);
+            }
+            // Heel up: the ankle rises as the shank leans on.
+            assert!(a.position_m[1] > 0.0);
+            assert!(f.dorsiflexion(phi1) == f.heel_off_rad);
+        } else {
+            assert_eq!(a.position_m, [0.0; 2]);
+            assert_eq!(f.dorsiflexion(phi1), phi1);
+        }
+    }
+    // Continuous at heel-off.
+    let a = f.ankle(f.heel_off_rad + 1e-9);
+    assert!(a.position_m[0].abs() < 1e-9 && a.position_m[1].abs() < 1e-9);
+}
+
+#[test]
+fn flat_foot_is_the_papers_model_exactly() {
+    let (m, f) = model();
+    let phi = [0.2, -0.1, 0.05, 2.9, 3.3];
+    let w = [0.4, -0.9, 0.2, -2.1, 3.3];
+    let a = [1.5, -2.0, 0.7, 6.0, -9.0];
+    assert_eq!(
+        foot::inverse_dynamics(&m, &f, &phi, &w, &a),
+        dynamics::inverse_dynamics(&m, &phi, &w, &a)
+    );
+    assert_eq!(
+        foot::energy(&m, &f, &phi, &w),
+        dynamics::energy(&m, &phi, &w)
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    #[test]
+    fn mass_matrix_on_the_toe_matches_kinetic_energy((q, _w, _a) in toe_state()) {
+        let (m, f) = model();
+        let d = foot::terms(&m, &f, &q, &[0.0; LINKS]).d;
+        let e = mass_matrix(&m, &f, &q, true);
+        for i in 0..LINKS {
+            for j in 0..LINKS {
+                prop_assert!((d[(i, j)] - e[i][j]).abs() < 1e-10, "D[{i}][{j}] {} vs {}", d[(i, j)], e[i][j]);
+            }
+        }
+    }
+
+    #[test]
+    fn inverse_dynamics_on_the_toe_matches_lagrangian((q, w, a) in toe_state()) {
+        let (m, f) = model();
+        let t = foot::inverse_dynamics(&m, &f, &q, &w, &a);
+        let l = lagrange_torques(&m, &f, &q, &w, &a);
+        for i in 0..LINKS {
+            prop_assert!((t[i] - l[i]).abs() < 1e-4 * (1.0 + l[i].abs()), "{i}: {} vs {}", t[i], l[i]);
+        }
+        // The matrix form agrees with the fast form.
+        let tm = foot::terms(&m, &f, &q, &w);
+        let full = tm.d * nalgebra::SVector::<f64, LINKS>::from(a) + tm.h_dphi + tm.g;
+        for i in 0..LINKS {
+            prop_assert!((full[i] - t[i]).abs() < 1e-9 * (1.0 + t[i].abs()));
+        }
+        // And forward dynamics inverts it.
+        let back = foot::forward_dynamics(&m, &f, &q, &w, &t).unwrap();
+        for i in 0..LINKS {
+            prop_assert!((back[i] - a[i]).abs() < 1e-8 * (1.0 + a[i].abs()));
+        }
+    }
+
+    /// The pivot torque −ΣT_φ is the rate of angular momentum about the toe
+    /// plus gravity's moment about it (Newton–Euler, not Lagrange).
+    #[test]
+    fn pivot_torque_is_momentum_rate_about_the_toe((q, w, a) in toe_state()) {
+        let (m, f) = model();
+        let t = foot::inverse_dynamics(&m, &f, &q, &w, &a);
+        let pivot_torque = -t.iter().sum::<f64>();
+        let toe = f.toe();
+        let all = [0, 1, 2, 3, 4];
+        // dL/dt by a central difference along the motion.
+        let h = 1e-6;
+        let q_at = |s: f64| -> [f64; LINKS] { core::array::from_fn(|i| q[i] + s * w[i] + 0.5 * s * s * a[i]) };
+        let w_at = |s: f64| -> [f64; LINKS] { core::array::from_fn(|i| w[i] + s * a[i]) };
+        let dl = (angular_momentum(&m, &f, &q_at(h), &w_at(h), true, &all, toe)
+            - angular_momentum(&m, &f, &q_at(-h), &w_at(-h), true, &all, toe)) / (2.0 * h);
+        // Gravity's moment about the toe (anticlockwise): Σ (c − toe) × (−m g ŷ).
+        let mut gravity = 0.0;
+        for k in 0..LINKS {
+            let (c, _) = com_and_jacobian(&m, &f, &q, k, true);
+            gravity += -(c[0] - toe[0]) * m.links()[k].mass_kg * GRAVITY_M_S2;
+        }
+        // Applied torque + gravity moment = dL/dt.
+        prop_assert!((pivot_torque + gravity - dl).abs() < 1e-3 * (1.0 + dl.abs()),
+            "{pivot_torque} + {gravity} vs {dl}");
+    }
+
+    #[test]
+    fn heel_off_and_heel_strike_conserve_the_right_momenta(
+        q in (-1.0f64..1.0, -0.6f64..0.6, 2.0f64..4.2, 2.0f64..4.2),
+        w in prop::array::uniform5(-3.0f64..3.0),
+    ) {
+        let (m, f) = model();
+        let s = f.heel_off_rad;
+        let phi = [s, q.0, q.1, q.2, q.3];
+        let toe = f.toe();
+        let all = [0, 1, 2, 3, 4];
+        // Heel-off: about the toe.
+        let up = foot::contact_switch_velocities(&m, &f, &phi, &w, true).unwrap();
+        let before = angular_momentum(&m, &f, &phi, &w, false, &all, toe);
+        let after = angular_momentum(&m, &f, &phi, &up, true, &all, toe);
+        prop_assert!((before - after).abs() < 1e-6 * (1.0 + before.abs()), "{before} vs {after}");
+        let jb = joint_momenta(&m, &f, &phi, &w, false);
+        let ja = joint_momenta(&m, &f, &phi, &up, true);
+        for i in 0..4 {
+            prop_assert!((jb[i] - ja[i]).abs() < 1e-6 * (1.0 + jb[i].abs()), "joint {i}: {} vs {}", jb[i], ja[i]);
+        }
+        // A plastic contact switch never adds energy.
+        let kb = kinetic(&mass_matrix(&m, &f, &phi, false), &w);
+        let ka = kinetic(&mass_matrix(&m, &f, &phi, true), &up);
+        prop_assert!(ka <= kb * (1.0 + 1e-9) + 1e-12, "{kb} -> {ka}");
+        // Heel strike: about the ankle.
+        let down = foot::contact_switch_velocities(&m, &f, &phi, &w, false).unwrap();
+        let before = angular_momentum(&m, &f, &phi, &w, true, &all, [0.0; 2]);
+        let after = angular_momentum(&m, &f, &phi, &down, false, &all, [0.0; 2]);
+        prop_assert!((before - after).abs() < 1e-6 * (1.0 + before.abs()), "{before} vs {after}");
+        let jb = joint_momenta(&m, &f, &phi, &w, true);
+        let ja = joint_momenta(&m, &f, &phi, &down, false);
+        for i in 0..4 {
+            prop_assert!((jb[i] - ja[i]).abs() < 1e-6 * (1.0 + jb[i].abs()));
+        }
+        let kb = kinetic(&mass_matrix(&m, &f, &phi, true), &w);
+        let ka = kinetic(&mass_matrix(&m, &f, &phi, false), &down);
+        prop_assert!(ka <= kb * (1.0 + 1e-9) + 1e-12);
+    }
+}
+
+/// The free chain on its toe conserves energy; across heel-off and heel
+/// strike it loses some (the switches are plastic) and never gains.
+#[test]
+fn free_chain_on_the_toe_conserves_energy() {
+    let (m, f) = model();
+    // Leaning past the stop, falling forward: stays on the toe.
+    let mut q = [0.5, 0.1, -0.1, 3.0, 3.4];
+    let mut w = [0.5, -0.3, 0.2, 1.0, -0.5];
+    let e0 = foot::energy(&m, &f, &q, &w);
+    for _ in 0..2000 {
+        assert!(f.on_toe(q[0]));
+        (q, w) = foot::rk4_step(&m, &f, &q, &w, &[0.0; LINKS], 1e-4).unwrap();
+        if q[0] > 1.2 {
+            break;
+        }
+    }
+    let e1 = foot::energy(&m, &f, &q, &w);
+    assert!((e1 - e0).abs() < 1e-6 * e0.abs().max(1.0), "{e0} -> {e1}");
+    // Energy also matches the explicit kinetic + potential energy.
+    let explicit = kinetic(&mass_matrix(&m, &f, &q, true), &w) + potential(&m, &f, &q);
+    assert!((explicit - e1).abs() < 1e-8 * e1.abs().max(1.0));
+
+    // Falling backwards from the toe onto the heel: energy drops at the
+    // strike, never rises.
+    let mut q = [0.4, 0.0, 0.1, 3.1, 3.2];
+    let mut w = [-1.5, 0.0, 0.0, 0.0, 0.0];
+    let mut e = foot::energy(&m, &f, &q, &w);
+    let mut struck = false;
+    for _ in 0..2000 {
+        let was = f.on_toe(q[0]);
+        (q, w) = foot::rk4_step(&m, &f, &q, &w, &[0.0; LINKS], 1e-4).unwrap();
+        let now = foot::energy(&m, &f, &q, &w);
+        if was != f.on_toe(q[0]) {
+            struck = true;
+            assert!(now < e, "heel strike added energy: {e} -> {now}");
+        } else {
+            assert!((now - e).abs() < 1e-6 * e.abs().max(1.0), "{e} -> {now}");
+        }
+        e = now;
+        if struck {
+            break;
+        }
+    }
+    assert!(struck, "never reached the heel");
+}
