@@ -237,6 +237,8 @@ pub fn setup(a: &OptimizeArgs, model: Option<BodyModel<f64>>) -> Result<Setup, S
         phi3_start_rad: base.phi3_start_rad,
         end_posture: None,
         rest_at_ends: false,
+        foot: None,
+        stance_knee_max_rad: None,
     };
     let model = model.unwrap_or_else(BodyModel::paper_table_iii);
     Ok(Setup {

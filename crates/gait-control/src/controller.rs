@@ -18,7 +18,8 @@
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;
 use embedded_hal::spi::SpiDevice;
-use gait_core::dynamics::{inverse_dynamics_joint, share_load};
+use gait_core::foot::{self, StanceFoot};
+use gait_core::kinematics::joint_torques;
 use gait_core::model::GRAVITY_M_S2;
 use gait_core::{BodyModel, LINKS};
 
@@ -616,8 +617,11 @@ impl<'t> Controller<'t> {
                 stance,
             ),
         };
-        let single = inverse_dynamics_joint(model, &phi, &dphi, &ddphi);
-        let shared = share_load(model, &phi, &single, other_load_n);
+        // The stance heel lifts past the ankle's stop (stair descent): the
+        // chain then turns about the toe (gait_core::foot).
+        let foot = StanceFoot::for_model(model);
+        let single = joint_torques(&foot::inverse_dynamics(model, &foot, &phi, &dphi, &ddphi));
+        let shared = foot::share_load(model, &foot, &phi, &single, other_load_n);
         let ff = joint_torques_from_theta_torques(&shared.torques, side);
         ff.map(|v| if v.is_finite() { v } else { 0.0 })
     }

@@ -186,19 +186,23 @@ pub struct EnvelopeMargins {
     /// Where a stop is at (or within the margin of) 0°, the knee may read
     /// this far past 0 (encoder calibration, compliance), rad.
     pub knee_hyperextension_tolerance_rad: f32,
-    /// Margin inside the ankle dorsiflexion stop, rad.
-    pub ankle_margin_rad: f32,
+    /// How far past the ankle's dorsiflexion stop a reading may go, rad.
+    /// The stop itself is where the toe rocker lifts the heel
+    /// (`gait_core::foot`): stair descent rests the trailing ankle on it,
+    /// so the envelope ends just beyond it (the stop's compliance and the
+    /// encoder's calibration), not inside it.
+    pub ankle_stop_tolerance_rad: f32,
     /// Like the knee's tolerance, for plantarflexion past 0, rad.
     pub ankle_plantarflexion_tolerance_rad: f32,
 }
 
 impl EnvelopeMargins {
     /// 5° inside the hip and knee stops, 3° of knee hyperextension, 2°
-    /// inside the ankle's dorsiflexion stop, 3° of plantarflexion.
+    /// past the ankle's dorsiflexion stop, 3° of plantarflexion.
     pub const DEFAULT: Self = Self {
         joint_margin_rad: 5.0 * DEG,
         knee_hyperextension_tolerance_rad: 3.0 * DEG,
-        ankle_margin_rad: 2.0 * DEG,
+        ankle_stop_tolerance_rad: 2.0 * DEG,
         ankle_plantarflexion_tolerance_rad: 3.0 * DEG,
     };
 }
@@ -296,9 +300,9 @@ impl SupervisorConfig {
             max_rad: limits.knee_flexion_rad - m.joint_margin_rad,
         };
         let ankle = AngleRange {
-            min_rad: -(limits.ankle_plantarflexion_rad - m.ankle_margin_rad)
+            min_rad: -(limits.ankle_plantarflexion_rad - m.ankle_stop_tolerance_rad)
                 .max(m.ankle_plantarflexion_tolerance_rad),
-            max_rad: limits.ankle_dorsiflexion_rad - m.ankle_margin_rad,
+            max_rad: limits.ankle_dorsiflexion_rad + m.ankle_stop_tolerance_rad,
         };
         Self {
             dt_s: 0.001,

@@ -197,7 +197,7 @@ fn envelope_is_table_i_with_margins() {
         "{knee:?}"
     );
     assert!(
-        close(ankle.min_rad, -3.0) && close(ankle.max_rad, 18.0),
+        close(ankle.min_rad, -3.0) && close(ankle.max_rad, 22.0),
         "{ankle:?}"
     );
     assert_eq!(cfg.joint_range[2], hip);

@@ -166,6 +166,19 @@ pub fn share_load<T: Real>(
     single: &[T; LINKS],
     max_load_n: T,
 ) -> DoubleSupportStatics<T> {
+    share_load_with_base(model, phi, single, max_load_n, [T::zero(); 2])
+}
+
+/// [`share_load`] for a stance ankle that moves with φ1 at `base_d1` =
+/// ∂(ankle)/∂φ1 (the toe rocker, [`crate::foot::share_load`]): the second
+/// foot's force then also acts on φ1 through the moving base.
+pub fn share_load_with_base<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    single: &[T; LINKS],
+    max_load_n: T,
+    base_d1: [T; 2],
+) -> DoubleSupportStatics<T> {
     let l = model.lengths();
     // Jᵀ e_x and Jᵀ e_y: ∂p5/∂φ_i = l_i (cos φ_i, −sin φ_i) for the links
     // between the stance ankle and the swing ankle (not the torso).
@@ -181,6 +194,10 @@ pub fn share_load<T: Real>(
             let (s, c) = p.sin_cos_fast();
             *x = li * c;
             *y = -li * s;
+        }
+        if i == 0 {
+            *x += base_d1[0];
+            *y += base_d1[1];
         }
     }
     let mx = joint_torques(&jx);

@@ -31,7 +31,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::dynamics::{self, DynamicsError, DynamicsTerms, TPhi};
+use crate::dynamics::{self, DoubleSupportStatics, DynamicsError, DynamicsTerms, TPhi};
 use crate::kinematics::{Phi, Point, forward_kinematics, link_com};
 use crate::model::{BodyModel, CARRIED, GRAVITY_M_S2, LINKS};
 use crate::scalar::Real;
@@ -70,14 +70,25 @@ pub struct AnklePlacement<T> {
 }
 
 impl<T: Real> StanceFoot<T> {
-    /// The device's foot: [`TOE_M`], [`ANKLE_HEIGHT_M`], heel-off at the
-    /// model's dorsiflexion limit (Table I: 20°).
-    pub fn for_model(model: &BodyModel<T>) -> Self {
+    /// The device's foot ([`TOE_M`], [`ANKLE_HEIGHT_M`]) with the heel
+    /// lifting at `heel_off_rad`.
+    pub fn device(heel_off_rad: T) -> Self {
         Self {
             toe_m: T::lit(TOE_M),
             ankle_height_m: T::lit(ANKLE_HEIGHT_M),
-            heel_off_rad: model.limits().ankle_dorsiflexion_rad,
+            heel_off_rad,
         }
+    }
+
+    /// The device's foot with heel-off at the model's dorsiflexion limit
+    /// (Table I: 20°).
+    pub fn for_model(model: &BodyModel<T>) -> Self {
+        Self::device(model.limits().ankle_dorsiflexion_rad)
+    }
+
+    /// The device's foot with heel-off at Table I's 20°.
+    pub fn table_i() -> Self {
+        Self::device(crate::model::JointLimits::<T>::paper_table_i().ankle_dorsiflexion_rad)
     }
 
     /// The foot's pitch (heel up, rad): max(φ1 − heel_off, 0).
@@ -292,6 +303,19 @@ pub fn forward_dynamics<T: Real>(
     } else {
         Err(DynamicsError::NonFinite)
     }
+}
+
+/// [`dynamics::share_load`] on this foot: the second foot's force also
+/// acts through the stance ankle's motion about the toe.
+pub fn share_load<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    phi: &Phi<T>,
+    single: &[T; LINKS],
+    max_load_n: T,
+) -> DoubleSupportStatics<T> {
+    let d1 = foot.ankle(first(phi)).d1;
+    dynamics::share_load_with_base(model, phi, single, max_load_n, d1)
 }
 
 /// Kinetic plus gravitational energy on this foot (heights from the flat

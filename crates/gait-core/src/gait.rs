@@ -13,6 +13,7 @@
 
 use crate::bezier::Bezier;
 use crate::dynamics::inverse_dynamics;
+use crate::foot::StanceFoot;
 use crate::ik::{IkError, IkSolution, IkSolver, IkTarget};
 use crate::kinematics::{Phi, joint_torques};
 use crate::model::{BodyModel, LINKS};
@@ -244,15 +245,20 @@ pub struct GaitSample<T> {
     pub p5: [T; 2],
     /// Assumed stance-ankle angle φ1, rad.
     pub phi1: T,
+    /// Where the stance ankle is: the origin while the foot is flat, on its
+    /// circle about the toe once the heel is up ([`crate::foot`]), m.
+    pub stance_ankle_m: [T; 2],
 }
 
 impl<T: Real> GaitSample<T> {
     /// The posture this sample asks for: the IK at its (x5, y5, φ1, φ3, r2),
     /// with an IK failure reported against the sample's index.
     pub fn solve(&self, ik: &IkSolver<T>) -> Result<IkSolution<T>, GaitError> {
+        // The IK works from the stance ankle; the path is in the flat
+        // foot's frame.
         ik.solve(&IkTarget {
-            x5: self.p5[0],
-            y5: self.p5[1],
+            x5: self.p5[0] - self.stance_ankle_m[0],
+            y5: self.p5[1] - self.stance_ankle_m[1],
             phi1: self.phi1,
             phi3: self.phi3,
             r2: self.r2,
@@ -270,6 +276,12 @@ pub struct Step<T> {
     pub stance: StanceAnkleProfile<T>,
     /// Time sampling.
     pub sampling: Sampling<T>,
+    /// The stance foot's toe rocker, or `None` for the paper's flat foot
+    /// (pinned ankle).
+    pub foot: Option<StanceFoot<T>>,
+    /// The IK's stance-knee flexion cap, rad, or `None` for the paper's
+    /// human range (45°). Stair descent lands on a stance knee bent past it.
+    pub stance_knee_max_rad: Option<T>,
 }
 
 fn rows<T: Copy, const N: usize>(p: &ControlPoints<T>, start: usize) -> Option<[[T; 2]; N]> {
@@ -278,6 +290,15 @@ fn rows<T: Copy, const N: usize>(p: &ControlPoints<T>, start: usize) -> Option<[
 }
 
 impl<T: Real> Step<T> {
+    /// The IK solver this step's samples are solved with.
+    pub fn ik(&self, model: &BodyModel<T>) -> IkSolver<T> {
+        let ik = IkSolver::new(model);
+        match self.stance_knee_max_rad {
+            Some(cap) => ik.with_stance_knee_max(cap),
+            None => ik,
+        }
+    }
+
     /// The swing-ankle path (x5, y5) as a curve of z (rows 10–14).
     pub fn path(&self) -> Option<Bezier<T, 5>> {
         rows::<T, 5>(&self.control, 10).map(Bezier::new)
@@ -312,6 +333,7 @@ impl<T: Real> Step<T> {
         for k in 0..=self.sampling.intervals {
             let t = T::lit(k as f64) * self.sampling.dt_s;
             let z = zw.at(t)?;
+            let phi1 = self.stance.at(t);
             let sample = GaitSample {
                 k,
                 t_s: t,
@@ -319,7 +341,10 @@ impl<T: Real> Step<T> {
                 phi3: phw.at(t)?,
                 z,
                 p5: path.eval(z),
-                phi1: self.stance.at(t),
+                phi1,
+                stance_ankle_m: self
+                    .foot
+                    .map_or([T::zero(); 2], |f| f.ankle(phi1).position_m),
             };
             visit(&sample)?;
         }
@@ -355,7 +380,8 @@ pub struct DynamicSample<T> {
     pub ddphi: Phi<T>,
     /// Relative angles Θ, rad.
     pub theta: Phi<T>,
-    /// Joint torques T_Θ, N·m; `[0]` is the stance-ankle torque τ = T_θ1.
+    /// Joint torques T_Θ, N·m; `[0]` is the stance pivot torque τ = T_θ1
+    /// (about the ankle, or about the toe once the heel is up).
     pub torque: [T; LINKS],
 }
 
@@ -377,7 +403,7 @@ pub fn evaluate_step<T: Real, E: From<GaitError>>(
     differences: Differences,
     mut visit: impl FnMut(StepEvent<'_, T>) -> Result<(), E>,
 ) -> Result<(), E> {
-    let ik = IkSolver::new(model);
+    let ik = step.ik(model);
     let dt = step.sampling.dt_s;
     let inv_dt = T::one() / dt;
     // Window of the last three samples (oldest first).
@@ -396,7 +422,12 @@ pub fn evaluate_step<T: Real, E: From<GaitError>>(
                 let result = if let Some(prev) = prev_dphi {
                     let ddphi = zip_map(&dphi, &prev, |a, b| (a - b) * inv_dt);
                     visit(StepEvent::Dynamics(&dynamic_sample(
-                        model, g2, p2, dphi, ddphi,
+                        model,
+                        step.foot.as_ref(),
+                        g2,
+                        p2,
+                        dphi,
+                        ddphi,
                     )))
                 } else {
                     Ok(())
@@ -417,7 +448,12 @@ pub fn evaluate_step<T: Real, E: From<GaitError>>(
                     *o = (a - b - b + c) * inv_dt * inv_dt;
                 }
                 visit(StepEvent::Dynamics(&dynamic_sample(
-                    model, g1, p1, dphi, ddphi,
+                    model,
+                    step.foot.as_ref(),
+                    g1,
+                    p1,
+                    dphi,
+                    ddphi,
                 )))
             }
         }
@@ -426,12 +462,17 @@ pub fn evaluate_step<T: Real, E: From<GaitError>>(
 
 fn dynamic_sample<T: Real>(
     model: &BodyModel<T>,
+    foot: Option<&StanceFoot<T>>,
     gait: GaitSample<T>,
     phi: Phi<T>,
     dphi: Phi<T>,
     ddphi: Phi<T>,
 ) -> DynamicSample<T> {
-    let torque = joint_torques(&inverse_dynamics(model, &phi, &dphi, &ddphi));
+    let t_phi = match foot {
+        Some(f) => crate::foot::inverse_dynamics(model, f, &phi, &dphi, &ddphi),
+        None => inverse_dynamics(model, &phi, &dphi, &ddphi),
+    };
+    let torque = joint_torques(&t_phi);
     DynamicSample {
         gait,
         phi,

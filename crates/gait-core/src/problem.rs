@@ -15,6 +15,7 @@
 //! re-plan a step from the ankle angle it measures; only the search is on
 //! the host (crates/gait-opt).
 
+use crate::foot::StanceFoot;
 use crate::gait::{
     CONTACT_THRESHOLD_M, CONTROL_ROWS, ControlPoints, Differences, GaitError, Sampling,
     StanceAnkleProfile, Step, StepEvent, contact_weight, evaluate_step,
@@ -61,6 +62,12 @@ pub struct StepCase<T> {
     /// lift-off and landing. `false` in the paper's cases, whose optima
     /// leave the standing posture with a jump in joint speed.
     pub rest_at_ends: bool,
+    /// The stance foot's toe rocker ([`crate::foot`]): the step's stance
+    /// heel lifts once φ1 passes its stop, and the path's (x5, y5) are in
+    /// the flat foot's frame. `None`: the paper's pinned, flat foot.
+    pub foot: Option<StanceFoot<T>>,
+    /// The IK's stance-knee flexion cap, rad (`None`: the paper's 45°).
+    pub stance_knee_max_rad: Option<T>,
 }
 
 /// r2 and φ3 at the landing, fixed by eq. (cons) with equal bounds.
@@ -101,6 +108,12 @@ pub struct PeriodicStep<T> {
     pub k_per_s: T,
     /// Midpoint t_c of the logistic, s.
     pub t_c_s: T,
+    /// The feet's toe rocker (`None`: flat, pinned feet). With it, a
+    /// trailing foot whose shank leans past the stop stands on its toe in
+    /// double support, its ankle raised ([`crate::foot`]).
+    pub foot: Option<StanceFoot<T>>,
+    /// The IK's stance-knee flexion cap, rad (`None`: the paper's 45°).
+    pub stance_knee_max_rad: Option<T>,
 }
 
 impl<T: Real> PeriodicStep<T> {
@@ -121,6 +134,8 @@ impl<T: Real> PeriodicStep<T> {
             phi3_rad: l(0.0),
             k_per_s: l(0.5638),
             t_c_s: l(2.24),
+            foot: Some(StanceFoot::table_i()),
+            stance_knee_max_rad: None,
         }
     }
 
@@ -138,9 +153,48 @@ impl<T: Real> PeriodicStep<T> {
             phi3_rad: l(0.0),
             k_per_s: l(4.0),
             t_c_s: l(1.14),
+            foot: Some(StanceFoot::table_i()),
+            stance_knee_max_rad: None,
+        }
+    }
+
+    /// Stair descent, which the paper does not treat: the paper's stair
+    /// (tread 0.275 m, rise 0.0935 m) walked down, the swing ankle going from
+    /// the tread above the stance foot to the one below. The trailing foot
+    /// stands on its toe in double support (with both feet flat its ankle
+    /// would need about 30° of dorsiflexion; Table I allows 20°), so the
+    /// stance heel lifts during the step. φ1(0), r2(0), (k, t_c) and ts are
+    /// this project's choices (`docs/model.md`, "Stair descent").
+    pub fn stair_down() -> Self {
+        let l = T::lit;
+        Self {
+            spacing_m: [l(0.275), l(-0.0935)],
+            step_time_s: l(STAIR_DOWN_STEP_S),
+            phi1_start_rad: l(STAIR_DOWN_PHI1_START_RAD),
+            r2_start: l(STAIR_DOWN_R2_START),
+            phi3_rad: l(0.0),
+            k_per_s: l(STAIR_DOWN_K_PER_S),
+            t_c_s: l(STAIR_DOWN_T_C_S),
+            foot: Some(StanceFoot::table_i()),
+            stance_knee_max_rad: Some(l(STAIR_DOWN_KNEE_MAX_DEG.to_radians())),
         }
     }
 }
+
+/// Stair descent's stance-knee cap, degrees: the trailing knee of the
+/// double-support posture bends 60° (Table I allows 100°).
+const STAIR_DOWN_KNEE_MAX_DEG: f64 = 75.0;
+
+/// Stair descent's step time, s.
+const STAIR_DOWN_STEP_S: f64 = 2.28;
+/// Stair descent's stance shank at the start, rad.
+const STAIR_DOWN_PHI1_START_RAD: f64 = 0.0;
+/// Stair descent's r2 at the start.
+const STAIR_DOWN_R2_START: f64 = 1.0;
+/// Stair descent's logistic steepness, 1/s.
+const STAIR_DOWN_K_PER_S: f64 = 4.0;
+/// Stair descent's logistic midpoint, s.
+const STAIR_DOWN_T_C_S: f64 = 1.14;
 
 /// Why no periodic case exists for a [`PeriodicStep`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -193,6 +247,8 @@ impl<T: Real> StepCase<T> {
                 phi3_start_rad: l(0.0),
                 end_posture: None,
                 rest_at_ends: false,
+                foot: None,
+                stance_knee_max_rad: None,
             },
             PaperCase::StairUp => Self {
                 start_m: [l(-0.275), l(-0.0935)],
@@ -208,6 +264,8 @@ impl<T: Real> StepCase<T> {
                 phi3_start_rad: l(0.0),
                 end_posture: None,
                 rest_at_ends: false,
+                foot: None,
+                stance_knee_max_rad: None,
             },
         }
     }
@@ -220,21 +278,53 @@ impl<T: Real> StepCase<T> {
     /// logistic keeps the shape (k, t_c) and its asymptotes are solved so
     /// that φ1(0) and φ1(ts) are the two postures' stance-shank angles.
     pub fn periodic(p: &PeriodicStep<T>, model: &BodyModel<T>) -> Result<Self, PeriodicError> {
-        let ik = IkSolver::new(model);
+        let ik = match p.stance_knee_max_rad {
+            Some(cap) => IkSolver::new(model).with_stance_knee_max(cap),
+            None => IkSolver::new(model),
+        };
         let [sx, sy] = p.spacing_m;
-        let start = ik
-            .solve(&IkTarget {
-                x5: -sx,
-                y5: -sy,
+        let ankle = |phi1: T| p.foot.map_or([T::zero(); 2], |f| f.ankle(phi1).position_m);
+        let stance_ankle = ankle(p.phi1_start_rad);
+        // The trailing (swing) foot stands at −spacing; on its toe its ankle
+        // is raised by how far its own shank leans past the stop, which the
+        // posture decides: lean = g(lean), solved by the secant method on
+        // g(lean) − lean (bounded at 40 rounds; it converges in a few where
+        // the plain fixed-point iteration can crawl).
+        let solve = |lean: T| {
+            let a = ankle(lean);
+            let trailing = [a[0] - sx, a[1] - sy];
+            ik.solve(&IkTarget {
+                x5: trailing[0] - stance_ankle[0],
+                y5: trailing[1] - stance_ankle[1],
                 phi1: p.phi1_start_rad,
                 phi3: p.phi3_rad,
                 r2: p.r2_start,
             })
-            .map_err(PeriodicError::Start)?;
+            .map(|sol| (trailing, sol))
+            .map_err(PeriodicError::Start)
+        };
+        let residual = |lean: T| -> Result<T, PeriodicError> {
+            let (_, sol) = solve(lean)?;
+            Ok(swap_legs(&sol.phi)[0] - lean)
+        };
+        let flat_lean = swap_legs(&solve(T::lit(-10.0))?.1.phi)[0];
+        let (mut x0, mut x1) = (flat_lean, flat_lean + residual(flat_lean)?);
+        let mut r0 = residual(x0)?;
+        for _ in 0..40 {
+            let r1 = residual(x1)?;
+            if r1.abs() < T::lit(1e-13) || (r1 - r0).abs() <= T::zero() {
+                break;
+            }
+            let next = x1 - r1 * (x1 - x0) / (r1 - r0);
+            (x0, r0, x1) = (x1, r1, next);
+        }
+        let (swing_start, start) = solve(x1)?;
         let landing = swap_legs(&start.phi);
         let [phi1_end, phi2_end, ..] = landing;
+        // At the landing the old stance foot trails; its ankle may be up.
+        let end_ankle = ankle(phi1_end);
         let (lo, hi) = ik
-            .phi2_range(sx, sy, phi1_end)
+            .phi2_range(sx - end_ankle[0], sy - end_ankle[1], phi1_end)
             .map_err(|_| PeriodicError::LandingOutsideHumanRange)?;
         let r2_end = if hi - lo > ik.tolerance {
             (phi2_end - lo) / (hi - lo)
@@ -256,7 +346,7 @@ impl<T: Real> StepCase<T> {
         let width = (phi1_end - p.phi1_start_rad) / span;
         let a = p.phi1_start_rad - width * s0;
         Ok(Self {
-            start_m: [-sx, -sy],
+            start_m: swing_start,
             landing_m: [sx, sy],
             step_time_s: p.step_time_s,
             stance: StanceAnkleProfile {
@@ -272,6 +362,8 @@ impl<T: Real> StepCase<T> {
                 phi3_rad: p.phi3_rad,
             }),
             rest_at_ends: true,
+            foot: p.foot,
+            stance_knee_max_rad: p.stance_knee_max_rad,
         })
     }
 }
@@ -556,6 +648,8 @@ impl<T: Real> PaperProblem<T> {
             control: *p,
             stance: self.case.stance,
             sampling: self.sampling,
+            foot: self.case.foot,
+            stance_knee_max_rad: self.case.stance_knee_max_rad,
         }
     }
 

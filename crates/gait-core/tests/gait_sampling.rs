@@ -79,6 +79,8 @@ fn linear_step(ts: f64, values: [f64; 5]) -> Step<f64> {
         control: p,
         stance: pb.case.stance,
         sampling: Sampling::paper(ts),
+        foot: None,
+        stance_knee_max_rad: None,
     }
 }
 

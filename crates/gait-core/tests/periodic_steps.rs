@@ -10,23 +10,34 @@ use gait_core::kinematics::{forward_kinematics, swap_legs, wrap_pi};
 use gait_core::problem::{PaperProblem, PeriodicError, PeriodicStep, StepCase};
 use proptest::prelude::*;
 
+/// The stance ankle's position at φ1 under the case's foot (origin when
+/// flat).
+fn stance_ankle(case: &StepCase<f64>, phi1: f64) -> [f64; 2] {
+    case.foot.map_or([0.0; 2], |f| f.ankle(phi1).position_m)
+}
+
 fn landing_and_start(case: &StepCase<f64>, m: &BodyModel<f64>) -> ([f64; 5], [f64; 5]) {
-    let ik = IkSolver::new(m);
+    let ik = match case.stance_knee_max_rad {
+        Some(cap) => IkSolver::new(m).with_stance_knee_max(cap),
+        None => IkSolver::new(m),
+    };
     let end = case.end_posture.expect("periodic cases fix the landing");
+    let (t0, ts) = (case.stance.at(0.0), case.stance.at(case.step_time_s));
+    let (a0, a1) = (stance_ankle(case, t0), stance_ankle(case, ts));
     let landing = ik
         .solve(&IkTarget {
-            x5: case.landing_m[0],
-            y5: case.landing_m[1],
-            phi1: case.stance.at(case.step_time_s),
+            x5: case.landing_m[0] - a1[0],
+            y5: case.landing_m[1] - a1[1],
+            phi1: ts,
             phi3: end.phi3_rad,
             r2: end.r2,
         })
         .expect("landing solves");
     let start = ik
         .solve(&IkTarget {
-            x5: case.start_m[0],
-            y5: case.start_m[1],
-            phi1: case.stance.at(0.0),
+            x5: case.start_m[0] - a0[0],
+            y5: case.start_m[1] - a0[1],
+            phi1: t0,
             phi3: case.phi3_start_rad,
             r2: case.r2_start,
         })
@@ -34,17 +45,27 @@ fn landing_and_start(case: &StepCase<f64>, m: &BodyModel<f64>) -> ([f64; 5], [f6
     (landing.phi, start.phi)
 }
 
-fn assert_chains(case: &StepCase<f64>, m: &BodyModel<f64>) {
+/// The landing, swapped, is the start; the swing foot lands where the case
+/// says; and the trailing foot at the start stands at −spacing (its ankle
+/// raised by the toe rocker when its shank leans past the stop).
+fn assert_chains(case: &StepCase<f64>, m: &BodyModel<f64>, spacing: [f64; 2]) {
     let (landing, start) = landing_and_start(case, m);
     let next = swap_legs(&landing);
+    // 1e-6 rad: at a fully stretched swing leg (the descent's landing) the
+    // IK's square root turns its 1e-9 radicand slack into ~1e-7 rad.
     for (a, b) in next.iter().zip(&start) {
-        assert!(wrap_pi(a - b).abs() < 1e-7, "{next:?} vs {start:?}");
+        assert!(wrap_pi(a - b).abs() < 1e-6, "{next:?} vs {start:?}");
     }
-    // Same joints in the world: the new stance foot is where the swing
-    // foot landed.
+    let a1 = stance_ankle(case, case.stance.at(case.step_time_s));
     let p = forward_kinematics(m, &landing);
-    assert!((p[4][0] - case.landing_m[0]).abs() < 1e-9);
-    assert!((p[4][1] - case.landing_m[1]).abs() < 1e-9);
+    // Within a micrometre: a landing with the swing leg fully stretched
+    // (the descent's) sits where the IK clamps its radicand.
+    let err = (p[4][0] + a1[0] - case.landing_m[0]).hypot(p[4][1] + a1[1] - case.landing_m[1]);
+    assert!(err < 1e-6, "landing misses by {err} m");
+    assert_eq!(case.landing_m, spacing);
+    let trailing = stance_ankle(case, swap_legs(&start)[0]);
+    assert!((case.start_m[0] - trailing[0] + spacing[0]).abs() < 1e-9);
+    assert!((case.start_m[1] - trailing[1] + spacing[1]).abs() < 1e-9);
 }
 
 #[test]
@@ -53,7 +74,7 @@ fn device_walk_and_stair_ascent_chain_into_the_next_step() {
     for p in [PeriodicStep::walk(), PeriodicStep::stair_up()] {
         let case = StepCase::periodic(&p, &m).expect("periodic case");
         assert!((case.stance.at(0.0) - p.phi1_start_rad).abs() < 1e-9);
-        assert_chains(&case, &m);
+        assert_chains(&case, &m, p.spacing_m);
         // The bounds pin the landing's r2 and φ3; the initial guess is
         // feasible and has a finite cost.
         let problem = PaperProblem::new(case, m);
@@ -161,6 +182,38 @@ fn paper_stair_descent_needs_more_ankle_than_table_i_allows() {
     );
 }
 
+/// With the toe rocker the descent's double-support posture exists: the
+/// trailing foot stands on its toe with the ankle on its 20° stop (what its
+/// encoder reads), the heel raised, and the step chains into the next one.
+#[test]
+fn stair_descent_exists_with_the_trailing_heel_up() {
+    let m = BodyModel::<f64>::paper_table_iii();
+    let p = PeriodicStep::<f64>::stair_down();
+    let foot = p.foot.expect("descent needs the toe rocker");
+    let case = StepCase::periodic(&p, &m).expect("periodic descent");
+    assert_chains(&case, &m, p.spacing_m);
+    let trailing = case.stance.at(case.step_time_s);
+    assert!(foot.on_toe(trailing));
+    assert_eq!(foot.dorsiflexion(trailing), foot.heel_off_rad);
+    // About 27° of foot pitch, the heel about 6 cm up.
+    let pitch = foot.pitch(trailing).to_degrees();
+    assert!((20.0..35.0).contains(&pitch), "pitch {pitch}°");
+    assert!(case.start_m[1] > -p.spacing_m[1] + 0.04);
+    // The front (stance) foot is flat at the start.
+    assert!(!foot.on_toe(case.stance.at(0.0)));
+    // Without the rocker the same step has no periodic case.
+    let flat = PeriodicStep { foot: None, ..p };
+    assert!(
+        StepCase::periodic(&flat, &m).is_err() || {
+            let c = StepCase::periodic(&flat, &m).expect("checked");
+            c.stance.at(c.step_time_s) > m.limits().ankle_dorsiflexion_rad
+        }
+    );
+    // The table problem's initial guess solves at every sample.
+    let problem = PaperProblem::new(case, m);
+    assert!(problem.cost(&problem.initial_guess()).is_ok());
+}
+
 proptest! {
     #[test]
     fn periodic_cases_chain_wherever_they_exist(
@@ -180,7 +233,7 @@ proptest! {
         // Too many rejections fail the test: it cannot pass vacuously.
         prop_assume!(case.is_ok());
         if let Ok(case) = case {
-            assert_chains(&case, &m);
+            assert_chains(&case, &m, p.spacing_m);
         }
     }
 }

@@ -3,11 +3,11 @@
 //! control points, J and its parts, the human-data baseline, reductions,
 //! solver figures and the per-sample trajectory.
 
+use gait_core::foot::StanceFoot;
 use gait_core::gait::{
     CONTACT_THRESHOLD_M, ControlPoints, Differences, GaitError, Sampling, StanceAnkleProfile,
     StepEvent, contact_weight, evaluate_step,
 };
-use gait_core::ik::IkSolver;
 use gait_core::kinematics::theta_from_phi;
 use gait_core::model::{BodyModel, JointLimits, Link};
 use gait_core::problem::{Cost, EndPosture, JointMotionLimit, PaperCase, PaperProblem, StepCase};
@@ -72,6 +72,13 @@ pub struct ProblemSpec {
     /// Whether the step starts and ends at rest (periodic device tables).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub rest_at_ends: bool,
+    /// The stance foot's toe rocker (toe m, ankle height m, heel-off rad);
+    /// absent for the paper's flat foot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub foot: Option<[f64; 3]>,
+    /// The IK's stance-knee cap, rad; absent for the paper's 45°.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stance_knee_max_rad: Option<f64>,
     /// Δt, s.
     pub dt_s: f64,
     /// N (samples t_k = kΔt, k = 0…N).
@@ -336,6 +343,8 @@ impl ProblemSpec {
             phi3_start_rad: c.phi3_start_rad,
             end_posture: c.end_posture.map(|e| [e.r2, e.phi3_rad]),
             rest_at_ends: c.rest_at_ends,
+            foot: c.foot.map(|f| [f.toe_m, f.ankle_height_m, f.heel_off_rad]),
+            stance_knee_max_rad: c.stance_knee_max_rad,
             dt_s: p.sampling.dt_s,
             intervals: p.sampling.intervals,
             grid: p.sampling.grid,
@@ -432,6 +441,14 @@ impl ProblemSpec {
                 .end_posture
                 .map(|[r2, phi3_rad]| EndPosture { r2, phi3_rad }),
             rest_at_ends: self.rest_at_ends,
+            foot: self
+                .foot
+                .map(|[toe_m, ankle_height_m, heel_off_rad]| StanceFoot {
+                    toe_m,
+                    ankle_height_m,
+                    heel_off_rad,
+                }),
+            stance_knee_max_rad: self.stance_knee_max_rad,
         };
         let problem = PaperProblem {
             case,
@@ -484,9 +501,9 @@ pub fn step_samples(
     problem: &PaperProblem<f64>,
     p: &ControlPoints<f64>,
 ) -> Result<Vec<SampleRow>, ReportError> {
-    let ik = IkSolver::new(&problem.model);
-    let mut rows: Vec<SampleRow> = Vec::new();
     let step = problem.step(p);
+    let ik = step.ik(&problem.model);
+    let mut rows: Vec<SampleRow> = Vec::new();
     evaluate_step::<f64, GaitError>(&problem.model, &step, problem.differences, |ev| {
         match ev {
             StepEvent::Sample(s) => {

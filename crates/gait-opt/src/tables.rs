@@ -29,7 +29,6 @@ use std::fmt::Write as _;
 
 use gait_core::BodyModel;
 use gait_core::gait::{ControlPoints, GaitError};
-use gait_core::ik::IkSolver;
 use gait_core::kinematics::Phi;
 use gait_core::problem::{
     JointMotionLimit, PaperCase, PaperProblem, PeriodicError, PeriodicStep, StepCase,
@@ -88,9 +87,10 @@ pub fn step_phi(
     problem: &PaperProblem<f64>,
     p: &ControlPoints<f64>,
 ) -> Result<Vec<Phi<f64>>, GaitError> {
-    let ik = IkSolver::new(&problem.model);
+    let step = problem.step(p);
+    let ik = step.ik(&problem.model);
     let mut out = Vec::new();
-    problem.step(p).for_each_sample::<GaitError>(|s| {
+    step.for_each_sample::<GaitError>(|s| {
         out.push(s.solve(&ik)?.phi);
         Ok(())
     })?;

@@ -42,12 +42,14 @@ struct LinkMotion {
     inertia: f64,
 }
 
-/// Each link's motion for a posture with the stance ankle at `origin`.
+/// Each link's motion for a posture with the stance ankle at `origin`,
+/// moving at `origin_vel` (the toe rocker's rolling ankle; zero when flat).
 fn link_motion(
     model: &BodyModel<f64>,
     phi: &Phi<f64>,
     dphi: &Phi<f64>,
     origin: [f64; 2],
+    origin_vel: [f64; 2],
 ) -> [LinkMotion; LINKS] {
     let links = model.links();
     let u = |j: usize| (phi[j].sin(), phi[j].cos());
@@ -55,7 +57,7 @@ fn link_motion(
     let du = |j: usize| (phi[j].cos() * dphi[j], -phi[j].sin() * dphi[j]);
     core::array::from_fn(|i| {
         let mut com = origin;
-        let mut vel = [0.0; 2];
+        let mut vel = origin_vel;
         let segments = PATH[i]
             .iter()
             .map(|&j| (j, links[j].length_m))
@@ -92,13 +94,15 @@ fn angular_momentum(links: &[LinkMotion; LINKS], subset: &[usize], p: [f64; 2]) 
 
 /// Post-impact Φ̇ of the mirrored posture `phi_new` (new stance ankle at
 /// `new_origin`) from the pre-impact state (`phi_old`, `dphi_old`, old
-/// stance ankle at `old_origin`). `None` if the system is singular (it is
-/// not for any physical posture; the caller falls back).
+/// stance ankle at `old_origin`, moving at `old_origin_vel` when its heel is
+/// up). `None` if the system is singular (it is not for any physical
+/// posture; the caller falls back).
 pub fn post_impact_velocities(
     model: &BodyModel<f64>,
     phi_old: &Phi<f64>,
     dphi_old: &Phi<f64>,
     old_origin: [f64; 2],
+    old_origin_vel: [f64; 2],
     phi_new: &Phi<f64>,
     new_origin: [f64; 2],
 ) -> Option<Phi<f64>> {
@@ -114,7 +118,7 @@ pub fn post_impact_velocities(
     ];
     // New link k is old link OLD_OF[k].
     const OLD_OF: [usize; LINKS] = [4, 3, 2, 1, 0];
-    let before = link_motion(model, phi_old, dphi_old, old_origin);
+    let before = link_motion(model, phi_old, dphi_old, old_origin, old_origin_vel);
     let before_renumbered: [LinkMotion; LINKS] = core::array::from_fn(|k| before[OLD_OF[k]]);
     let rhs: [f64; LINKS] =
         core::array::from_fn(|r| angular_momentum(&before_renumbered, laws[r].0, laws[r].1));
@@ -122,7 +126,7 @@ pub fn post_impact_velocities(
     for c in 0..LINKS {
         let mut e = [0.0; LINKS];
         e[c] = 1.0;
-        let after = link_motion(model, phi_new, &e, new_origin);
+        let after = link_motion(model, phi_new, &e, new_origin, [0.0; 2]);
         for (r, row) in m.iter_mut().enumerate() {
             row[c] = angular_momentum(&after, laws[r].0, laws[r].1);
         }
@@ -189,16 +193,16 @@ mod tests {
         let old = [0.2, 0.15, 0.05, pi - 0.35, pi - 0.2];
         let new = [old[4] - pi, old[3] - pi, old[2], old[1] + pi, old[0] + pi];
         let p5 = gait_core::kinematics::forward_kinematics(&m, &old)[4];
-        let x = post_impact_velocities(&m, &old, &[0.0; LINKS], [0.0; 2], &new, p5)
+        let x = post_impact_velocities(&m, &old, &[0.0; LINKS], [0.0; 2], [0.0; 2], &new, p5)
             .unwrap_or([f64::NAN; LINKS]);
         assert!(x.iter().all(|v| v.abs() < 1e-12), "{x:?}");
         // Moving: the whole body's momentum about the contact is the same
         // before and after (recomputed here, not taken from the solve).
         let w = [0.6, 0.4, 0.1, -1.5, -2.0];
-        let x =
-            post_impact_velocities(&m, &old, &w, [0.0; 2], &new, p5).unwrap_or([f64::NAN; LINKS]);
-        let before = link_motion(&m, &old, &w, [0.0; 2]);
-        let after = link_motion(&m, &new, &x, p5);
+        let x = post_impact_velocities(&m, &old, &w, [0.0; 2], [0.0; 2], &new, p5)
+            .unwrap_or([f64::NAN; LINKS]);
+        let before = link_motion(&m, &old, &w, [0.0; 2], [0.0; 2]);
+        let after = link_motion(&m, &new, &x, p5, [0.0; 2]);
         let all = [0, 1, 2, 3, 4];
         let h0 = angular_momentum(&before, &all, p5);
         let h1 = angular_momentum(&after, &all, p5);
@@ -210,10 +214,10 @@ mod tests {
         sym_links[1] = sym_links[3];
         sym_links[1].com_m = sym_links[1].length_m - sym_links[3].com_m;
         let sym = BodyModel::new(sym_links, *m.limits()).unwrap_or(m);
-        let x =
-            post_impact_velocities(&sym, &old, &w, [0.0; 2], &new, p5).unwrap_or([f64::NAN; LINKS]);
-        let before = link_motion(&sym, &old, &w, [0.0; 2]);
-        let after = link_motion(&sym, &new, &x, p5);
+        let x = post_impact_velocities(&sym, &old, &w, [0.0; 2], [0.0; 2], &new, p5)
+            .unwrap_or([f64::NAN; LINKS]);
+        let before = link_motion(&sym, &old, &w, [0.0; 2], [0.0; 2]);
+        let after = link_motion(&sym, &new, &x, p5, [0.0; 2]);
         let h0s = angular_momentum(&before, &all, p5);
         let h1s = angular_momentum(&after, &all, p5);
         assert!(

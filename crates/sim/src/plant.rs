@@ -36,6 +36,7 @@
 //!   lever rule on the centre of mass's x between the two ankles.
 
 use gait_core::dynamics::{self, DynamicsError};
+use gait_core::foot::{self, StanceFoot};
 use gait_core::kinematics::{
     Phi, anatomical_angles, forward_kinematics, joint_torques, link_com, theta_from_phi,
 };
@@ -122,6 +123,10 @@ pub struct PlantConfig {
     /// scuff during the swing): a penalty spring-damper with friction, or
     /// `None` for the bare chain (no double support).
     pub contact: Option<GroundContact>,
+    /// The feet's toe rocker ([`gait_core::foot`]): past the ankle's
+    /// dorsiflexion stop the stance heel lifts and the chain turns about
+    /// the toe. `None`: the paper's pinned, flat foot.
+    pub foot: Option<StanceFoot<f64>>,
 }
 
 /// Penalty contact between the swing ankle and the ground: vertical
@@ -176,6 +181,7 @@ impl Default for PlantConfig {
             max_speed_rad_s: 60.0,
             min_hip_height_m: 0.4,
             contact: Some(GroundContact::default()),
+            foot: Some(StanceFoot::table_i()),
         }
     }
 }
@@ -513,18 +519,22 @@ impl Plant {
         self.phi = combine(&q0, &k1q, &k2q, &k3q, &k4q);
         self.dphi = combine(&w0, &k1w, &k2w, &k3w, &k4w);
         self.time_s = t0 + h;
+        // The heel lifted or landed in this substep: a plastic contact
+        // switch ([`foot::contact_switch_velocities`]), applied at its end.
+        if let Some(f) = &self.cfg.foot {
+            let (was, is) = (f.on_toe(q0[0]), f.on_toe(self.phi[0]));
+            if was != is {
+                self.dphi =
+                    foot::contact_switch_velocities(&self.cfg.model, f, &self.phi, &self.dphi, is)?;
+            }
+        }
         Ok(())
     }
 
     /// Φ̈ at a state and time, with the held motor torques.
     fn accel(&self, phi: &Phi<f64>, dphi: &Phi<f64>, t_s: f64) -> Result<Phi<f64>, SimError> {
         let f = self.forces(phi, dphi, t_s);
-        Ok(dynamics::forward_dynamics(
-            &self.cfg.model,
-            phi,
-            dphi,
-            &f.t_phi,
-        )?)
+        self.forward(phi, dphi, &f.t_phi)
     }
 
     /// Recomputes the reported torques and Φ̈ at the present state.
@@ -534,8 +544,47 @@ impl Plant {
         self.contact_n = f.contact_n;
         self.spring_nm = f.spring_nm;
         self.stops_nm = f.stops_nm;
-        self.ddphi = dynamics::forward_dynamics(&self.cfg.model, &self.phi, &self.dphi, &f.t_phi)?;
+        self.ddphi = self.forward(&self.phi, &self.dphi, &f.t_phi)?;
         Ok(())
+    }
+
+    /// Forward dynamics on the configured foot.
+    fn forward(
+        &self,
+        phi: &Phi<f64>,
+        dphi: &Phi<f64>,
+        t_phi: &[f64; LINKS],
+    ) -> Result<Phi<f64>, SimError> {
+        Ok(match &self.cfg.foot {
+            Some(f) => foot::forward_dynamics(&self.cfg.model, f, phi, dphi, t_phi)?,
+            None => dynamics::forward_dynamics(&self.cfg.model, phi, dphi, t_phi)?,
+        })
+    }
+
+    /// The stance ankle's offset from the flat foot's ankle, its
+    /// φ1-derivatives (zero while flat).
+    fn ankle_at(&self, phi1: f64) -> foot::AnklePlacement<f64> {
+        match &self.cfg.foot {
+            Some(f) => f.ankle(phi1),
+            None => foot::AnklePlacement {
+                position_m: [0.0; 2],
+                d1: [0.0; 2],
+                d2: [0.0; 2],
+            },
+        }
+    }
+
+    /// Whether the stance heel is up at φ1.
+    fn on_toe(&self, phi1: f64) -> bool {
+        self.cfg.foot.is_some_and(|f| f.on_toe(phi1))
+    }
+
+    /// How far the swing foot's sole sits below its ankle's height above
+    /// the flat-foot position: a swing leg leaning past the stop (the
+    /// trailing foot of a descent) stands on its toe with the ankle raised.
+    fn swing_rocker_rise_m(&self, phi: &Phi<f64>) -> f64 {
+        let lean = gait_core::kinematics::wrap_pi(phi[4] - PI);
+        self.ankle_at(lean).position_m[1]
     }
 
     /// Every generalised force at a state: motors (held), ankle spring,
@@ -544,6 +593,11 @@ impl Plant {
         let (q, dq) = role_angles(phi, dphi);
         let contact_n = self.contact_force(phi, dphi);
         let (pilot, spring) = self.ankle_torques_at(t_s, phi, dphi[0], contact_n);
+        // On the toe the ankle rests on its stop: spring and stop torques
+        // act between the (massless) foot and the shank, and the toe, not
+        // the ankle, meets the ground: nothing of them reaches the chain.
+        let toe = self.on_toe(phi[0]);
+        let spring = if toe { 0.0 } else { spring };
         let lim = self.cfg.model.limits();
         let bounds = [
             (lim.ankle_plantarflexion_rad, lim.ankle_dorsiflexion_rad),
@@ -552,12 +606,16 @@ impl Plant {
             (lim.hip_extension_rad, lim.hip_flexion_rad),
             (lim.knee_extension_rad, lim.knee_flexion_rad),
         ];
-        let stops: [f64; LINKS] = match &self.cfg.stops {
+        let mut stops: [f64; LINKS] = match &self.cfg.stops {
             Some(st) => {
                 core::array::from_fn(|i| st.torque_nm(q[i], dq[i], bounds[i].0, bounds[i].1))
             }
             None => [0.0; LINKS],
         };
+        if self.cfg.foot.is_some() && q[0] > 0.0 {
+            // The dorsiflexion stop is the toe rocker's heel-off.
+            stops[0] = stops[0].max(0.0);
+        }
         let m = self.motor_nm;
         let (st_hip, st_knee, sw_hip, sw_knee) = match self.stance {
             Side::Left => (m[0], m[1], m[2], m[3]),
@@ -590,6 +648,9 @@ impl Plant {
         for i in [0, 1, 3, 4] {
             t_phi[i] += l[i] * (phi[i].cos() * contact_n[0] - phi[i].sin() * contact_n[1]);
         }
+        // The moving stance ankle carries the swing foot with it.
+        let d1 = self.ankle_at(phi[0]).d1;
+        t_phi[0] += d1[0] * contact_n[0] + d1[1] * contact_n[1];
         Forces {
             t_phi,
             contact_n,
@@ -615,12 +676,18 @@ impl Plant {
         // ground under the other foot takes (its generalised forces Jᵀ F).
         let static_nm = if self.cfg.pilot.gravity_compensation != 0.0 {
             let zero = [0.0; LINKS];
-            let mut required = dynamics::inverse_dynamics(&self.cfg.model, phi, &zero, &zero);
+            let mut required = match &self.cfg.foot {
+                Some(f) => foot::inverse_dynamics(&self.cfg.model, f, phi, &zero, &zero),
+                None => dynamics::inverse_dynamics(&self.cfg.model, phi, &zero, &zero),
+            };
             let l = self.cfg.model.lengths();
             for i in [0, 1, 3, 4] {
                 required[i] -= l[i] * (phi[i].cos() * contact_n[0] - phi[i].sin() * contact_n[1]);
             }
-            -joint_torques(&required)[0] - spring
+            let d1 = self.ankle_at(phi1).d1;
+            required[0] -= d1[0] * contact_n[0] + d1[1] * contact_n[1];
+            let spring_now = if self.on_toe(phi1) { 0.0 } else { spring };
+            -joint_torques(&required)[0] - spring_now
         } else {
             0.0
         };
@@ -631,14 +698,21 @@ impl Plant {
     /// Swing-ankle world position and velocity at a state.
     fn swing_foot_at(&self, phi: &Phi<f64>, dphi: &Phi<f64>) -> ([f64; 2], [f64; 2]) {
         let p5 = forward_kinematics(&self.cfg.model, phi)[4];
+        let a = self.ankle_at(phi[0]);
         let l = self.cfg.model.lengths();
-        let mut v = [0.0; 2];
+        let mut v = [a.d1[0] * dphi[0], a.d1[1] * dphi[0]];
         for i in [0, 1, 3, 4] {
             v[0] += l[i] * dphi[i] * phi[i].cos();
             v[1] -= l[i] * dphi[i] * phi[i].sin();
         }
         let o = self.stance_foot_m;
-        ([o[0] + p5[0], o[1] + p5[1]], v)
+        (
+            [
+                o[0] + a.position_m[0] + p5[0],
+                o[1] + a.position_m[1] + p5[1],
+            ],
+            v,
+        )
     }
 
     /// The ground's force on the swing ankle at a state (world x, y), N.
@@ -647,7 +721,7 @@ impl Plant {
             return [0.0; 2];
         };
         let (p, v) = self.swing_foot_at(phi, dphi);
-        let depth = self.cfg.terrain.height_m(p[0]) - p[1];
+        let depth = self.cfg.terrain.height_m(p[0]) - (p[1] - self.swing_rocker_rise_m(phi));
         if depth <= 0.0 {
             return [0.0; 2];
         }
@@ -664,7 +738,7 @@ impl Plant {
     /// foot is clear of the ground.
     fn update_contact_anchor(&mut self) {
         let (p, _) = self.swing_foot_at(&self.phi, &self.dphi);
-        let depth = self.cfg.terrain.height_m(p[0]) - p[1];
+        let depth = self.cfg.terrain.height_m(p[0]) - (p[1] - self.swing_rocker_rise_m(&self.phi));
         if depth >= 0.0 {
             if self.contact_anchor_x.is_none() {
                 self.contact_anchor_x = Some(p[0]);
@@ -686,7 +760,8 @@ impl Plant {
                 });
             }
         }
-        let hip = forward_kinematics(&self.cfg.model, &self.phi)[1][1];
+        let hip = forward_kinematics(&self.cfg.model, &self.phi)[1][1]
+            + self.ankle_at(self.phi[0]).position_m[1];
         if hip < self.cfg.min_hip_height_m {
             return Err(SimError::Fell { hip_height_m: hip });
         }
@@ -695,25 +770,20 @@ impl Plant {
 
     /// Swing-ankle position in the world, m.
     fn swing_foot_world(&self) -> [f64; 2] {
-        let p5 = forward_kinematics(&self.cfg.model, &self.phi)[4];
-        [self.stance_foot_m[0] + p5[0], self.stance_foot_m[1] + p5[1]]
+        self.swing_foot_at(&self.phi, &self.dphi).0
     }
 
+    /// The swing foot's sole above the ground (the toe, for a foot whose
+    /// heel is up), m.
     fn swing_height_above_ground_m(&self) -> f64 {
         let p = self.swing_foot_world();
-        p[1] - self.cfg.terrain.height_m(p[0])
+        p[1] - self.swing_rocker_rise_m(&self.phi) - self.cfg.terrain.height_m(p[0])
     }
 
     /// Swing-ankle velocity, m/s: Σ l_i φ̇_i (cos φ_i, −sin φ_i) over links
     /// 1, 2, 4, 5.
     fn swing_foot_velocity(&self) -> [f64; 2] {
-        let l = self.cfg.model.lengths();
-        let mut v = [0.0; 2];
-        for i in [0, 1, 3, 4] {
-            v[0] += l[i] * self.dphi[i] * self.phi[i].cos();
-            v[1] -= l[i] * self.dphi[i] * self.phi[i].sin();
-        }
-        v
+        self.swing_foot_at(&self.phi, &self.dphi).1
     }
 
     fn detect_landing(&mut self) -> Option<Landing> {
@@ -747,6 +817,12 @@ impl Plant {
     /// Mirrors the posture onto the other leg and applies the impact map
     /// ([`crate::impact`]); see the module docs.
     fn swap(&mut self, new_stance_foot: [f64; 2]) {
+        let a = self.ankle_at(self.phi[0]);
+        let old_ankle = [
+            self.stance_foot_m[0] + a.position_m[0],
+            self.stance_foot_m[1] + a.position_m[1],
+        ];
+        let old_ankle_vel = [a.d1[0] * self.dphi[0], a.d1[1] * self.dphi[0]];
         let [p1, p2, p3, p4, p5] = self.phi;
         let [_, _, w3, w4, w5] = self.dphi;
         let near_zero = gait_core::kinematics::wrap_pi::<f64>;
@@ -762,7 +838,8 @@ impl Plant {
             &self.cfg.model,
             &self.phi,
             &self.dphi,
-            self.stance_foot_m,
+            old_ankle,
+            old_ankle_vel,
             &phi_new,
             new_stance_foot,
         )
@@ -785,7 +862,8 @@ impl Plant {
     pub fn state(&self) -> TrueState {
         let model = &self.cfg.model;
         let pts = forward_kinematics(model, &self.phi);
-        let o = self.stance_foot_m;
+        let a = self.ankle_at(self.phi[0]).position_m;
+        let o = [self.stance_foot_m[0] + a[0], self.stance_foot_m[1] + a[1]];
         let world = |p: [f64; 2]| [o[0] + p[0], o[1] + p[1]];
         let points_m = [
             o,
@@ -807,7 +885,13 @@ impl Plant {
             ),
         };
         let mut ankle = [None; 2];
-        ankle[self.stance.index()] = Some(self.phi[0]);
+        // The encoder reads the shank–foot angle: φ1, or the stop once the
+        // heel is up.
+        ankle[self.stance.index()] = Some(
+            self.cfg
+                .foot
+                .map_or(self.phi[0], |f| f.dorsiflexion(self.phi[0])),
+        );
         let mut feet_m = [[0.0; 2]; 2];
         feet_m[self.stance.index()] = o;
         feet_m[self.stance.other().index()] = points_m[5];
@@ -831,12 +915,18 @@ impl Plant {
         foot_forces_n[self.stance.index()] = (feet_total - swing_load).max(0.0);
         foot_forces_n[self.stance.other().index()] = swing_load;
 
+        let spring_angle = self
+            .cfg
+            .foot
+            .map_or(self.phi[0], |f| f.dorsiflexion(self.phi[0]));
         let spring_pe = 0.5
             * self.cfg.ankle_stiffness_nm_per_rad
-            * (self.phi[0] - self.cfg.ankle_rest_rad).powi(2);
-        let energy_j = dynamics::energy(model, &self.phi, &self.dphi)
-            + total_m * GRAVITY_M_S2 * o[1]
-            + spring_pe;
+            * (spring_angle - self.cfg.ankle_rest_rad).powi(2);
+        let chain = match &self.cfg.foot {
+            Some(f) => foot::energy(model, f, &self.phi, &self.dphi),
+            None => dynamics::energy(model, &self.phi, &self.dphi),
+        };
+        let energy_j = chain + total_m * GRAVITY_M_S2 * self.stance_foot_m[1] + spring_pe;
         TrueState {
             time_s: self.time_s,
             stance: self.stance,
@@ -871,7 +961,10 @@ impl Plant {
         let acc = |j: usize, c: f64| {
             c * (-self.phi[j].sin() * self.ddphi[j] - self.phi[j].cos() * self.dphi[j].powi(2))
         };
-        let mut total = 0.0;
+        // The stance ankle's own acceleration on its circle about the toe.
+        let a = self.ankle_at(self.phi[0]);
+        let base = a.d1[1] * self.ddphi[0] + a.d2[1] * self.dphi[0].powi(2);
+        let mut total = model.total_mass_kg() * base;
         for (i, (link, path)) in links.iter().zip(PATH).enumerate() {
             let mut a = acc(i, link.com_m);
             for &j in path {

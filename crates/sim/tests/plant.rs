@@ -24,8 +24,48 @@ fn free_config() -> PlantConfig {
         contact: None,
         max_speed_rad_s: 1e3,
         min_hip_height_m: -10.0,
+        foot: None,
         ..PlantConfig::default()
     }
+}
+
+/// Leaning past the ankle's 20° stop, the stance heel lifts: the ankle then
+/// reads the stop, rises on its circle about the toe, the switch loses a
+/// little energy (plastic) and the motion on the toe conserves it.
+#[test]
+fn falling_past_the_stop_rolls_onto_the_toe() {
+    let cfg = PlantConfig {
+        foot: Some(gait_core::foot::StanceFoot::table_i()),
+        ..free_config()
+    };
+    let stop = cfg.model.limits().ankle_dorsiflexion_rad;
+    let phi = [stop - 0.02, 0.0, 0.0, PI, PI];
+    let mut p =
+        Plant::with_posture(cfg, phi, [1.0, 1.0, 1.0, 1.0, 1.0], Side::Left, [0.0, 0.0]).unwrap();
+    p.set_pilot(PilotTarget::Off);
+    let mut e = p.state().energy_j;
+    let mut switched = false;
+    for _ in 0..150 {
+        p.step([0.0; 4]).unwrap();
+        let s = p.state();
+        if s.phi[0] > stop && !switched {
+            switched = true;
+            assert!(
+                s.energy_j <= e + 1e-9,
+                "heel-off gained energy: {e} -> {}",
+                s.energy_j
+            );
+        } else if switched {
+            assert!(((s.energy_j - e) / e).abs() < 1e-7, "{e} -> {}", s.energy_j);
+        }
+        e = s.energy_j;
+    }
+    assert!(switched);
+    let s = p.state();
+    assert!(s.phi[0] > stop + 0.1, "leaning on: {}", s.phi[0]);
+    // The encoder reads the stop; the ankle has risen off the ground.
+    assert_eq!(s.ankle_dorsiflexion_rad[0], Some(stop));
+    assert!(s.points_m[0][1] > 0.01, "ankle at {:?}", s.points_m[0]);
 }
 
 #[test]
