@@ -16,10 +16,10 @@
 //!   joint-velocity limits.
 //! - **stair ascent**: `PeriodicStep::stair_up` (the paper's stair), paper
 //!   v_p.
-//! - **stair descent**: none. A flat-footed reciprocal descent at the
-//!   paper's stair needs the trailing ankle beyond Table I's 20° of
-//!   dorsiflexion in every double-support posture (docs/model.md, "Stair
-//!   descent"), so the gait cannot be selected.
+//! - **stair descent**: none yet. The toe rocker (`gait_core::foot`) makes
+//!   the periodic descent posture exist (`PeriodicStep::stair_down`), but
+//!   the optimum still jumps where the IK's φ2 range switches branch
+//!   (docs/model.md, "Stair descent"), so the gait cannot be selected.
 //!
 //! Deterministic: the optimiser is seeded and budgeted by evaluation count,
 //! so regenerating gives the same bytes; a test checks that the committed
