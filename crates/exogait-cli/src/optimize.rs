@@ -238,7 +238,7 @@ pub fn setup(a: &OptimizeArgs, model: Option<BodyModel<f64>>) -> Result<Setup, S
         end_posture: None,
         rest_at_ends: false,
         foot: None,
-        stance_knee_max_rad: None,
+        ik: gait_core::ik::IkOptions::paper(),
     };
     let model = model.unwrap_or_else(BodyModel::paper_table_iii);
     Ok(Setup {

@@ -14,7 +14,7 @@
 use crate::bezier::Bezier;
 use crate::dynamics::inverse_dynamics;
 use crate::foot::StanceFoot;
-use crate::ik::{IkError, IkSolution, IkSolver, IkTarget};
+use crate::ik::{IkError, IkOptions, IkSolution, IkSolver, IkTarget};
 use crate::kinematics::{Phi, joint_torques};
 use crate::model::{BodyModel, LINKS};
 use crate::scalar::Real;
@@ -279,9 +279,10 @@ pub struct Step<T> {
     /// The stance foot's toe rocker, or `None` for the paper's flat foot
     /// (pinned ankle).
     pub foot: Option<StanceFoot<T>>,
-    /// The IK's stance-knee flexion cap, rad, or `None` for the paper's
-    /// human range (45°). Stair descent lands on a stance knee bent past it.
-    pub stance_knee_max_rad: Option<T>,
+    /// How the IK chooses the stance thigh (paper: [`IkOptions::paper`]).
+    /// Stair descent lands on a stance knee bent past 45° and needs the
+    /// continuous [`crate::ik::KneeRange::Human`].
+    pub ik: IkOptions<T>,
 }
 
 fn rows<T: Copy, const N: usize>(p: &ControlPoints<T>, start: usize) -> Option<[[T; 2]; N]> {
@@ -292,11 +293,7 @@ fn rows<T: Copy, const N: usize>(p: &ControlPoints<T>, start: usize) -> Option<[
 impl<T: Real> Step<T> {
     /// The IK solver this step's samples are solved with.
     pub fn ik(&self, model: &BodyModel<T>) -> IkSolver<T> {
-        let ik = IkSolver::new(model);
-        match self.stance_knee_max_rad {
-            Some(cap) => ik.with_stance_knee_max(cap),
-            None => ik,
-        }
+        IkSolver::new(model).with_options(self.ik)
     }
 
     /// The swing-ankle path (x5, y5) as a curve of z (rows 10–14).

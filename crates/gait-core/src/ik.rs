@@ -92,6 +92,47 @@ impl core::fmt::Display for IkError {
     }
 }
 
+/// Which stance-thigh range r2 chooses from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum KneeRange {
+    /// The paper's: the human range narrowed by where the swing leg, fully
+    /// stretched, can still reach the target (eq. (aaa)/(aba)). Which bound
+    /// the stretch limits depends on the sign of x5 − x1, and the range
+    /// jumps where that sign changes with the bound active.
+    Reach,
+    /// The human range alone, [φ1 − cap, φ1]: r2 is the stance knee's
+    /// flexion as a fraction of the cap (flexion = (1 − r2)·cap), a
+    /// continuous function of the target. A posture the swing leg cannot
+    /// reach is reported ([`IkError::SwingLegUnreachable`]) instead of
+    /// being avoided by the range. Stair descent needs it: there the stance
+    /// knee, leaning on its toe, passes over the swing foot with the bound
+    /// active, and the paper's range made the stance thigh jump 0.3 rad in
+    /// one sample (docs/model.md, "Stair descent").
+    Human,
+}
+
+/// How the IK chooses the stance thigh: the paper's choices, or the
+/// descent's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct IkOptions<T> {
+    /// Largest stance-knee flexion, rad (paper: π/4).
+    pub stance_knee_max_rad: T,
+    /// The φ2 range r2 maps onto.
+    pub knee_range: KneeRange,
+}
+
+impl<T: Real> IkOptions<T> {
+    /// The paper's human range: 45° of stance knee, the reach-narrowed range.
+    pub fn paper() -> Self {
+        Self {
+            stance_knee_max_rad: T::frac_pi_4(),
+            knee_range: KneeRange::Reach,
+        }
+    }
+}
+
 /// The IK solver: the model's lengths and the tolerances it works to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IkSolver<T> {
@@ -104,6 +145,8 @@ pub struct IkSolver<T> {
     /// descent needs more (the trailing knee bends past 45° while the foot
     /// is still on the upper step; docs/model.md).
     pub stance_knee_max_rad: T,
+    /// The φ2 range r2 maps onto (paper: [`KneeRange::Reach`]).
+    pub knee_range: KneeRange,
 }
 
 impl<T: Real> IkSolver<T> {
@@ -115,6 +158,7 @@ impl<T: Real> IkSolver<T> {
             l: model.lengths(),
             tolerance,
             stance_knee_max_rad: T::frac_pi_4(),
+            knee_range: KneeRange::Reach,
         }
     }
 
@@ -133,6 +177,14 @@ impl<T: Real> IkSolver<T> {
         self
     }
 
+    /// The same solver with these options (the cap clamped as in
+    /// [`Self::with_stance_knee_max`]).
+    #[must_use]
+    pub fn with_options(mut self, options: IkOptions<T>) -> Self {
+        self.knee_range = options.knee_range;
+        self.with_stance_knee_max(options.stance_knee_max_rad)
+    }
+
     /// The feasible φ2 range [φ2min, φ2max] for a swing-ankle target and φ1
     /// (eq. (qw), (dsfgf), (aaa), (aba), with the defects resolved as in the
     /// module documentation).
@@ -145,6 +197,12 @@ impl<T: Real> IkSolver<T> {
         let dist = (dx * dx + dy * dy).sqrt();
         let leg = l4 + l5;
         let lo = phi1 - self.stance_knee_max_rad;
+        if self.knee_range == KneeRange::Human {
+            if dist > l2 + leg + self.tolerance * (l2 + leg) {
+                return Err(IkError::Unreachable);
+            }
+            return Ok((lo, phi1));
+        }
         // Step 2 first: no circle intersection, the whole human range works.
         if dist + l2 <= leg {
             return Ok((lo, phi1));

@@ -20,7 +20,7 @@ use crate::gait::{
     CONTACT_THRESHOLD_M, CONTROL_ROWS, ControlPoints, Differences, GaitError, Sampling,
     StanceAnkleProfile, Step, StepEvent, contact_weight, evaluate_step,
 };
-use crate::ik::{IkSolver, IkTarget};
+use crate::ik::{IkOptions, IkSolver, IkTarget, KneeRange};
 use crate::kinematics::swap_legs;
 use crate::model::BodyModel;
 use crate::scalar::Real;
@@ -66,8 +66,8 @@ pub struct StepCase<T> {
     /// heel lifts once φ1 passes its stop, and the path's (x5, y5) are in
     /// the flat foot's frame. `None`: the paper's pinned, flat foot.
     pub foot: Option<StanceFoot<T>>,
-    /// The IK's stance-knee flexion cap, rad (`None`: the paper's 45°).
-    pub stance_knee_max_rad: Option<T>,
+    /// How the IK chooses the stance thigh (paper: [`IkOptions::paper`]).
+    pub ik: IkOptions<T>,
 }
 
 /// r2 and φ3 at the landing, fixed by eq. (cons) with equal bounds.
@@ -112,8 +112,8 @@ pub struct PeriodicStep<T> {
     /// trailing foot whose shank leans past the stop stands on its toe in
     /// double support, its ankle raised ([`crate::foot`]).
     pub foot: Option<StanceFoot<T>>,
-    /// The IK's stance-knee flexion cap, rad (`None`: the paper's 45°).
-    pub stance_knee_max_rad: Option<T>,
+    /// How the IK chooses the stance thigh (paper: [`IkOptions::paper`]).
+    pub ik: IkOptions<T>,
 }
 
 impl<T: Real> PeriodicStep<T> {
@@ -135,7 +135,7 @@ impl<T: Real> PeriodicStep<T> {
             k_per_s: l(0.5638),
             t_c_s: l(2.24),
             foot: Some(StanceFoot::table_i()),
-            stance_knee_max_rad: None,
+            ik: IkOptions::paper(),
         }
     }
 
@@ -154,7 +154,7 @@ impl<T: Real> PeriodicStep<T> {
             k_per_s: l(4.0),
             t_c_s: l(1.14),
             foot: Some(StanceFoot::table_i()),
-            stance_knee_max_rad: None,
+            ik: IkOptions::paper(),
         }
     }
 
@@ -176,21 +176,24 @@ impl<T: Real> PeriodicStep<T> {
             k_per_s: l(STAIR_DOWN_K_PER_S),
             t_c_s: l(STAIR_DOWN_T_C_S),
             foot: Some(StanceFoot::table_i()),
-            stance_knee_max_rad: Some(l(STAIR_DOWN_KNEE_MAX_DEG.to_radians())),
+            ik: IkOptions {
+                stance_knee_max_rad: l(STAIR_DOWN_KNEE_MAX_DEG.to_radians()),
+                knee_range: KneeRange::Human,
+            },
         }
     }
 }
 
 /// Stair descent's stance-knee cap, degrees: the trailing knee of the
 /// double-support posture bends 60° (Table I allows 100°).
-const STAIR_DOWN_KNEE_MAX_DEG: f64 = 75.0;
+const STAIR_DOWN_KNEE_MAX_DEG: f64 = 90.0;
 
 /// Stair descent's step time, s.
 const STAIR_DOWN_STEP_S: f64 = 2.28;
 /// Stair descent's stance shank at the start, rad.
 const STAIR_DOWN_PHI1_START_RAD: f64 = 0.0;
 /// Stair descent's r2 at the start.
-const STAIR_DOWN_R2_START: f64 = 1.0;
+const STAIR_DOWN_R2_START: f64 = 0.9;
 /// Stair descent's logistic steepness, 1/s.
 const STAIR_DOWN_K_PER_S: f64 = 4.0;
 /// Stair descent's logistic midpoint, s.
@@ -248,7 +251,7 @@ impl<T: Real> StepCase<T> {
                 end_posture: None,
                 rest_at_ends: false,
                 foot: None,
-                stance_knee_max_rad: None,
+                ik: IkOptions::paper(),
             },
             PaperCase::StairUp => Self {
                 start_m: [l(-0.275), l(-0.0935)],
@@ -265,7 +268,7 @@ impl<T: Real> StepCase<T> {
                 end_posture: None,
                 rest_at_ends: false,
                 foot: None,
-                stance_knee_max_rad: None,
+                ik: IkOptions::paper(),
             },
         }
     }
@@ -278,10 +281,7 @@ impl<T: Real> StepCase<T> {
     /// logistic keeps the shape (k, t_c) and its asymptotes are solved so
     /// that φ1(0) and φ1(ts) are the two postures' stance-shank angles.
     pub fn periodic(p: &PeriodicStep<T>, model: &BodyModel<T>) -> Result<Self, PeriodicError> {
-        let ik = match p.stance_knee_max_rad {
-            Some(cap) => IkSolver::new(model).with_stance_knee_max(cap),
-            None => IkSolver::new(model),
-        };
+        let ik = IkSolver::new(model).with_options(p.ik);
         let [sx, sy] = p.spacing_m;
         let ankle = |phi1: T| p.foot.map_or([T::zero(); 2], |f| f.ankle(phi1).position_m);
         let stance_ankle = ankle(p.phi1_start_rad);
@@ -363,7 +363,7 @@ impl<T: Real> StepCase<T> {
             }),
             rest_at_ends: true,
             foot: p.foot,
-            stance_knee_max_rad: p.stance_knee_max_rad,
+            ik: p.ik,
         })
     }
 }
@@ -649,7 +649,7 @@ impl<T: Real> PaperProblem<T> {
             stance: self.case.stance,
             sampling: self.sampling,
             foot: self.case.foot,
-            stance_knee_max_rad: self.case.stance_knee_max_rad,
+            ik: self.case.ik,
         }
     }
 

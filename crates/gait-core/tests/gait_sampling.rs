@@ -80,7 +80,7 @@ fn linear_step(ts: f64, values: [f64; 5]) -> Step<f64> {
         stance: pb.case.stance,
         sampling: Sampling::paper(ts),
         foot: None,
-        stance_knee_max_rad: None,
+        ik: gait_core::ik::IkOptions::paper(),
     }
 }
 

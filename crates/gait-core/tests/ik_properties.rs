@@ -228,3 +228,83 @@ fn phi2_jumps_at_the_no_intersection_boundary() {
     let jump = (inside.phi[1] - outside.phi[1]).abs();
     assert!(jump > 0.05, "expected a jump in φ2, got {jump}");
 }
+
+/// The descent's knee range: r2 is the stance knee's flexion as a share of
+/// the cap, the map is continuous where the paper's jumps (the stance knee
+/// passing over the swing foot with the stretch bound active), and every
+/// solution still reaches its target.
+mod human_knee_range {
+    use super::*;
+    use gait_core::ik::{IkOptions, KneeRange};
+
+    fn descent_solver() -> (BodyModel<f64>, IkSolver<f64>) {
+        let m = BodyModel::<f64>::paper_table_iii();
+        let s = IkSolver::new(&m).with_options(IkOptions {
+            stance_knee_max_rad: 90f64.to_radians(),
+            knee_range: KneeRange::Human,
+        });
+        (m, s)
+    }
+
+    proptest! {
+        #[test]
+        fn r2_is_the_knee_flexion_and_fk_reaches_the_target(t in workspace()) {
+            let (m, s) = descent_solver();
+            if let Ok(sol) = s.solve(&t) {
+                let knee = t.phi1 - sol.phi[1];
+                prop_assert!((knee - (1.0 - t.r2) * 90f64.to_radians()).abs() < 1e-12);
+                let p = forward_kinematics(&m, &sol.phi);
+                prop_assert!((p[4][0] - t.x5).abs() < 1e-6 && (p[4][1] - t.y5).abs() < 1e-6);
+            }
+        }
+
+        #[test]
+        fn the_stance_thigh_moves_continuously_with_the_target(
+            t in workspace(),
+            dx in -1e-4f64..1e-4,
+            dy in -1e-4f64..1e-4,
+        ) {
+            let (_, s) = descent_solver();
+            let u = IkTarget { x5: t.x5 + dx, y5: t.y5 + dy, ..t };
+            if let (Ok(a), Ok(b)) = (s.solve(&t), s.solve(&u)) {
+                // φ2 does not depend on the target at all; the swing leg's
+                // angles move by at most a few times the target's motion
+                // (away from full stretch).
+                prop_assert_eq!(a.phi[1], b.phi[1]);
+                let stretch = (a.points[1][0] - t.x5).hypot(a.points[1][1] - t.y5);
+                if stretch < 0.8 {
+                    for i in [3, 4] {
+                        prop_assert!((a.phi[i] - b.phi[i]).abs() < 0.05, "{i}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Where the paper's range jumps (descent, the stance knee over the swing
+    /// foot), the human range does not.
+    #[test]
+    fn no_jump_where_the_papers_range_jumps() {
+        let m = BodyModel::<f64>::paper_table_iii();
+        let paper = IkSolver::new(&m).with_stance_knee_max(90f64.to_radians());
+        let (_, human) = descent_solver();
+        // The stance shank leans 37° on its toe; the swing foot comes down
+        // under the knee (x1 = 0.441 sin 0.643 = 0.264 m), as in the descent
+        // optimum's final approach.
+        let phi1: f64 = 0.643;
+        let x1 = m.lengths()[0] * phi1.sin();
+        let jump = |s: &IkSolver<f64>, y: f64| -> Option<f64> {
+            let before = target(x1 - 0.001, y, phi1, 0.0, 0.9);
+            let after = target(x1 + 0.001, y, phi1, 0.0, 0.9);
+            Some((s.solve(&before).ok()?.phi[1] - s.solve(&after).ok()?.phi[1]).abs())
+        };
+        let ys = (0..=40).map(|i| -0.2 + 0.005 * f64::from(i));
+        let paper_max = ys
+            .clone()
+            .filter_map(|y| jump(&paper, y))
+            .fold(0.0, f64::max);
+        let human_max = ys.filter_map(|y| jump(&human, y)).fold(0.0, f64::max);
+        assert!(paper_max > 0.05, "paper jump {paper_max}");
+        assert!(human_max < 1e-12, "human jump {human_max}");
+    }
+}

@@ -17,10 +17,7 @@ fn stance_ankle(case: &StepCase<f64>, phi1: f64) -> [f64; 2] {
 }
 
 fn landing_and_start(case: &StepCase<f64>, m: &BodyModel<f64>) -> ([f64; 5], [f64; 5]) {
-    let ik = match case.stance_knee_max_rad {
-        Some(cap) => IkSolver::new(m).with_stance_knee_max(cap),
-        None => IkSolver::new(m),
-    };
+    let ik = IkSolver::new(m).with_options(case.ik);
     let end = case.end_posture.expect("periodic cases fix the landing");
     let (t0, ts) = (case.stance.at(0.0), case.stance.at(case.step_time_s));
     let (a0, a1) = (stance_ankle(case, t0), stance_ankle(case, ts));

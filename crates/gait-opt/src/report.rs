@@ -8,6 +8,7 @@ use gait_core::gait::{
     CONTACT_THRESHOLD_M, ControlPoints, Differences, GaitError, Sampling, StanceAnkleProfile,
     StepEvent, contact_weight, evaluate_step,
 };
+use gait_core::ik::{IkOptions, KneeRange};
 use gait_core::kinematics::theta_from_phi;
 use gait_core::model::{BodyModel, JointLimits, Link};
 use gait_core::problem::{Cost, EndPosture, JointMotionLimit, PaperCase, PaperProblem, StepCase};
@@ -79,6 +80,10 @@ pub struct ProblemSpec {
     /// The IK's stance-knee cap, rad; absent for the paper's 45°.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stance_knee_max_rad: Option<f64>,
+    /// Whether r2 maps onto the human range alone (`KneeRange::Human`);
+    /// absent for the paper's reach-narrowed range.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub knee_range_human: bool,
     /// Δt, s.
     pub dt_s: f64,
     /// N (samples t_k = kΔt, k = 0…N).
@@ -344,7 +349,8 @@ impl ProblemSpec {
             end_posture: c.end_posture.map(|e| [e.r2, e.phi3_rad]),
             rest_at_ends: c.rest_at_ends,
             foot: c.foot.map(|f| [f.toe_m, f.ankle_height_m, f.heel_off_rad]),
-            stance_knee_max_rad: c.stance_knee_max_rad,
+            stance_knee_max_rad: (c.ik != IkOptions::paper()).then_some(c.ik.stance_knee_max_rad),
+            knee_range_human: c.ik.knee_range == KneeRange::Human,
             dt_s: p.sampling.dt_s,
             intervals: p.sampling.intervals,
             grid: p.sampling.grid,
@@ -448,7 +454,16 @@ impl ProblemSpec {
                     ankle_height_m,
                     heel_off_rad,
                 }),
-            stance_knee_max_rad: self.stance_knee_max_rad,
+            ik: IkOptions {
+                stance_knee_max_rad: self
+                    .stance_knee_max_rad
+                    .unwrap_or(std::f64::consts::FRAC_PI_4),
+                knee_range: if self.knee_range_human {
+                    KneeRange::Human
+                } else {
+                    KneeRange::Reach
+                },
+            },
         };
         let problem = PaperProblem {
             case,

@@ -16,10 +16,12 @@
 //!   joint-velocity limits.
 //! - **stair ascent**: `PeriodicStep::stair_up` (the paper's stair), paper
 //!   v_p.
-//! - **stair descent**: none yet. The toe rocker (`gait_core::foot`) makes
-//!   the periodic descent posture exist (`PeriodicStep::stair_down`), but
-//!   the optimum still jumps where the IK's φ2 range switches branch
-//!   (docs/model.md, "Stair descent"), so the gait cannot be selected.
+//! - **stair descent**: `PeriodicStep::stair_down` (the paper's stair walked
+//!   down), paper v_p. It needs two things the paper does not have: the toe
+//!   rocker (`gait_core::foot`: the trailing heel is up in double support)
+//!   and the IK's continuous `KneeRange::Human` (the paper's range jumps as
+//!   the stance knee passes over the swing foot). docs/model.md, "Stair
+//!   descent".
 //!
 //! Deterministic: the optimiser is seeded and budgeted by evaluation count,
 //! so regenerating gives the same bytes; a test checks that the committed
@@ -194,9 +196,24 @@ pub fn stair_up_table() -> Result<GeneratedTable, TableGenError> {
     })
 }
 
+/// The stair-descent table (periodic, toe rocker, human knee range, paper
+/// v_p).
+pub fn stair_down_table() -> Result<GeneratedTable, TableGenError> {
+    let (phi, j) = optimised(PaperCase::StairUp, &PeriodicStep::stair_down(), None)?;
+    Ok(GeneratedTable {
+        kind: GaitKind::StairDown,
+        ident: "STAIR_DOWN",
+        provenance: format!(
+            "periodic stair descent (PeriodicStep::stair_down: toe rocker, \
+             KneeRange::Human), paper v_p, seed 1, 20,000 evaluations; {j}"
+        ),
+        image: table_image(GaitKind::StairDown, &phi).map_err(TableGenError::Table)?,
+    })
+}
+
 /// The source of `crates/gait-core/src/flash_tables.rs`.
 pub fn flash_module_source() -> Result<String, TableGenError> {
-    let tables = [walk_table()?, stair_up_table()?];
+    let tables = [walk_table()?, stair_up_table()?, stair_down_table()?];
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -207,7 +224,7 @@ pub fn flash_module_source() -> Result<String, TableGenError> {
          //!\n\
          //! The gait tables the firmware carries in flash, in the format of\n\
          //! [`crate::tables`] (verified by [`crate::tables::GaitTable::parse`]\n\
-         //! before any use). Stair descent has no table yet.\n\
+         //! before any use).\n\
          #![allow(clippy::unreadable_literal)]\n\
          \n\
          use crate::tables::{{GaitTable, TableError}};\n"
@@ -226,7 +243,9 @@ pub fn flash_module_source() -> Result<String, TableGenError> {
         "/// The walking table, verified.\n\
          pub fn walk() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&WALK)\n}}\n\n\
          /// The stair-ascent table, verified.\n\
-         pub fn stair_up() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&STAIR_UP)\n}}"
+         pub fn stair_up() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&STAIR_UP)\n}}\n\n\
+         /// The stair-descent table, verified.\n\
+         pub fn stair_down() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&STAIR_DOWN)\n}}"
     );
     Ok(s)
 }
