@@ -41,13 +41,13 @@ pub const DT_S: f32 = 1.0 / TICK_HZ as f32;
 /// The gait tables this image carries (`gait_core::flash_tables`, made by
 /// `cargo xtask tables`), each verified (magic, version, kind, length,
 /// CRC-32, finite samples) before it can be selected: a table that fails is
-/// left out, so its gait cannot start. Stair descent has no table yet.
+/// left out, so its gait cannot start.
 #[must_use]
 pub fn flash_tables() -> GaitTables<'static> {
     GaitTables {
         walk: gait_core::flash_tables::walk().ok(),
         stair_up: gait_core::flash_tables::stair_up().ok(),
-        stair_down: None,
+        stair_down: gait_core::flash_tables::stair_down().ok(),
     }
 }
 

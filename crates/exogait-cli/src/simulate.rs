@@ -15,6 +15,9 @@ pub enum SimGait {
     Walk,
     /// Stair ascent on the paper's staircase (rise 93.5 mm, tread 275 mm).
     StairUp,
+    /// Stair descent on the same staircase walked down (the trailing heel
+    /// lifts: the feet's toe rocker).
+    StairDown,
 }
 
 /// Options of `exogait simulate`.
@@ -54,6 +57,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
     let (gait, label) = match args.gait {
         SimGait::Walk => (Gait::Walk, "walking"),
         SimGait::StairUp => (Gait::StairUp, "climbing stairs"),
+        SimGait::StairDown => (Gait::StairDown, "descending stairs"),
     };
     let noise = args.sensor_noise;
     let run = match sim::scenario::run_gait_with(gait, args.seconds, args.steps, |rig| {

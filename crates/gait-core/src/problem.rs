@@ -378,8 +378,8 @@ pub struct Cost<T> {
     pub torque: T,
     /// v_p · max ‖Δp5‖/Δt.
     pub velocity: T,
-    /// The joint-motion term (0 without a [`JointMotionLimit`], as in the
-    /// paper).
+    /// The joint-motion term: [`JointMotionLimit`] and [`JointRangeLimit`]
+    /// (0 without them, as in the paper).
     pub joint_motion: T,
     /// max_k ‖p5(k) − p5(k−1)‖/Δt, m/s.
     pub peak_ankle_speed_m_s: T,
@@ -474,6 +474,53 @@ fn excess_sq<T: Real>(dphi: &[T; 5], limit: T) -> T {
     sum
 }
 
+/// A soft joint-range limit for tables the device plays: the paper's IK
+/// keeps only the stance knee inside a human range, and a descent's swing
+/// knee folds to 108° (Table I: 100°) to clear the step edge. Term added to
+/// J at every dynamics sample: `weight · Σ excess²` over the stance knee and
+/// hip and the swing hip and knee, where the excess is how far an
+/// anatomical angle lies beyond `limits` less `margin_rad` (flexion side;
+/// on the extension side, beyond the stop less the margin, never past a
+/// stop at 0°: a straight knee costs nothing).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointRangeLimit<T> {
+    /// The joints' stops (Table I).
+    pub limits: crate::model::JointLimits<T>,
+    /// How far inside a stop the term starts, rad.
+    pub margin_rad: T,
+    /// Weight of the squared excess, N²·m² per rad² per sample.
+    pub weight: T,
+}
+
+impl<T: Real> JointRangeLimit<T> {
+    /// The term at one posture.
+    pub fn penalty(&self, phi: &crate::kinematics::Phi<T>) -> T {
+        let a = crate::kinematics::anatomical_angles(&crate::kinematics::theta_from_phi(phi));
+        let l = &self.limits;
+        let m = self.margin_rad;
+        let knee = (
+            (l.knee_extension_rad - m).max(T::zero()),
+            l.knee_flexion_rad - m,
+        );
+        let hip = (
+            (l.hip_extension_rad - m).max(T::zero()),
+            l.hip_flexion_rad - m,
+        );
+        let [_, stance_knee, stance_hip, swing_hip, swing_knee] = a;
+        let mut sum = T::zero();
+        for (q, (ext, flex)) in [
+            (stance_knee, knee),
+            (stance_hip, hip),
+            (swing_hip, hip),
+            (swing_knee, knee),
+        ] {
+            let excess = (q - flex).max(-ext - q).max(T::zero());
+            sum += excess * excess;
+        }
+        self.weight * sum
+    }
+}
+
 /// The reference problem: a case, the model, the sampling and v_p.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PaperProblem<T> {
@@ -489,6 +536,9 @@ pub struct PaperProblem<T> {
     pub differences: Differences,
     /// Soft joint speed and acceleration limits (`None` in paper mode).
     pub joint_motion_limit: Option<JointMotionLimit<T>>,
+    /// Soft joint-range limit (`None` in paper mode); counted in
+    /// [`Cost::joint_motion`].
+    pub joint_range_limit: Option<JointRangeLimit<T>>,
     /// Count τ² at every sample, also within 2 mm of the start and the
     /// landing (c_k = 1 throughout). `false` in paper mode. For steps that
     /// start and end at rest the foot lingers near the ground, and with the
@@ -519,6 +569,7 @@ impl<T: Real> PaperProblem<T> {
             velocity_weight: T::lit(PAPER_VELOCITY_WEIGHT),
             differences: Differences::Backward,
             joint_motion_limit: None,
+            joint_range_limit: None,
             count_every_sample: false,
         }
     }
@@ -676,6 +727,7 @@ impl<T: Real> PaperProblem<T> {
         let mut taus: heapless::Vec<([T; 2], T), MAX_SAMPLES> = heapless::Vec::new();
         let mut joint_motion = T::zero();
         let limit = self.joint_motion_limit;
+        let range = self.joint_range_limit;
         evaluate_step::<T, Infeasible>(&self.model, &step, self.differences, |ev| {
             match ev {
                 StepEvent::Sample(s) => {
@@ -690,6 +742,9 @@ impl<T: Real> PaperProblem<T> {
                     prev = Some(s.p5);
                 }
                 StepEvent::Dynamics(d) => {
+                    if let Some(r) = &range {
+                        joint_motion += r.penalty(&d.phi);
+                    }
                     if let Some(l) = &limit {
                         joint_motion += l.penalty(&d.dphi, Some(&d.ddphi));
                         // The first interval's rate is in no dynamics

@@ -65,7 +65,11 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
     let mut prev_dphi: Option<Phi<f64>> = None;
     let mut prev: Option<&Phi<f64>> = None;
     for p in phi {
-        let p5 = forward_kinematics(&problem.model, p)[4];
+        // With the toe rocker the stance ankle moves (docs/model.md).
+        let foot = problem.case.foot;
+        let ankle = foot.map_or([0.0; 2], |f| f.ankle(p[0]).position_m);
+        let fk = forward_kinematics(&problem.model, p)[4];
+        let p5 = [fk[0] + ankle[0], fk[1] + ankle[1]];
         let mut torque = None;
         let mut rates = None;
         let mut accels = None;
@@ -80,12 +84,12 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
                     *d = (a - b) * inv_dt;
                 }
                 accels = Some(ddphi);
-                torque = Some(joint_torques(&inverse_dynamics(
-                    &problem.model,
-                    p,
-                    &dphi,
-                    &ddphi,
-                )));
+                torque = Some(joint_torques(&match &foot {
+                    Some(f) => {
+                        gait_core::foot::inverse_dynamics(&problem.model, f, p, &dphi, &ddphi)
+                    }
+                    None => inverse_dynamics(&problem.model, p, &dphi, &ddphi),
+                }));
             }
             rates = Some(dphi);
             prev_dphi = Some(dphi);
@@ -148,12 +152,21 @@ pub fn cost_from_phi(
     }
     let torque = sum_sq / (n.saturating_sub(1).max(1) as f64);
     let velocity = problem.velocity_weight * peak_speed;
-    let joint_motion: f64 = problem.joint_motion_limit.map_or(0.0, |l| {
+    let motion: f64 = problem.joint_motion_limit.map_or(0.0, |l| {
         samples
             .iter()
             .filter_map(|s| s.dphi.map(|d| l.penalty(&d, s.ddphi.as_ref())))
             .sum()
     });
+    let range: f64 = problem.joint_range_limit.map_or(0.0, |r| {
+        samples
+            .iter()
+            .zip(phi)
+            .filter(|(s, _)| s.torque.is_some())
+            .map(|(_, p)| r.penalty(p))
+            .sum()
+    });
+    let joint_motion = motion + range;
     Ok(Cost {
         j: torque + velocity + joint_motion,
         torque,

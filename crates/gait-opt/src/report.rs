@@ -11,7 +11,9 @@ use gait_core::gait::{
 use gait_core::ik::{IkOptions, KneeRange};
 use gait_core::kinematics::theta_from_phi;
 use gait_core::model::{BodyModel, JointLimits, Link};
-use gait_core::problem::{Cost, EndPosture, JointMotionLimit, PaperCase, PaperProblem, StepCase};
+use gait_core::problem::{
+    Cost, EndPosture, JointMotionLimit, JointRangeLimit, PaperCase, PaperProblem, StepCase,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::baseline::{Baseline, Source};
@@ -96,6 +98,10 @@ pub struct ProblemSpec {
     /// joint-motion term; absent in paper mode.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint_motion_limit: Option<[f64; 4]>,
+    /// Soft joint-range limit (margin rad, weight) inside the model's
+    /// Table I stops; absent in paper mode.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_range_limit: Option<[f64; 2]>,
     /// τ² counted at every sample (c_k = 1 throughout; device tables).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub count_every_sample: bool,
@@ -355,6 +361,7 @@ impl ProblemSpec {
             intervals: p.sampling.intervals,
             grid: p.sampling.grid,
             velocity_weight: p.velocity_weight,
+            joint_range_limit: p.joint_range_limit.map(|r| [r.margin_rad, r.weight]),
             joint_motion_limit: p.joint_motion_limit.map(|l| {
                 [
                     l.speed_rad_s,
@@ -483,6 +490,13 @@ impl ProblemSpec {
                     accel_weight,
                 },
             ),
+            joint_range_limit: self
+                .joint_range_limit
+                .map(|[margin_rad, weight]| JointRangeLimit {
+                    limits: *model.limits(),
+                    margin_rad,
+                    weight,
+                }),
             count_every_sample: self.count_every_sample,
         };
         let (lo, hi) = problem.bounds();

@@ -33,7 +33,8 @@ use gait_core::BodyModel;
 use gait_core::gait::{ControlPoints, GaitError};
 use gait_core::kinematics::Phi;
 use gait_core::problem::{
-    JointMotionLimit, PaperCase, PaperProblem, PeriodicError, PeriodicStep, StepCase,
+    JointMotionLimit, JointRangeLimit, PaperCase, PaperProblem, PeriodicError, PeriodicStep,
+    StepCase,
 };
 use gait_core::tables::{GaitKind, TableError, encode, image_len};
 
@@ -55,6 +56,13 @@ pub const TABLE_JOINT_SPEED_WEIGHT: f64 = 1.0e4;
 pub const TABLE_JOINT_ACCEL_RAD_S2: f64 = 30.0;
 /// Weight of the acceleration excess, N²·m² per (rad/s²)² per sample.
 pub const TABLE_JOINT_ACCEL_WEIGHT: f64 = 10.0;
+/// How far inside Table I's hip and knee stops a table's cost starts to
+/// grow, rad: 10°, twice the supervisor's envelope margin (a descent's swing
+/// knee folded to 108° otherwise).
+pub const TABLE_JOINT_RANGE_MARGIN_RAD: f64 = 10.0 * std::f64::consts::PI / 180.0;
+/// Weight of the squared range excess, N²·m² per rad² per sample: 10° over
+/// for 0.1 s costs about as much as a good step's torque part.
+pub const TABLE_JOINT_RANGE_WEIGHT: f64 = 1.0e5;
 /// Sample period of the tables, µs (the paper's Δt).
 pub const TABLE_PERIOD_US: u32 = 10_000;
 
@@ -138,6 +146,11 @@ pub fn table_problem(
         speed_weight: TABLE_JOINT_SPEED_WEIGHT,
         accel_rad_s2: TABLE_JOINT_ACCEL_RAD_S2,
         accel_weight: TABLE_JOINT_ACCEL_WEIGHT,
+    });
+    problem.joint_range_limit = Some(JointRangeLimit {
+        limits: *problem.model.limits(),
+        margin_rad: TABLE_JOINT_RANGE_MARGIN_RAD,
+        weight: TABLE_JOINT_RANGE_WEIGHT,
     });
     problem.count_every_sample = true;
     Ok(problem)

@@ -1,7 +1,7 @@
 //! Prints a coarse trace of the closed-loop walk (every 50 ms): phase, the
 //! true Φ, the reference and measured joints, commands, pilot torque, foot
 //! and crutch forces. For diagnosing the closed loop:
-//! `cargo run --release -p sim --example walk_trace -- [STEPS] [SECONDS] [EVERY_MS] [walk|stair-up]`.
+//! `cargo run --release -p sim --example walk_trace -- [STEPS] [SECONDS] [EVERY_MS] [walk|stair-up|stair-down]`.
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -10,6 +10,7 @@ fn main() {
     let every: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(50);
     let gait = match args.next().as_deref() {
         Some("stair-up") => gait_control::operator::Gait::StairUp,
+        Some("stair-down") => gait_control::operator::Gait::StairDown,
         _ => gait_control::operator::Gait::Walk,
     };
     // EXO_NOISE="ENC,ADC": sensor noise in counts.

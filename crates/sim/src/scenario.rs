@@ -5,7 +5,7 @@
 use gait_control::operator::Gait;
 use gait_control::sequencer::GaitTables;
 use gait_core::BodyModel;
-use gait_core::kinematics::forward_kinematics;
+use gait_core::foot::StanceFoot;
 use gait_core::problem::{PeriodicStep, StepCase};
 
 use crate::closed_loop::{PilotBehaviour, Rig, RigError, RigSetup, heel_rocker_model};
@@ -19,7 +19,7 @@ pub fn flash_tables() -> GaitTables<'static> {
     GaitTables {
         walk: gait_core::flash_tables::walk().ok(),
         stair_up: gait_core::flash_tables::stair_up().ok(),
-        stair_down: None,
+        stair_down: gait_core::flash_tables::stair_down().ok(),
     }
 }
 
@@ -51,8 +51,21 @@ pub const PAPER_STAIRS: Terrain = Terrain::Stairs {
     steps: 12,
 };
 
+/// The paper's staircase walked down: the top floor at height 0 up to the
+/// first (downward) riser, halfway between the feet of the stair-descent
+/// start posture, then 12 steps of 0.0935 m down. The stance foot at x = 0
+/// stands on the first tread (y = −0.0935), the trailing foot on the top
+/// floor 0.275 m behind, on its toe.
+pub const PAPER_STAIRS_DOWN: Terrain = Terrain::Stairs {
+    start_x_m: -0.1375,
+    rise_m: -0.0935,
+    tread_m: 0.275,
+    steps: 12,
+};
+
 /// The device standing in `gait`'s start posture, left leg in front as
-/// stance (on the first step for stair ascent, see [`PAPER_STAIRS`]), the
+/// stance (on the first step for stair ascent, see [`PAPER_STAIRS`]; on the
+/// first tread down for descent, [`PAPER_STAIRS_DOWN`]), the
 /// pilot following the plan the table was optimised with, the plant held
 /// still for the first 60 ms while the drives soft-start (40 ms).
 pub fn gait_rig(
@@ -69,7 +82,7 @@ pub fn gait_rig(
     let (step, terrain, foot_y) = match gait {
         Gait::Walk => (PeriodicStep::walk(), Terrain::Level, 0.0),
         Gait::StairUp => (PeriodicStep::stair_up(), PAPER_STAIRS, 0.0935),
-        Gait::StairDown => return Err(RigError::Config("no stair-descent table")),
+        Gait::StairDown => (PeriodicStep::stair_down(), PAPER_STAIRS_DOWN, -0.0935),
     };
     let case = StepCase::periodic(&step, &BodyModel::paper_table_iii())
         .map_err(|_| RigError::Config("no periodic case for the gait"))?;
@@ -143,7 +156,8 @@ pub fn run_gait_with(
     let planned_landing_x_m = tables.get(gait).map_or(0.0, |t| {
         let m = heel_rocker_model();
         let last = t.last().map(f64::from);
-        forward_kinematics(&m, &last)[4][0]
+        // The stance ankle may have rolled onto its toe (descent).
+        StanceFoot::for_model(&m).points(&m, &last)[4][0]
     });
     let mut rig = gait_rig(gait, strong_pilot(), tables)?;
     Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);

@@ -12,7 +12,7 @@ pub enum Terrain {
     Stairs {
         /// x of the first riser, m.
         start_x_m: f64,
-        /// Step height, m.
+        /// Step height, m (negative: a staircase going down).
         rise_m: f64,
         /// Tread depth, m.
         tread_m: f64,
@@ -41,7 +41,8 @@ impl Terrain {
         }
     }
 
-    /// Whether the parameters make sense (finite, positive tread, rise ≥ 0).
+    /// Whether the parameters make sense (finite, positive tread and rise
+    /// of either sign).
     pub fn is_valid(&self) -> bool {
         match *self {
             Self::Level => true,
@@ -50,7 +51,7 @@ impl Terrain {
                 rise_m,
                 tread_m,
                 ..
-            } => start_x_m.is_finite() && rise_m.is_finite() && rise_m >= 0.0 && tread_m > 0.0,
+            } => start_x_m.is_finite() && rise_m.is_finite() && tread_m > 0.0,
         }
     }
 }
