@@ -1,4 +1,5 @@
-//! Host benchmarks of the per-sample work: IK, inverse dynamics, both
+//! Host benchmarks of the per-sample work: IK, inverse dynamics (flat foot
+//! and on the toe rocker), both
 //! together, and the feed-forward's load sharing between the feet, in f32
 //! and f64; and one paper-mode cost evaluation (the optimiser's inner loop).
 //! `cargo bench -p gait-core`.
@@ -32,6 +33,21 @@ fn per_sample<T: Real>(c: &mut Criterion, name: &str) {
     c.bench_function(&format!("inverse_dynamics_{name}"), |b| {
         b.iter(|| inverse_dynamics(&m, black_box(&phi), black_box(&w), black_box(&a)))
     });
+    // The stance heel up (stair descent): the toe rocker's dynamics.
+    let foot = gait_core::foot::StanceFoot::for_model(&m);
+    let mut on_toe = phi;
+    on_toe[0] = l(0.6);
+    c.bench_function(&format!("toe_rocker_inverse_dynamics_{name}"), |b| {
+        b.iter(|| {
+            gait_core::foot::inverse_dynamics(
+                &m,
+                &foot,
+                black_box(&on_toe),
+                black_box(&w),
+                black_box(&a),
+            )
+        })
+    });
     let single = [-208.0, -208.0, 5.0, 5.0, -2.0].map(l);
     c.bench_function(&format!("share_load_{name}"), |b| {
         b.iter(|| share_load(&m, black_box(&phi), black_box(&single), l(912.0)))
@@ -50,6 +66,15 @@ fn benches(c: &mut Criterion) {
     let pb = PaperProblem::<f64>::paper(PaperCase::Walk);
     let p = pb.initial_guess();
     c.bench_function("paper_cost_walk_f64", |b| b.iter(|| pb.cost(black_box(&p))));
+    // The descent table's problem: toe rocker, human knee range, joint limits.
+    let case = gait_core::problem::StepCase::periodic(
+        &gait_core::problem::PeriodicStep::<f64>::stair_down(),
+        &BodyModel::paper_table_iii(),
+    )
+    .unwrap();
+    let pb = PaperProblem::new(case, BodyModel::paper_table_iii());
+    let p = pb.initial_guess();
+    c.bench_function("descent_cost_f64", |b| b.iter(|| pb.cost(black_box(&p))));
 }
 
 criterion_group!(model, benches);

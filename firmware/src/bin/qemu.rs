@@ -178,7 +178,20 @@ fn bench(ctr: &mut InstrCounter) {
         let single = [-208.0, -208.0, 5.0, 5.0, -2.0];
         black_box(share_load(&m, &phi, &single, 912.0));
     });
+    // The stance heel up (stair descent): the toe rocker's extra terms.
+    let foot = gait_core::foot::StanceFoot::for_model(&m);
+    let toe_id = ctr.per_call(1000, |i| {
+        let a = i as f32 * 1e-3;
+        let phi = [0.6 + a, -0.3, 0.05, 2.7 - a, 3.5];
+        let w = [0.4, -0.9, 0.2, -2.1, 3.3];
+        let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
+        black_box(gait_core::foot::inverse_dynamics(&m, &foot, &phi, &w, &dd));
+    });
     hprintln!("bench: loop_overhead instr={}", base);
+    hprintln!(
+        "bench: toe_rocker_inverse_dynamics_f32 instr={}",
+        toe_id.saturating_sub(base)
+    );
     hprintln!("bench: share_load_f32 instr={}", share.saturating_sub(base));
     hprintln!("bench: ik_f32 instr={}", ik_only.saturating_sub(base));
     hprintln!(
