@@ -138,6 +138,11 @@ pub struct Controller<'t> {
     crutch: CrutchLoad,
     last_raw: [u16; ENCODERS],
     last_angle: [f32; ENCODERS],
+    /// The stance shank angle φ1 the gait table last asked for, rad. With
+    /// the stance heel up (toe rocker, stair descent) the ankle encoder
+    /// reads its stop, not φ1; the feed-forward's static posture then uses
+    /// this instead ([`Controller::stance_phi1`]).
+    planned_phi1: f32,
     rate: [f32; JOINTS],
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
@@ -183,6 +188,7 @@ impl<'t> Controller<'t> {
             crutch: CrutchLoad::new(),
             last_raw: [0; ENCODERS],
             last_angle: [0.0; ENCODERS],
+            planned_phi1: 0.0,
             rate: [0.0; JOINTS],
             motor_sense: [idle; JOINTS],
             motors_enabled: false,
@@ -301,11 +307,20 @@ impl<'t> Controller<'t> {
         self.crutch.sample(forces_n[2], forces_n[3], dt);
 
         // 3. act
-        let stance_ankle = self
-            .last_angle
-            .get(JOINTS + plan.stance.ankle())
-            .copied()
-            .unwrap_or(0.0);
+        if let Some(tb) = plan.swing.and_then(|(g, _, _)| self.seq.tables().get(g)) {
+            let t = plan.swing.map_or(0.0, |(_, _, t)| t);
+            // Past the end the table holds its last posture.
+            let [phi1, ..] = tb.at_time(t.min(tb.duration_s()));
+            if phi1.is_finite() {
+                self.planned_phi1 = phi1;
+            }
+        }
+        let stance_ankle = self.stance_phi1(
+            self.last_angle
+                .get(JOINTS + plan.stance.ankle())
+                .copied()
+                .unwrap_or(0.0),
+        );
         // What the other foot may carry: the whole body between steps
         // (planned double support); at the start of a swing a share that
         // falls to nothing over SWING_UNLOAD_S, as the foot is unloaded and
@@ -540,6 +555,15 @@ impl<'t> Controller<'t> {
             };
         }
         out
+    }
+
+    /// The stance shank's angle φ1 for a static posture: the ankle
+    /// encoder's reading, or, when it reads the dorsiflexion stop (within
+    /// 0.5°: the heel may be up and φ1 beyond what the encoder can see), the
+    /// larger of it and the last planned φ1.
+    fn stance_phi1(&self, ankle_reading: f32) -> f32 {
+        let stop = StanceFoot::for_model(&self.cfg.model).heel_off_rad;
+        crate::posture::stance_phi1_estimate(ankle_reading, stop, self.planned_phi1)
     }
 
     /// Last good joint angles (joint order).

@@ -111,9 +111,36 @@ pub fn phi_from_joints(joints: &[f32; JOINTS], stance_ankle_rad: f32, stance: Si
     [phi1, phi2, phi3, phi4, phi5]
 }
 
+/// The stance shank's angle φ1 from the ankle encoder's `reading`: the
+/// reading itself while the foot is flat; once the reading is at the
+/// dorsiflexion `stop` (within 0.5°), the heel may be up (toe rocker,
+/// `gait_core::foot`) and φ1 beyond what the encoder can see, so the larger
+/// of the reading and the `planned` φ1. NaN readings stay NaN.
+pub fn stance_phi1_estimate(reading: f32, stop: f32, planned: f32) -> f32 {
+    if reading >= stop - 0.5 * core::f32::consts::PI / 180.0 && planned.is_finite() {
+        reading.max(planned)
+    } else {
+        reading
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stance_phi1_follows_the_plan_only_on_the_stop() {
+        let stop = 20f32.to_radians();
+        // Flat: the encoder is the truth, whatever the plan says.
+        assert_eq!(stance_phi1_estimate(0.1, stop, 0.7), 0.1);
+        // On the stop, heel up: the plan's larger lean.
+        assert_eq!(stance_phi1_estimate(stop, stop, 0.7), 0.7);
+        // On the stop but the plan leans less: the encoder.
+        assert_eq!(stance_phi1_estimate(stop, stop, 0.2), stop);
+        // NaN stays NaN; a NaN plan is ignored.
+        assert!(stance_phi1_estimate(f32::NAN, stop, 0.7).is_nan());
+        assert_eq!(stance_phi1_estimate(stop, stop, f32::NAN), stop);
+    }
 
     #[test]
     fn phi_joint_round_trip_both_sides() {

@@ -261,7 +261,7 @@ impl<'t> Sequencer<'t> {
         new_stance: Side,
     ) -> Option<TransferPlan> {
         let model = self.model.as_ref()?;
-        let ik = IkSolver::new(model);
+        let ik = self.transfer_ik(model);
         // The same posture seen from the new stance foot (links swap roles).
         let mirrored = swap_legs(landing_phi);
         let params = |phi: &Phi<f32>| -> Option<[f32; 5]> {
@@ -305,10 +305,21 @@ impl<'t> Sequencer<'t> {
 
     /// The transfer reference at `fraction` (smoothstepped), or the joint
     /// blend when there is no plan or the IK fails.
+    /// The IK the gait's tables were made with: the descent's knee range
+    /// is `KneeRange::Human` with a 90° cap (`PeriodicStep::stair_down`),
+    /// the others the paper's.
+    fn transfer_ik(&self, model: &BodyModel<f32>) -> IkSolver<f32> {
+        let options = match self.gait {
+            Gait::StairDown => gait_core::problem::PeriodicStep::<f32>::stair_down().ik,
+            Gait::Walk | Gait::StairUp => gait_core::ik::IkOptions::paper(),
+        };
+        IkSolver::new(model).with_options(options)
+    }
+
     fn transfer_reference(&self, fraction: f32, stance: Side) -> [f32; JOINTS] {
         let planned = self.transfer.and_then(|plan| {
             let model = self.model.as_ref()?;
-            let ik = IkSolver::new(model);
+            let ik = self.transfer_ik(model);
             let s = smoothstep(fraction);
             let mut p = plan.from;
             for (v, &b) in p.iter_mut().zip(&plan.to) {

@@ -192,17 +192,22 @@ pub struct EnvelopeMargins {
     /// so the envelope ends just beyond it (the stop's compliance and the
     /// encoder's calibration), not inside it.
     pub ankle_stop_tolerance_rad: f32,
+    /// Margin inside the ankle's plantarflexion stop, where that stop is far
+    /// from 0° (the heel rocker's 12°), rad.
+    pub ankle_margin_rad: f32,
     /// Like the knee's tolerance, for plantarflexion past 0, rad.
     pub ankle_plantarflexion_tolerance_rad: f32,
 }
 
 impl EnvelopeMargins {
     /// 5° inside the hip and knee stops, 3° of knee hyperextension, 2°
-    /// past the ankle's dorsiflexion stop, 3° of plantarflexion.
+    /// past the ankle's dorsiflexion stop, 2° inside its plantarflexion stop
+    /// or 3° past it when it is at 0°.
     pub const DEFAULT: Self = Self {
         joint_margin_rad: 5.0 * DEG,
         knee_hyperextension_tolerance_rad: 3.0 * DEG,
         ankle_stop_tolerance_rad: 2.0 * DEG,
+        ankle_margin_rad: 2.0 * DEG,
         ankle_plantarflexion_tolerance_rad: 3.0 * DEG,
     };
 }
@@ -300,7 +305,7 @@ impl SupervisorConfig {
             max_rad: limits.knee_flexion_rad - m.joint_margin_rad,
         };
         let ankle = AngleRange {
-            min_rad: -(limits.ankle_plantarflexion_rad - m.ankle_stop_tolerance_rad)
+            min_rad: -(limits.ankle_plantarflexion_rad - m.ankle_margin_rad)
                 .max(m.ankle_plantarflexion_tolerance_rad),
             max_rad: limits.ankle_dorsiflexion_rad + m.ankle_stop_tolerance_rad,
         };

@@ -166,18 +166,21 @@ pub fn share_load<T: Real>(
     single: &[T; LINKS],
     max_load_n: T,
 ) -> DoubleSupportStatics<T> {
-    share_load_with_base(model, phi, single, max_load_n, [T::zero(); 2])
+    let zero = [T::zero(); 2];
+    share_load_with_base(model, phi, single, max_load_n, zero, zero)
 }
 
-/// [`share_load`] for a stance ankle that moves with φ1 at `base_d1` =
-/// ∂(ankle)/∂φ1 (the toe rocker, [`crate::foot::share_load`]): the second
-/// foot's force then also acts on φ1 through the moving base.
+/// [`share_load`] with the toe rocker ([`crate::foot::share_load`]): the
+/// stance ankle moves with φ1 at `base_d1` = ∂(ankle)/∂φ1, and the second
+/// foot's contact point moves with φ5 beyond its ankle at `swing_d5` (its
+/// toe, turning with the shank): the force then also acts on φ1 and φ5.
 pub fn share_load_with_base<T: Real>(
     model: &BodyModel<T>,
     phi: &Phi<T>,
     single: &[T; LINKS],
     max_load_n: T,
     base_d1: [T; 2],
+    swing_d5: [T; 2],
 ) -> DoubleSupportStatics<T> {
     let l = model.lengths();
     // Jᵀ e_x and Jᵀ e_y: ∂p5/∂φ_i = l_i (cos φ_i, −sin φ_i) for the links
@@ -198,6 +201,10 @@ pub fn share_load_with_base<T: Real>(
         if i == 0 {
             *x += base_d1[0];
             *y += base_d1[1];
+        }
+        if i == LINKS - 1 {
+            *x += swing_d5[0];
+            *y += swing_d5[1];
         }
     }
     let mx = joint_torques(&jx);

@@ -305,8 +305,10 @@ pub fn forward_dynamics<T: Real>(
     }
 }
 
-/// [`dynamics::share_load`] on this foot: the second foot's force also
-/// acts through the stance ankle's motion about the toe.
+/// [`dynamics::share_load`] with these feet: the second foot's force also
+/// acts through the stance ankle's motion about its toe, and, when the
+/// second foot stands on its own toe (its shank, seen as a stance shank,
+/// leans past the stop: a descent's trailing foot), at that toe.
 pub fn share_load<T: Real>(
     model: &BodyModel<T>,
     foot: &StanceFoot<T>,
@@ -315,7 +317,11 @@ pub fn share_load<T: Real>(
     max_load_n: T,
 ) -> DoubleSupportStatics<T> {
     let d1 = foot.ankle(first(phi)).d1;
-    dynamics::share_load_with_base(model, phi, single, max_load_n, d1)
+    let [.., phi5] = *phi;
+    let lean = crate::kinematics::wrap_pi(phi5 - T::pi());
+    // Toe − ankle = toe − a(lean): its φ5-derivative is −a'(lean).
+    let a = foot.ankle(lean).d1;
+    dynamics::share_load_with_base(model, phi, single, max_load_n, d1, [-a[0], -a[1]])
 }
 
 /// Kinetic plus gravitational energy on this foot (heights from the flat
@@ -361,9 +367,9 @@ fn linear_momentum<T: Real>(
 /// conserves the angular momentum about the toe; heel strike (the heel
 /// lands; the ankle is free again) conserves it about the ankle. Both keep
 /// every sub-chain's angular momentum about the knee and hip joints (no
-/// impulsive joint torque), i.e. T_φj-momenta for j ≥ 2. With
-/// L_toe = L_ankle + (a − toe) × P, the switch changes only p_φ1 (= −L for
-/// the whole chain): p'_φ1 = p_φ1 ∓ (a − toe) × P. The velocities then
+/// impulsive joint torque), i.e. the momenta p_φj for j ≥ 2. With
+/// L_toe = L_ankle + (a − toe) × P and −Σ_j p_φj = L about the pivot, the
+/// switch changes only p_φ1: p'_φ1 = p_φ1 ∓ (a − toe) × P. The velocities then
 /// solve D' Φ̇⁺ = p'. `to_toe` picks the direction; Φ is the switching
 /// posture (on either side of heel-off: the masses use the new contact).
 pub fn contact_switch_velocities<T: Real>(
@@ -375,7 +381,9 @@ pub fn contact_switch_velocities<T: Real>(
 ) -> Result<Phi<T>, DynamicsError> {
     // The posture just before and just after (the switch is at heel_off;
     // the moving ankle's Jacobian differs on the two sides).
-    let nudge = T::lit(1e-9);
+    // Past the stop by a few units of the scalar's precision (1e-9 is lost
+    // in f32 rounding at 0.35 rad).
+    let nudge = T::default_epsilon() * T::lit(4.0) * (T::one() + foot.heel_off_rad.abs());
     let (before, after) = {
         let [q1, q2, q3, q4, q5] = *phi;
         let on = [q1.max(foot.heel_off_rad + nudge), q2, q3, q4, q5];

@@ -210,6 +210,9 @@ pub enum PeriodicError {
     LandingOutsideHumanRange,
     /// The logistic's shape (k, t_c) is flat over [0, ts] or not finite.
     FlatProfile,
+    /// The trailing foot's raised ankle and its shank's lean did not settle
+    /// on one posture (the secant iteration did not converge).
+    TrailingFootNotSettled,
 }
 
 impl core::fmt::Display for PeriodicError {
@@ -220,6 +223,9 @@ impl core::fmt::Display for PeriodicError {
                 f.write_str("the landing posture is outside the IK's human range")
             }
             Self::FlatProfile => f.write_str("the stance-shank logistic is flat over the step"),
+            Self::TrailingFootNotSettled => {
+                f.write_str("the trailing foot's heel-up posture did not converge")
+            }
         }
     }
 }
@@ -308,17 +314,26 @@ impl<T: Real> StepCase<T> {
             Ok(swap_legs(&sol.phi)[0] - lean)
         };
         let flat_lean = swap_legs(&solve(T::lit(-10.0))?.1.phi)[0];
-        let (mut x0, mut x1) = (flat_lean, flat_lean + residual(flat_lean)?);
-        let mut r0 = residual(x0)?;
+        let tolerance = T::default_epsilon().sqrt() * T::lit(1e-3);
+        let (mut x0, mut r0) = (flat_lean, residual(flat_lean)?);
+        let mut x1 = x0 + r0;
+        let mut lean = (r0.abs() <= tolerance).then_some(x0);
         for _ in 0..40 {
-            let r1 = residual(x1)?;
-            if r1.abs() < T::lit(1e-13) || (r1 - r0).abs() <= T::zero() {
+            if lean.is_some() {
                 break;
             }
-            let next = x1 - r1 * (x1 - x0) / (r1 - r0);
-            (x0, r0, x1) = (x1, r1, next);
+            let r1 = residual(x1)?;
+            if r1.abs() <= tolerance {
+                lean = Some(x1);
+            } else if (r1 - r0).abs() > T::zero() {
+                let next = x1 - r1 * (x1 - x0) / (r1 - r0);
+                (x0, r0, x1) = (x1, r1, next);
+            } else {
+                break;
+            }
         }
-        let (swing_start, start) = solve(x1)?;
+        let lean = lean.ok_or(PeriodicError::TrailingFootNotSettled)?;
+        let (swing_start, start) = solve(lean)?;
         let landing = swap_legs(&start.phi);
         let [phi1_end, phi2_end, ..] = landing;
         // At the landing the old stance foot trails; its ankle may be up.

@@ -402,3 +402,80 @@ fn free_chain_on_the_toe_conserves_energy() {
     }
     assert!(struck, "never reached the heel");
 }
+
+/// The load sharing with the toe rocker uses the right contact Jacobian:
+/// the returned torques are `single − Aᵀ Jᵀ F` with J the derivative of the
+/// second foot's toe (stance ankle rolled, swing foot on its toe), here by
+/// finite differences of the point built independently.
+#[test]
+fn load_sharing_acts_at_the_rolled_feet() {
+    use gait_core::kinematics::joint_torques;
+    let (m, f) = model();
+    // Stance on its toe (0.6 rad), trailing/second foot on its toe too
+    // (its shank, seen as a stance shank, leans 0.5 rad).
+    let phi = [0.6, -0.3, 0.05, 2.6, core::f64::consts::PI + 0.5];
+    let toe_of_second = |q: &[f64; LINKS]| -> [f64; 2] {
+        let (a, _) = ankle(&f, q[0], true);
+        let p5 = forward_kinematics(&m, q)[4];
+        let lean = q[4] - core::f64::consts::PI;
+        let (b, _) = ankle(&f, lean, true);
+        [
+            a[0] + p5[0] + f.toe_m - b[0],
+            a[1] + p5[1] - f.ankle_height_m - b[1],
+        ]
+    };
+    // What holding the posture on the stance foot alone asks.
+    let zero = [0.0; LINKS];
+    let single = joint_torques(&foot::inverse_dynamics(&m, &f, &phi, &zero, &zero));
+    let s = foot::share_load(&m, &f, &phi, &single, 900.0);
+    assert!(s.reaction_n[1] > 1.0, "no load shared: {:?}", s.reaction_n);
+    let h = 1e-7;
+    let mut generalised = [0.0; LINKS];
+    for i in 0..LINKS {
+        let (mut qp, mut qm) = (phi, phi);
+        qp[i] += h;
+        qm[i] -= h;
+        let (p, q) = (toe_of_second(&qp), toe_of_second(&qm));
+        generalised[i] = (p[0] - q[0]) / (2.0 * h) * s.reaction_n[0]
+            + (p[1] - q[1]) / (2.0 * h) * s.reaction_n[1];
+    }
+    let expect = joint_torques(&generalised);
+    for i in 0..LINKS {
+        let want = single[i] - expect[i];
+        assert!(
+            (s.torques[i] - want).abs() < 1e-5 * (1.0 + want.abs()),
+            "{i}: {} vs {want}",
+            s.torques[i]
+        );
+    }
+}
+
+/// The contact switch works in f32 too (the nudge past the stop is not lost
+/// in rounding) and agrees with f64.
+#[test]
+fn contact_switch_in_f32_agrees_with_f64() {
+    let (m, f) = model();
+    let m32: BodyModel<f32> = m.cast();
+    let f32foot = StanceFoot::<f32>::table_i();
+    let phi = [f.heel_off_rad, -0.1, 0.05, 3.0, 3.3];
+    let w = [0.8, -0.5, 0.2, 1.0, -1.0];
+    let v64 = foot::contact_switch_velocities(&m, &f, &phi, &w, true).unwrap();
+    let v32 = foot::contact_switch_velocities(
+        &m32,
+        &f32foot,
+        &phi.map(|x| x as f32),
+        &w.map(|x| x as f32),
+        true,
+    )
+    .unwrap();
+    // The heel-off map changes the velocities (it is not the identity).
+    assert!((0..LINKS).any(|i| (v64[i] - w[i]).abs() > 1e-3));
+    for i in 0..LINKS {
+        assert!(
+            (f64::from(v32[i]) - v64[i]).abs() < 1e-3,
+            "{i}: {} vs {}",
+            v32[i],
+            v64[i]
+        );
+    }
+}

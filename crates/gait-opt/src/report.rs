@@ -413,6 +413,42 @@ impl ProblemSpec {
         if !(self.dt_s.is_finite() && self.dt_s > 0.0) {
             return Err(bad("dt_s", format!("must be positive, got {}", self.dt_s)));
         }
+        if let Some(f) = self.foot {
+            let [toe, height, heel_off] = f;
+            let sane = toe.is_finite()
+                && toe > 0.0
+                && height.is_finite()
+                && height >= 0.0
+                && heel_off.is_finite()
+                && heel_off.abs() < std::f64::consts::FRAC_PI_2;
+            if !sane {
+                return Err(bad(
+                    "foot",
+                    format!(
+                        "expected [toe > 0 m, ankle height >= 0 m, heel-off in (-pi/2, pi/2) rad], got {f:?}"
+                    ),
+                ));
+            }
+        }
+        if let Some(cap) = self.stance_knee_max_rad
+            && !(cap.is_finite() && cap > 0.0 && cap <= std::f64::consts::FRAC_PI_2)
+        {
+            return Err(bad(
+                "stance_knee_max_rad",
+                format!("must be in (0, pi/2], got {cap}"),
+            ));
+        }
+        if let Some([margin, weight]) = self.joint_range_limit
+            && !(margin.is_finite() && margin >= 0.0 && weight.is_finite() && weight >= 0.0)
+        {
+            return Err(bad(
+                "joint_range_limit",
+                format!(
+                    "expected [margin >= 0 rad, weight >= 0], got {:?}",
+                    [margin, weight]
+                ),
+            ));
+        }
         if self.intervals < 2 || self.intervals + 1 > gait_core::problem::MAX_SAMPLES {
             return Err(bad(
                 "intervals",

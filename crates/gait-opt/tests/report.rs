@@ -111,3 +111,56 @@ fn one_call_for_the_cli() {
         optimize(&cfg, &mut |_| {}).unwrap().evaluations
     );
 }
+
+/// The descent table's problem (toe rocker, human knee range, joint
+/// limits) survives the JSON round trip: its fields are written, read back,
+/// and the cost recomputed from the file is the same, bit for bit; the
+/// cost from the sampled Φ (`cost_from_phi`) agrees with it too.
+#[test]
+fn descent_problem_round_trips_with_its_new_fields() {
+    use gait_core::problem::PeriodicStep;
+    let problem = gait_opt::tables::table_problem(&PeriodicStep::stair_down(), None).unwrap();
+    let mut cfg = OptimizeConfig::new(PaperCase::StairUp);
+    cfg.max_evals = 300;
+    let r = gait_opt::solver::optimize_problem(&problem, &cfg, &mut |_| {}).unwrap();
+    let rep = Report::for_problem("stair_down", &problem, &r, None).unwrap();
+    let text = rep.to_json().unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for key in [
+        "foot",
+        "stance_knee_max_rad",
+        "knee_range_human",
+        "joint_range_limit",
+    ] {
+        assert!(v["problem"].get(key).is_some(), "missing problem.{key}");
+    }
+    let back = Report::from_json(&text).unwrap();
+    assert_eq!(back, rep);
+    let again = back.problem.problem().unwrap();
+    assert_eq!(again.case.foot, problem.case.foot);
+    assert_eq!(again.case.ik, problem.case.ik);
+    assert_eq!(again.joint_range_limit, problem.joint_range_limit);
+    let c = back.recompute_cost().unwrap();
+    assert_eq!(c.j.to_bits(), r.cost.j.to_bits());
+    // Corrupt values are refused by name.
+    for (key, value) in [
+        ("foot", serde_json::json!([0.0, 0.07, 0.35])),
+        ("foot", serde_json::json!([-0.1, 0.07, 0.35])),
+        ("stance_knee_max_rad", serde_json::json!(4.0)),
+        ("joint_range_limit", serde_json::json!([-0.1, 1e5])),
+    ] {
+        let mut w = v.clone();
+        w["problem"][key] = value;
+        let parsed = Report::from_json(&w.to_string()).unwrap();
+        let e = parsed.problem.problem().unwrap_err().to_string();
+        assert!(e.contains(key), "{key}: {e}");
+    }
+    let phi = gait_opt::tables::step_phi(&problem, &r.control_points).unwrap();
+    let from_phi = gait_opt::cost_from_phi(&problem, &phi).unwrap();
+    assert!(
+        (from_phi.j - r.cost.j).abs() < 1e-6 * r.cost.j,
+        "{} vs {}",
+        from_phi.j,
+        r.cost.j
+    );
+}

@@ -352,8 +352,10 @@ pub struct Plant {
     last_swap_s: f64,
     pilot_target: PilotTarget,
     lifted: bool,
-    /// World x where the swing foot's current ground contact began.
-    contact_anchor_x: Option<f64>,
+    /// World x where the swing foot's current ground contact began, and
+    /// whether that contact is on the toe (the anchor restarts when the
+    /// contact point moves between the ankle and the toe).
+    contact_anchor_x: Option<(f64, bool)>,
     /// The swing foot's ground force at the present state (x, y), N.
     contact_n: [f64; 2],
     motor_nm: [f64; 4],
@@ -361,6 +363,20 @@ pub struct Plant {
     spring_nm: f64,
     stops_nm: [f64; 4],
     landings: Vec<Landing>,
+}
+
+/// The swing foot's ground contact point ([`Plant::swing_sole`]).
+struct SwingSole {
+    /// The contact point, world x, and the sole's height in the terrain's
+    /// ankle-level convention, m.
+    point_m: [f64; 2],
+    /// Its velocity, m/s.
+    velocity_m_s: [f64; 2],
+    /// ∂(contact point)/∂φ5 beyond the ankle's own (the toe turning with
+    /// the shank), m/rad; zero while flat.
+    d5: [f64; 2],
+    /// Whether the foot stands on its toe.
+    on_toe: bool,
 }
 
 /// The generalised forces at one state.
@@ -579,12 +595,40 @@ impl Plant {
         self.cfg.foot.is_some_and(|f| f.on_toe(phi1))
     }
 
-    /// How far the swing foot's sole sits below its ankle's height above
-    /// the flat-foot position: a swing leg leaning past the stop (the
-    /// trailing foot of a descent) stands on its toe with the ankle raised.
-    fn swing_rocker_rise_m(&self, phi: &Phi<f64>) -> f64 {
+    /// Where the swing foot meets the ground: under the ankle while flat;
+    /// at the toe while it still stands on it, before lift-off (a
+    /// descent's trailing foot, its shank leaning past the stop: the foot
+    /// turns with the shank, held on its stop, so a ground force there also
+    /// turns the swing shank, [`SwingSole::d5`]). Once lifted the foot hangs
+    /// free, its angle not modelled, and is a point at the ankle again, as in
+    /// the paper (a toe held at the stop in the air caught the stair nosing
+    /// in stair ascent).
+    fn swing_sole(&self, phi: &Phi<f64>, dphi: &Phi<f64>) -> SwingSole {
+        let (ankle, v) = self.swing_foot_at(phi, dphi);
         let lean = gait_core::kinematics::wrap_pi(phi[4] - PI);
-        self.ankle_at(lean).position_m[1]
+        match self.cfg.foot.filter(|f| !self.lifted && f.on_toe(lean)) {
+            Some(f) => {
+                let a = f.ankle(lean);
+                let toe = f.toe();
+                // Toe − ankle in the world, and its φ5-derivative.
+                let r = [toe[0] - a.position_m[0], toe[1] - a.position_m[1]];
+                let d5 = [-a.d1[0], -a.d1[1]];
+                SwingSole {
+                    // Heights in the ankle-level convention of the terrain:
+                    // the sole is `rise` below the raised ankle.
+                    point_m: [ankle[0] + r[0], ankle[1] - a.position_m[1]],
+                    velocity_m_s: [v[0] + d5[0] * dphi[4], v[1] + d5[1] * dphi[4]],
+                    d5,
+                    on_toe: true,
+                }
+            }
+            None => SwingSole {
+                point_m: ankle,
+                velocity_m_s: v,
+                d5: [0.0; 2],
+                on_toe: false,
+            },
+        }
     }
 
     /// Every generalised force at a state: motors (held), ankle spring,
@@ -648,9 +692,12 @@ impl Plant {
         for i in [0, 1, 3, 4] {
             t_phi[i] += l[i] * (phi[i].cos() * contact_n[0] - phi[i].sin() * contact_n[1]);
         }
-        // The moving stance ankle carries the swing foot with it.
+        // The moving stance ankle carries the swing foot with it; a force
+        // on the swing foot's toe also turns its shank.
         let d1 = self.ankle_at(phi[0]).d1;
         t_phi[0] += d1[0] * contact_n[0] + d1[1] * contact_n[1];
+        let d5 = self.swing_sole(phi, dphi).d5;
+        t_phi[4] += d5[0] * contact_n[0] + d5[1] * contact_n[1];
         Forces {
             t_phi,
             contact_n,
@@ -686,6 +733,8 @@ impl Plant {
             }
             let d1 = self.ankle_at(phi1).d1;
             required[0] -= d1[0] * contact_n[0] + d1[1] * contact_n[1];
+            let d5 = self.swing_sole(phi, &[0.0; LINKS]).d5;
+            required[4] -= d5[0] * contact_n[0] + d5[1] * contact_n[1];
             let spring_now = if self.on_toe(phi1) { 0.0 } else { spring };
             -joint_torques(&required)[0] - spring_now
         } else {
@@ -720,15 +769,17 @@ impl Plant {
         let Some(c) = &self.cfg.contact else {
             return [0.0; 2];
         };
-        let (p, v) = self.swing_foot_at(phi, dphi);
-        let depth = self.cfg.terrain.height_m(p[0]) - (p[1] - self.swing_rocker_rise_m(phi));
+        let sole = self.swing_sole(phi, dphi);
+        let (p, v) = (sole.point_m, sole.velocity_m_s);
+        let depth = self.cfg.terrain.height_m(p[0]) - p[1];
         if depth <= 0.0 {
             return [0.0; 2];
         }
         let fy = (c.stiffness_n_per_m * depth - c.damping_n_s_per_m * v[1]).max(0.0);
         let stick = self
             .contact_anchor_x
-            .map_or(0.0, |ax| -c.tangential_stiffness_n_per_m * (p[0] - ax));
+            .filter(|&(_, toe)| toe == sole.on_toe)
+            .map_or(0.0, |(ax, _)| -c.tangential_stiffness_n_per_m * (p[0] - ax));
         let limit = c.friction * fy;
         let fx = (stick - c.tangential_damping_n_s_per_m * v[0]).clamp(-limit, limit);
         [fx, fy]
@@ -737,11 +788,15 @@ impl Plant {
     /// Remembers where the swing foot's contact began; forgets it once the
     /// foot is clear of the ground.
     fn update_contact_anchor(&mut self) {
-        let (p, _) = self.swing_foot_at(&self.phi, &self.dphi);
-        let depth = self.cfg.terrain.height_m(p[0]) - (p[1] - self.swing_rocker_rise_m(&self.phi));
+        let sole = self.swing_sole(&self.phi, &self.dphi);
+        let p = sole.point_m;
+        let depth = self.cfg.terrain.height_m(p[0]) - p[1];
+        let same = self
+            .contact_anchor_x
+            .is_some_and(|(_, toe)| toe == sole.on_toe);
         if depth >= 0.0 {
-            if self.contact_anchor_x.is_none() {
-                self.contact_anchor_x = Some(p[0]);
+            if !same {
+                self.contact_anchor_x = Some((p[0], sole.on_toe));
             }
         } else if depth < -0.001 {
             self.contact_anchor_x = None;
@@ -776,8 +831,8 @@ impl Plant {
     /// The swing foot's sole above the ground (the toe, for a foot whose
     /// heel is up), m.
     fn swing_height_above_ground_m(&self) -> f64 {
-        let p = self.swing_foot_world();
-        p[1] - self.swing_rocker_rise_m(&self.phi) - self.cfg.terrain.height_m(p[0])
+        let p = self.swing_sole(&self.phi, &self.dphi).point_m;
+        p[1] - self.cfg.terrain.height_m(p[0])
     }
 
     /// Swing-ankle velocity, m/s: Σ l_i φ̇_i (cos φ_i, −sin φ_i) over links

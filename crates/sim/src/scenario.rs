@@ -52,12 +52,15 @@ pub const PAPER_STAIRS: Terrain = Terrain::Stairs {
 };
 
 /// The paper's staircase walked down: the top floor at height 0 up to the
-/// first (downward) riser, halfway between the feet of the stair-descent
-/// start posture, then 12 steps of 0.0935 m down. The stance foot at x = 0
-/// stands on the first tread (y = −0.0935), the trailing foot on the top
-/// floor 0.275 m behind, on its toe.
+/// first (downward) riser, then 12 steps of 0.0935 m down. The stance foot
+/// at x = 0 stands on the first tread (y = −0.0935), the trailing foot on
+/// the top floor 0.275 m behind, on the ball of its foot (0.14 m ahead of
+/// its ankle, [`gait_core::foot::TOE_M`]). The riser at x = −0.12 puts that
+/// ball 1.5 cm inside the top floor's edge and the stance heel (5 cm
+/// behind its ankle) 7 cm onto its tread; the simulated steps are 8 mm short
+/// (docs/model.md), so 8 steps keep every heel on its tread.
 pub const PAPER_STAIRS_DOWN: Terrain = Terrain::Stairs {
-    start_x_m: -0.1375,
+    start_x_m: -0.12,
     rise_m: -0.0935,
     tread_m: 0.275,
     steps: 12,
