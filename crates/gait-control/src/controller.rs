@@ -384,6 +384,15 @@ impl<'t> Controller<'t> {
             m.commanded_nm = c;
             m.limit_nm = g.torque_limit_nm;
         }
+        // The stance ankle's planned dorsiflexion during a swing (φ1 of the
+        // table: the ankle angle while flat; past the stop the heel is
+        // planned to be up); nothing planned otherwise.
+        let mut ankle_plan_rad = [f32::NAN; 2];
+        if plan.swing.is_some()
+            && let Some(p) = ankle_plan_rad.get_mut(plan.stance.ankle())
+        {
+            *p = self.planned_phi1;
+        }
         let input = SupervisorInput {
             tick: self.tick,
             joints: [0, 1, 2, 3].map(|i| encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
@@ -396,6 +405,7 @@ impl<'t> Controller<'t> {
             deadline_missed,
             step_in_progress: self.seq.step_in_progress(),
             button_input_fault: mode.input_fault || go.input_fault,
+            ankle_plan_rad,
         };
         let verdict: Verdict = self.supervisor.check(&input);
         match verdict.reaction {

@@ -47,6 +47,10 @@ pub enum FaultCode {
     TrackingError = 0x0103,
     /// A passive ankle's angle is outside its envelope.
     AnklePositionLimit = 0x0104,
+    /// The stance ankle rests on its dorsiflexion stop (the heel lifts:
+    /// the toe rocker) while the plan keeps it well below: the pilot leans
+    /// further forward than the gait was planned for.
+    UnplannedHeelOff = 0x0105,
     /// Joint encoder: too many bad frames, the last a bus error.
     EncoderBusError = 0x0201,
     /// Joint encoder: too many bad frames, the last a parity error.
@@ -93,7 +97,7 @@ pub enum FaultCode {
 
 impl FaultCode {
     /// Number of fault codes.
-    pub const COUNT: usize = 23;
+    pub const COUNT: usize = 24;
 
     /// Every fault code, in bit order of [`FaultSet`].
     pub const ALL: [Self; Self::COUNT] = [
@@ -120,6 +124,7 @@ impl FaultCode {
         Self::ButtonInputFault,
         Self::DeadlineMissed,
         Self::ControlValueInvalid,
+        Self::UnplannedHeelOff,
     ];
 
     /// The stable numeric code.
@@ -161,6 +166,7 @@ impl FaultCode {
             Self::ButtonInputFault => 20,
             Self::DeadlineMissed => 21,
             Self::ControlValueInvalid => 22,
+            Self::UnplannedHeelOff => 23,
         }
     }
 
@@ -171,6 +177,7 @@ impl FaultCode {
             // Passive ankles, sensors needed only to start a swing, and
             // the buttons: not needed to hold, so finish the step first.
             Self::AnklePositionLimit
+            | Self::UnplannedHeelOff
             | Self::AnkleEncoder
             | Self::ForceBusError
             | Self::ForceOpen
@@ -204,6 +211,7 @@ impl FaultCode {
             Self::JointVelocityLimit => "joint velocity limit",
             Self::TrackingError => "tracking error",
             Self::AnklePositionLimit => "ankle position limit",
+            Self::UnplannedHeelOff => "unplanned heel-off",
             Self::EncoderBusError => "encoder bus error",
             Self::EncoderParity => "encoder parity error",
             Self::EncoderErrorFlag => "encoder error flag",

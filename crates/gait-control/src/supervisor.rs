@@ -146,6 +146,10 @@ pub struct SupervisorInput {
     pub step_in_progress: bool,
     /// The button driver reports a wiring or read fault.
     pub button_input_fault: bool,
+    /// The dorsiflexion the gait plans for each ankle this tick, rad: the
+    /// stance ankle's φ1 during a swing; NaN where nothing is planned (the
+    /// swing ankle, standing). For the unplanned heel-off rule (0x0105).
+    pub ankle_plan_rad: [f32; ANKLES],
 }
 
 /// Allowed range of one angle, rad.
@@ -264,6 +268,16 @@ pub struct SupervisorConfig {
     pub force_max_n: f32,
     /// Consecutive ticks with |command| ≥ limit that make a fault.
     pub saturation_ticks: u32,
+    /// The ankles' dorsiflexion stop, where the heel lifts (the toe
+    /// rocker), rad.
+    pub heel_off_rad: f32,
+    /// A reading within this of the stop counts as resting on it, rad.
+    pub heel_off_reading_tolerance_rad: f32,
+    /// Resting on the stop is unplanned when the plan is more than this
+    /// below it, rad.
+    pub heel_off_plan_margin_rad: f32,
+    /// Consecutive ticks of unplanned heel-off that make a fault.
+    pub heel_off_ticks: u32,
     /// Missed deadlines within the window that make a fault (1 ..=
     /// [`MAX_DEADLINE_MISSES`]).
     pub deadline_miss_count: u8,
@@ -335,6 +349,13 @@ impl SupervisorConfig {
             force_min_n: -50.0,
             force_max_n: 2000.0,
             saturation_ticks: 200,
+            // On the stop within 0.5° while the plan is 5° or more below it,
+            // for 50 ms: the walk and stair-ascent tables never come within
+            // 9° of the stop; a descent plans its heel-off.
+            heel_off_rad: limits.ankle_dorsiflexion_rad,
+            heel_off_reading_tolerance_rad: 0.5 * DEG,
+            heel_off_plan_margin_rad: 5.0 * DEG,
+            heel_off_ticks: 50,
             deadline_miss_count: 3,
             deadline_window_ticks: 1000,
         }
@@ -349,6 +370,9 @@ impl SupervisorConfig {
             self.tracking_error_limit_rad,
             self.frozen_reference_speed_rad_s,
             self.frozen_command_fraction,
+            self.heel_off_rad,
+            self.heel_off_reading_tolerance_rad,
+            self.heel_off_plan_margin_rad,
         ];
         let velocities_ok = self
             .velocity_limit_rad_s
@@ -381,6 +405,7 @@ impl SupervisorConfig {
             || self.tracking_error_ticks == 0
             || self.frozen_ticks == 0
             || self.saturation_ticks == 0
+            || self.heel_off_ticks == 0
             || self.max_jump_counts_per_tick == 0
         {
             return Err(ConfigError::BadWindow);
@@ -623,6 +648,8 @@ pub struct Supervisor {
     log: HistoryBuf<FaultRecord, LOG_LEN>,
     joints: [JointTrack; JOINTS],
     ankles: [EncoderTrack; ANKLES],
+    /// Consecutive ticks each ankle has rested on its stop unplanned.
+    heel_off_ticks: [u32; ANKLES],
     forces: [ForceTrack; FORCE_SENSORS],
     previous_reference_rad: Option<[f32; JOINTS]>,
     /// `calls` at the latest deadline misses (ring).
@@ -652,6 +679,7 @@ impl Supervisor {
             log: HistoryBuf::new(),
             joints: [JointTrack::default(); JOINTS],
             ankles: [EncoderTrack::default(); ANKLES],
+            heel_off_ticks: [0; ANKLES],
             forces: [ForceTrack::default(); FORCE_SENSORS],
             previous_reference_rad: None,
             misses: [None; MAX_DEADLINE_MISSES as usize],
@@ -949,6 +977,22 @@ impl Supervisor {
             if let Frame::Accepted { angle_rad, .. } = frame {
                 if !range.contains(angle_rad) {
                     self.raise(t, FaultCode::AnklePositionLimit, ch, angle_rad);
+                }
+                // Resting on the stop while the plan is well below it (a
+                // NaN plan never counts; a rejected frame neither counts
+                // nor resets).
+                let plan = input.ankle_plan_rad.get(i).copied().unwrap_or(f32::NAN);
+                let on_stop = angle_rad >= cfg.heel_off_rad - cfg.heel_off_reading_tolerance_rad;
+                let unplanned = plan < cfg.heel_off_rad - cfg.heel_off_plan_margin_rad;
+                if let Some(n) = self.heel_off_ticks.get_mut(i) {
+                    *n = if on_stop && unplanned {
+                        n.saturating_add(1)
+                    } else {
+                        0
+                    };
+                    if *n >= cfg.heel_off_ticks {
+                        self.raise(t, FaultCode::UnplannedHeelOff, ch, angle_rad);
+                    }
                 }
             }
         }

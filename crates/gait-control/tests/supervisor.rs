@@ -87,6 +87,7 @@ fn healthy_input(tick: u32) -> SupervisorInput {
         deadline_missed: false,
         step_in_progress: false,
         button_input_fault: false,
+        ankle_plan_rad: [f32::NAN; ANKLES],
     }
 }
 
@@ -288,6 +289,53 @@ fn row_ankle_position_limit() {
         Reaction::FinishStepThenHold,
         expected,
     );
+}
+
+#[test]
+fn row_unplanned_heel_off() {
+    // The left ankle on its 20° stop (the heel lifting onto the toe) while
+    // the plan keeps it at 6° (a walk): 50 ticks on the stop trip it.
+    // The ankle rolls onto the stop at 0.02 rad per tick (no jump), then
+    // stays: the 50th tick on the stop trips.
+    let cfg = SupervisorConfig::paper();
+    let stop = cfg.heel_off_rad;
+    let ramp = |k: u32| (STAND_ANKLES[0] + 0.02 * k as f32).min(stop);
+    let on_stop = |k: u32| encoder(ramp(k)).angle_rad >= stop - cfg.heel_off_reading_tolerance_rad;
+    let first = (1..).find(|&k| on_stop(k)).unwrap();
+    let (_, v) = inject(first + 60, |k, input| {
+        input.ankles[0] = encoder(ramp(k));
+        input.ankle_plan_rad[0] = 0.1;
+    });
+    assert_row(
+        &v,
+        FaultCode::UnplannedHeelOff,
+        Reaction::FinishStepThenHold,
+        first + cfg.heel_off_ticks - 1,
+    );
+    // Planned (a descent's stance heel lifts on schedule), nothing planned
+    // (NaN: standing, the swing ankle), or off the stop: nothing.
+    for (reading, plan) in [
+        (stop, stop + 0.2),
+        (stop, stop - 3.0 * DEG),
+        (stop, f32::NAN),
+        (stop - 1.0 * DEG, 0.1),
+    ] {
+        let (_, v) = inject(200, |k, input| {
+            input.ankles[0] = encoder((STAND_ANKLES[0] + 0.02 * k as f32).min(reading));
+            input.ankle_plan_rad[0] = plan;
+        });
+        assert!(
+            v.iter().all(|x| x.reaction == Reaction::None),
+            "reading {reading}, plan {plan}"
+        );
+    }
+    // Leaving the stop restarts the count: 49 on, 1 off, 49 on: nothing.
+    let (_, v) = inject(first + 98, |k, input| {
+        let dip = k == first + 49;
+        input.ankles[0] = encoder(if dip { stop - 2.0 * DEG } else { ramp(k) });
+        input.ankle_plan_rad[0] = 0.1;
+    });
+    assert!(v.iter().all(|x| x.reaction == Reaction::None));
 }
 
 #[test]
@@ -806,6 +854,7 @@ fn random_input() -> impl Strategy<Value = SupervisorInput> {
                 deadline_missed: flags[2],
                 step_in_progress: flags[3],
                 button_input_fault: flags[4],
+                ankle_plan_rad: [f32::NAN; ANKLES],
             },
         )
 }
