@@ -505,3 +505,48 @@ fn walks_with_noisy_sensors_without_false_faults() {
     );
     assert!(rig.faults().is_empty());
 }
+
+#[test]
+fn a_pilot_leaning_onto_the_toe_mid_walk_is_an_unplanned_heel_off() {
+    // The walk never plans the stance heel up (its φ1 stays under 11°). A
+    // pilot who leans on past the ankle's 20° stop mid-swing rolls onto the
+    // ball of the foot: 0x0105 within 50 ms of the ankle resting on its
+    // stop, and the device finishes the step instead of starting another.
+    let mut rig = standing_rig(strong_pilot()).unwrap();
+    Rig::press(&rig.go, sim::scenario::GO_AT_TICK, sim::scenario::GO_TICKS);
+    rig.run_until(
+        6_000,
+        |s| matches!(s.report.phase, Phase::Swing { t_s, .. } if t_s > 0.5),
+    )
+    .unwrap();
+    rig.set_pilot_behaviour(sim::closed_loop::PilotBehaviour::Fixed(
+        sim::pilot::PilotTarget::Hold { phi1_rad: 0.5 },
+    ));
+    let stop = rig.plant.config().model.limits().ankle_dorsiflexion_rad;
+    let ticks = rig
+        .run_until(1_500, |s| s.report.reaction >= Reaction::FinishStepThenHold)
+        .unwrap();
+    assert!(ticks < 1_500, "no reaction");
+    assert!(
+        rig.faults().contains(FaultCode::UnplannedHeelOff),
+        "{:?}",
+        rig.faults()
+    );
+    // Detected 50 ticks after the *reading* rests on the stop; the rig's
+    // ankle sensor follows the true angle through a 30 ms lag, so at most
+    // 100 ms more after the true ankle got there (and not before 50).
+    let on_stop = |s: &sim::closed_loop::Sample| {
+        s.state.ankle_dorsiflexion_rad[s.state.stance.index()]
+            .is_some_and(|a| a >= stop - 0.5f64.to_radians())
+    };
+    let detected = rig.trace.len() - 1;
+    let last_off = rig.trace[..detected]
+        .iter()
+        .rposition(|s| !on_stop(s))
+        .unwrap();
+    assert!(
+        (50..=150).contains(&(detected - last_off)),
+        "off the stop last at {last_off}, detected at {detected}"
+    );
+    assert_eq!(rig.worst_reaction(), Reaction::FinishStepThenHold);
+}

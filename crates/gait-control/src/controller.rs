@@ -138,11 +138,13 @@ pub struct Controller<'t> {
     crutch: CrutchLoad,
     last_raw: [u16; ENCODERS],
     last_angle: [f32; ENCODERS],
-    /// The stance shank angle φ1 the gait table last asked for, rad. With
-    /// the stance heel up (toe rocker, stair descent) the ankle encoder
-    /// reads its stop, not φ1; the feed-forward's static posture then uses
-    /// this instead ([`Controller::stance_phi1`]).
-    planned_phi1: f32,
+    /// What the gait plans for each ankle this tick (left, right), rad:
+    /// the shank's lean as a stance shank, NaN where nothing is planned
+    /// ([`Controller::plan_ankles`]). With the heel up (toe rocker) the
+    /// ankle encoder reads its stop, not the lean: the feed-forward's
+    /// static posture then uses the plan ([`Controller::stance_phi1`]), and
+    /// the supervisor flags a heel-off the plan does not have (0x0105).
+    ankle_plan: [f32; 2],
     rate: [f32; JOINTS],
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
@@ -188,7 +190,7 @@ impl<'t> Controller<'t> {
             crutch: CrutchLoad::new(),
             last_raw: [0; ENCODERS],
             last_angle: [0.0; ENCODERS],
-            planned_phi1: 0.0,
+            ankle_plan: [f32::NAN; 2],
             rate: [0.0; JOINTS],
             motor_sense: [idle; JOINTS],
             motors_enabled: false,
@@ -307,19 +309,13 @@ impl<'t> Controller<'t> {
         self.crutch.sample(forces_n[2], forces_n[3], dt);
 
         // 3. act
-        if let Some(tb) = plan.swing.and_then(|(g, _, _)| self.seq.tables().get(g)) {
-            let t = plan.swing.map_or(0.0, |(_, _, t)| t);
-            // Past the end the table holds its last posture.
-            let [phi1, ..] = tb.at_time(t.min(tb.duration_s()));
-            if phi1.is_finite() {
-                self.planned_phi1 = phi1;
-            }
-        }
+        self.ankle_plan = self.plan_ankles(plan.stance, plan.swing);
         let stance_ankle = self.stance_phi1(
             self.last_angle
                 .get(JOINTS + plan.stance.ankle())
                 .copied()
                 .unwrap_or(0.0),
+            plan.stance,
         );
         // What the other foot may carry: the whole body between steps
         // (planned double support); at the start of a swing a share that
@@ -384,15 +380,7 @@ impl<'t> Controller<'t> {
             m.commanded_nm = c;
             m.limit_nm = g.torque_limit_nm;
         }
-        // The stance ankle's planned dorsiflexion during a swing (φ1 of the
-        // table: the ankle angle while flat; past the stop the heel is
-        // planned to be up); nothing planned otherwise.
-        let mut ankle_plan_rad = [f32::NAN; 2];
-        if plan.swing.is_some()
-            && let Some(p) = ankle_plan_rad.get_mut(plan.stance.ankle())
-        {
-            *p = self.planned_phi1;
-        }
+        let ankle_plan_rad = self.ankle_plan;
         let input = SupervisorInput {
             tick: self.tick,
             joints: [0, 1, 2, 3].map(|i| encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
@@ -571,9 +559,64 @@ impl<'t> Controller<'t> {
     /// encoder's reading, or, when it reads the dorsiflexion stop (within
     /// 0.5°: the heel may be up and φ1 beyond what the encoder can see), the
     /// larger of it and the last planned φ1.
-    fn stance_phi1(&self, ankle_reading: f32) -> f32 {
+    fn stance_phi1(&self, ankle_reading: f32, stance: Side) -> f32 {
         let stop = StanceFoot::for_model(&self.cfg.model).heel_off_rad;
-        crate::posture::stance_phi1_estimate(ankle_reading, stop, self.planned_phi1)
+        let planned = self
+            .ankle_plan
+            .get(stance.ankle())
+            .copied()
+            .unwrap_or(f32::NAN);
+        crate::posture::stance_phi1_estimate(ankle_reading, stop, planned)
+    }
+
+    /// What the gait plans for each ankle now (left, right), as a stance
+    /// shank's lean (φ1; past the stop the heel is planned to be up):
+    /// - in a swing, the stance ankle follows the table (its last sample
+    ///   once it has ended); the swing foot is in the air (NaN);
+    /// - standing, waiting or transferring, both feet are down in the
+    ///   gait's start posture: the stance ankle at the table's first φ1,
+    ///   the other at its last (the trailing leg's lean; periodic tables).
+    ///   Standing, the gait is the clinician's selection;
+    /// - in a safe hold, what it was when the hold began.
+    fn plan_ankles(
+        &self,
+        stance: Side,
+        swing: Option<(crate::operator::Gait, Side, f32)>,
+    ) -> [f32; 2] {
+        let tables = self.seq.tables();
+        let mut out = [f32::NAN; 2];
+        let mut set = |side: Side, v: f32| {
+            if let Some(p) = out.get_mut(side.ankle()) {
+                *p = v;
+            }
+        };
+        let both = |tb: &gait_core::tables::GaitTable<'_>, set: &mut dyn FnMut(Side, f32)| {
+            let [first, ..] = tb.first();
+            let [last, ..] = tb.last();
+            set(stance, first);
+            set(stance.other(), last);
+        };
+        match self.seq.phase() {
+            Phase::SafeHold { .. } => return self.ankle_plan,
+            Phase::Swing { .. } => {
+                let playing = swing.and_then(|(g, s, t)| tables.get(g).map(|tb| (tb, s, t)));
+                if let Some((tb, s, t)) = playing {
+                    let [phi1, ..] = tb.at_time(t.min(tb.duration_s()));
+                    set(s, phi1);
+                }
+            }
+            Phase::Standing => {
+                if let Some(tb) = tables.get(self.operator.selected()) {
+                    both(tb, &mut set);
+                }
+            }
+            Phase::WaitingReady { .. } | Phase::Transfer { .. } => {
+                if let Some(tb) = tables.get(self.seq.gait()) {
+                    both(tb, &mut set);
+                }
+            }
+        }
+        out
     }
 
     /// Last good joint angles (joint order).

@@ -344,6 +344,13 @@ impl<'t> Sequencer<'t> {
         &self.tables
     }
 
+    /// The gait being played, or last played (walking before the first
+    /// start).
+    #[must_use]
+    pub fn gait(&self) -> Gait {
+        self.gait
+    }
+
     /// `true` while a step is in progress (the swing or the weight transfer
     /// after it): no gait change, no new start.
     pub fn step_in_progress(&self) -> bool {

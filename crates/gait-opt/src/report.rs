@@ -430,17 +430,17 @@ impl ProblemSpec {
                 ));
             }
         }
-        if let Some(cap) = self.stance_knee_max_rad
-            && !(cap.is_finite() && cap > 0.0 && cap <= std::f64::consts::FRAC_PI_2)
-        {
+        let cap_ok = |cap: f64| cap.is_finite() && cap > 0.0 && cap <= std::f64::consts::FRAC_PI_2;
+        if let Some(cap) = self.stance_knee_max_rad.filter(|&c| !cap_ok(c)) {
             return Err(bad(
                 "stance_knee_max_rad",
                 format!("must be in (0, pi/2], got {cap}"),
             ));
         }
-        if let Some([margin, weight]) = self.joint_range_limit
-            && !(margin.is_finite() && margin >= 0.0 && weight.is_finite() && weight >= 0.0)
-        {
+        let range_ok = |[margin, weight]: [f64; 2]| {
+            margin.is_finite() && margin >= 0.0 && weight.is_finite() && weight >= 0.0
+        };
+        if let Some([margin, weight]) = self.joint_range_limit.filter(|&r| !range_ok(r)) {
             return Err(bad(
                 "joint_range_limit",
                 format!(

@@ -582,6 +582,12 @@ impl<'t> Rig<'t> {
         Ok(max_ticks)
     }
 
+    /// Changes what the simulated pilot does from the next tick on (fault
+    /// injection: a pilot who stops following the plan).
+    pub fn set_pilot_behaviour(&mut self, behaviour: PilotBehaviour) {
+        self.pilot = behaviour;
+    }
+
     /// Latched faults now.
     pub fn faults(&self) -> FaultSet {
         self.controller.supervisor().latched()
