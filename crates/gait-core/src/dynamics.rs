@@ -281,15 +281,34 @@ pub fn forward_dynamics<T: Real>(
     dphi: &Phi<T>,
     t_phi: &TPhi<T>,
 ) -> Result<Phi<T>, DynamicsError> {
-    let all_finite = phi
+    check_finite(phi, dphi, t_phi)?;
+    accelerations(&terms(model, phi, dphi), t_phi)
+}
+
+/// NaN or infinite inputs are an error, not a NaN result.
+pub(crate) fn check_finite<T: Real>(
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    t_phi: &TPhi<T>,
+) -> Result<(), DynamicsError> {
+    if phi
         .iter()
         .chain(dphi.iter())
         .chain(t_phi.iter())
-        .all(|x| x.finite());
-    if !all_finite {
-        return Err(DynamicsError::NonFinite);
+        .all(|x| x.finite())
+    {
+        Ok(())
+    } else {
+        Err(DynamicsError::NonFinite)
     }
-    let t = terms(model, phi, dphi);
+}
+
+/// Φ̈ = D⁻¹ (T_Φ − HΦ̇ − G) from evaluated terms, by Cholesky (shared with
+/// the toe rocker's [`crate::foot::forward_dynamics`]).
+pub(crate) fn accelerations<T: Real>(
+    t: &DynamicsTerms<T>,
+    t_phi: &TPhi<T>,
+) -> Result<Phi<T>, DynamicsError> {
     let rhs = SVector::<T, LINKS>::from(*t_phi) - t.h_dphi - t.g;
     let chol = t.d.cholesky().ok_or(DynamicsError::SingularMassMatrix)?;
     let acc = chol.solve(&rhs);
@@ -324,15 +343,26 @@ pub fn rk4_step<T: Real>(
     t_phi: &TPhi<T>,
     h: T,
 ) -> Result<(Phi<T>, Phi<T>), DynamicsError> {
+    rk4_with(phi, dphi, h, |q, w| forward_dynamics(model, q, w, t_phi))
+}
+
+/// One RK4 step of Φ̈ = `accel`(Φ, Φ̇) over `h` seconds (shared with the toe
+/// rocker's [`crate::foot::rk4_step`]).
+pub(crate) fn rk4_with<T: Real>(
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    h: T,
+    accel: impl Fn(&Phi<T>, &Phi<T>) -> Result<Phi<T>, DynamicsError>,
+) -> Result<(Phi<T>, Phi<T>), DynamicsError> {
     let half = h * T::lit(0.5);
-    let k1w = forward_dynamics(model, phi, dphi, t_phi)?;
+    let k1w = accel(phi, dphi)?;
     let k1q = *dphi;
     let k2q = axpy(dphi, &k1w, half);
-    let k2w = forward_dynamics(model, &axpy(phi, &k1q, half), &k2q, t_phi)?;
+    let k2w = accel(&axpy(phi, &k1q, half), &k2q)?;
     let k3q = axpy(dphi, &k2w, half);
-    let k3w = forward_dynamics(model, &axpy(phi, &k2q, half), &k3q, t_phi)?;
+    let k3w = accel(&axpy(phi, &k2q, half), &k3q)?;
     let k4q = axpy(dphi, &k3w, h);
-    let k4w = forward_dynamics(model, &axpy(phi, &k3q, h), &k4q, t_phi)?;
+    let k4w = accel(&axpy(phi, &k3q, h), &k4q)?;
     let sixth = h / T::lit(6.0);
     let two = T::lit(2.0);
     let mut q = *phi;

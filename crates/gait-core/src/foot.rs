@@ -286,23 +286,8 @@ pub fn forward_dynamics<T: Real>(
     dphi: &Phi<T>,
     t_phi: &TPhi<T>,
 ) -> Result<Phi<T>, DynamicsError> {
-    if !phi
-        .iter()
-        .chain(dphi.iter())
-        .chain(t_phi.iter())
-        .all(|x| x.finite())
-    {
-        return Err(DynamicsError::NonFinite);
-    }
-    let t = terms(model, foot, phi, dphi);
-    let rhs = SVector::<T, LINKS>::from(*t_phi) - t.h_dphi - t.g;
-    let chol = t.d.cholesky().ok_or(DynamicsError::SingularMassMatrix)?;
-    let acc = chol.solve(&rhs);
-    if acc.iter().all(|x| x.finite()) {
-        Ok(acc.into())
-    } else {
-        Err(DynamicsError::NonFinite)
-    }
+    dynamics::check_finite(phi, dphi, t_phi)?;
+    dynamics::accelerations(&terms(model, foot, phi, dphi), t_phi)
 }
 
 /// [`dynamics::share_load`] with these feet: the second foot's force also
@@ -421,32 +406,9 @@ pub fn rk4_step<T: Real>(
     t_phi: &TPhi<T>,
     h: T,
 ) -> Result<(Phi<T>, Phi<T>), DynamicsError> {
-    let f = |q: &Phi<T>, w: &Phi<T>| forward_dynamics(model, foot, q, w, t_phi);
-    let half = h * T::lit(0.5);
-    let axpy = |a: &Phi<T>, b: &Phi<T>, s: T| -> Phi<T> {
-        let mut o = *a;
-        for (oi, &bi) in o.iter_mut().zip(b) {
-            *oi += s * bi;
-        }
-        o
-    };
-    let k1w = f(phi, dphi)?;
-    let k2q = axpy(dphi, &k1w, half);
-    let k2w = f(&axpy(phi, dphi, half), &k2q)?;
-    let k3q = axpy(dphi, &k2w, half);
-    let k3w = f(&axpy(phi, &k2q, half), &k3q)?;
-    let k4q = axpy(dphi, &k3w, h);
-    let k4w = f(&axpy(phi, &k3q, h), &k4q)?;
-    let sixth = h / T::lit(6.0);
-    let two = T::lit(2.0);
-    let mut q = *phi;
-    let mut w = *dphi;
-    for ((((qi, &a), &b), &c), &d) in q.iter_mut().zip(dphi).zip(&k2q).zip(&k3q).zip(&k4q) {
-        *qi += sixth * (a + two * b + two * c + d);
-    }
-    for ((((wi, &a), &b), &c), &d) in w.iter_mut().zip(&k1w).zip(&k2w).zip(&k3w).zip(&k4w) {
-        *wi += sixth * (a + two * b + two * c + d);
-    }
+    let (q, mut w) = dynamics::rk4_with(phi, dphi, h, |q, w| {
+        forward_dynamics(model, foot, q, w, t_phi)
+    })?;
     let (was, is) = (foot.on_toe(first(phi)), foot.on_toe(first(&q)));
     if was != is {
         w = contact_switch_velocities(model, foot, &q, &w, is)?;
