@@ -45,6 +45,16 @@ fn assert_alternating_landings(rig: &Rig<'_>, steps: usize, spacing: [f64; 2], s
     }
 }
 
+/// The supervisor never acted during the run and latched nothing.
+fn assert_no_supervisor_action(rig: &Rig<'_>) {
+    assert!(
+        rig.trace
+            .iter()
+            .all(|s| s.report.reaction == Reaction::None)
+    );
+    assert!(rig.faults().is_empty(), "{:?}", rig.faults());
+}
+
 /// Largest deviation of the given joints from their angles at tick `from`.
 fn drift_of(rig: &Rig<'_>, from: usize, joints: &[usize]) -> f64 {
     let start = rig.trace[from].state.joint_angles_rad;
@@ -325,12 +335,7 @@ fn walks_four_steps_with_the_legs_alternating_and_no_fault() {
     }
     // Nothing faulted, and the joints tracked the tables closely through
     // every swing.
-    assert!(
-        rig.trace
-            .iter()
-            .all(|s| s.report.reaction == Reaction::None)
-    );
-    assert!(rig.faults().is_empty());
+    assert_no_supervisor_action(rig);
     for s in &rig.trace {
         if matches!(s.report.phase, Phase::Swing { .. }) {
             for (r, m) in s.report.reference_rad.iter().zip(&s.report.joints_rad) {
@@ -357,12 +362,7 @@ fn climbs_four_stairs_with_the_legs_alternating_and_no_fault() {
     assert!(run.ended_by.is_none(), "{:?}", run.ended_by);
     let rig = &run.rig;
     assert_alternating_landings(rig, 4, [0.275, 0.0935], 0.0935);
-    assert!(
-        rig.trace
-            .iter()
-            .all(|s| s.report.reaction == Reaction::None)
-    );
-    assert!(rig.faults().is_empty());
+    assert_no_supervisor_action(rig);
 }
 
 #[test]
@@ -417,12 +417,7 @@ fn descends_four_stairs_on_the_toe_rocker_with_no_fault() {
         let ankle = before.state.points_m[0];
         assert!(ankle[1] - rig.plant.config().terrain.height_m(ankle[0] - 0.05) > 0.02);
     }
-    assert!(
-        rig.trace
-            .iter()
-            .all(|s| s.report.reaction == Reaction::None)
-    );
-    assert!(rig.faults().is_empty());
+    assert_no_supervisor_action(rig);
 }
 
 #[test]
@@ -498,12 +493,7 @@ fn walks_with_noisy_sensors_without_false_faults() {
         rig.plant.landings().len()
     );
     assert_alternating_landings(&rig, 4, [0.3, 0.0], 0.0);
-    assert!(
-        rig.trace
-            .iter()
-            .all(|s| s.report.reaction == Reaction::None)
-    );
-    assert!(rig.faults().is_empty());
+    assert_no_supervisor_action(&rig);
 }
 
 #[test]
