@@ -18,7 +18,7 @@ use embedded_hal::spi::{self, Operation, SpiDevice};
 use gait_control::drivers::as5048a::{Calibration, Direction};
 use gait_control::drivers::buttons::ActiveLevel;
 
-use crate::board_config::{self, BoardIo};
+use exogait_device::{BoardIo, DeviceConfig};
 
 /// AS5048A register addresses (datasheet, "Register Description").
 mod as5048a_reg {
@@ -289,7 +289,7 @@ impl InputPin for FakeInput {
     }
 }
 
-/// The rig's peripherals, typed as [`board_config::hardware`] takes them.
+/// The rig's peripherals, typed as [`crate::board_config::hardware`] takes them.
 pub type RigIo =
     BoardIo<FakeAs5048a, FakeMcp3208, FakePwm, FakeOutput, FakeOutput, FakeInput, FakeOutput>;
 
@@ -299,20 +299,29 @@ pub const STANDING_JOINTS_RAD: [f32; 4] = [0.05, 0.05, 0.05, 0.05];
 /// Ankle angles of the standing rig, rad (left, right).
 pub const STANDING_ANKLES_RAD: [f32; 2] = [0.0, 0.0];
 
-/// ADC counts of the standing rig: 1,500 counts on each foot (≈ 367 N with
-/// the board's foot calibration) and on each crutch (≈ 82 N), ≈ 900 N in
-/// all (93 kg); the unused inputs sit mid-range.
-pub const STANDING_ADC_COUNTS: [u16; 8] = [1_500, 1_500, 1_500, 1_500, 2_048, 2_048, 2_048, 2_048];
+/// Forces of the standing rig, N: 367 N on each foot and 82 N on each
+/// crutch, ≈ 900 N in all (93 kg).
+pub const STANDING_FORCES_N: [f32; 4] = [367.0, 367.0, 82.0, 82.0];
+
+/// ADC counts of the standing rig: [`STANDING_FORCES_N`] through the
+/// device's load cells; the unused inputs sit mid-range.
+#[must_use]
+pub fn standing_adc_counts(device: &DeviceConfig) -> [u16; 8] {
+    let [lf, rf, lc, rc] = STANDING_FORCES_N;
+    let foot = |n: f32| (device.foot_sensor.counts(n) + 0.5) as u16;
+    let crutch = |n: f32| (device.crutch_sensor.counts(n) + 0.5) as u16;
+    [foot(lf), foot(rf), crutch(lc), crutch(rc), 2_048, 2_048, 2_048, 2_048]
+}
 
 /// A pilot standing still on both feet, both crutches loaded, e-stop
-/// released, no button pressed, with the board's calibrations.
+/// released, no button pressed, with the device's calibrations.
 #[must_use]
-pub fn standing() -> RigIo {
-    let [c0, c1, c2, c3, c4, c5] = board_config::ENCODER_CALIBRATION;
+pub fn standing(device: &DeviceConfig) -> RigIo {
+    let [c0, c1, c2, c3, c4, c5] = device.encoders;
     let [j0, j1, j2, j3] = STANDING_JOINTS_RAD;
     let [a0, a1] = STANDING_ANKLES_RAD;
     let released = |active_high: bool| FakeInput { high: !active_high };
-    let button_active_high = matches!(board_config::BUTTONS.active, ActiveLevel::High);
+    let button_active_high = matches!(device.buttons.active, ActiveLevel::High);
     BoardIo {
         encoders: [
             FakeAs5048a::at_angle(c0, j0),
@@ -322,14 +331,14 @@ pub fn standing() -> RigIo {
             FakeAs5048a::at_angle(c4, a0),
             FakeAs5048a::at_angle(c5, a1),
         ],
-        adc: FakeMcp3208::new(STANDING_ADC_COUNTS),
+        adc: FakeMcp3208::new(standing_adc_counts(device)),
         pwm: [0; 4].map(|duty| FakePwm { duty }),
         dir: [0; 4].map(|_| FakeOutput { high: false }),
         // Enables start high so the boot-time disable is visible.
         enable: [0; 4].map(|_| FakeOutput { high: true }),
         mode: released(button_active_high),
         go: released(button_active_high),
-        e_stop: released(board_config::E_STOP_ACTIVE_HIGH),
+        e_stop: released(device.e_stop_active_high),
         gait_led: FakeOutput { high: false },
         fault_led: FakeOutput { high: false },
         buzzer: FakeOutput { high: false },

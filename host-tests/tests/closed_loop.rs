@@ -12,7 +12,7 @@
 use gait_control::faults::{FaultCode, Reaction};
 use gait_control::sequencer::Phase;
 use host_tests::{standing_rig, strong_pilot};
-use sim::closed_loop::{DRIVE_TORQUE_LIMIT_NM, Rig};
+use sim::closed_loop::Rig;
 use sim::mcp3208::ChannelFault;
 use sim::pilot::PilotConfig;
 use sim::wiring::INJECTED_SPI_ERROR;
@@ -220,6 +220,7 @@ fn commands_stay_within_limits_under_sensor_garbage() {
     // controller decides, every command it writes is finite and within the
     // joint's limit, and the plant never sees more than the drive allows.
     let mut rig = standing_rig(strong_pilot()).unwrap();
+    let drive_limit = rig.device().drives[0].peak_torque_nm();
     rig.run_until(600, |_| false).unwrap();
     let mut seed: u32 = 0x9E37_79B9;
     for k in 0..1500 {
@@ -242,13 +243,13 @@ fn commands_stay_within_limits_under_sensor_garbage() {
         };
         for &c in &s.report.command_nm {
             assert!(
-                c.is_finite() && c.abs() <= DRIVE_TORQUE_LIMIT_NM + 1e-3,
+                c.is_finite() && c.abs() <= drive_limit + 1e-3,
                 "command {c}"
             );
         }
         for t in rig.wiring.motor_torques_nm() {
             assert!(
-                t.abs() <= f64::from(DRIVE_TORQUE_LIMIT_NM) + 0.1,
+                t.abs() <= f64::from(drive_limit) + 0.1,
                 "bridge torque {t}"
             );
         }

@@ -420,17 +420,43 @@ fn qemu(tc: &Toolchain) -> Result {
         .arg("-kernel")
         .arg(&elf);
     let t = Instant::now();
-    let status = cmd
-        .status()
+    let out = cmd
+        .stderr(Stdio::inherit())
+        .output()
         .map_err(|e| format!("cannot start qemu-system-arm: {e}"))?;
     let took = t.elapsed();
+    let text = String::from_utf8_lossy(&out.stdout);
+    print!("{text}");
+    let status = out.status;
     if status.code() == Some(124) || took > Duration::from_secs(QEMU_TIMEOUT_S) {
         return Err(format!("QEMU timed out after {QEMU_TIMEOUT_S} s"));
     }
-    if status.success() {
+    if !status.success() {
+        return Err(format!("QEMU self-test failed ({status})"));
+    }
+    check_device_fingerprint(&text)
+}
+
+/// The firmware prints the CRC of the device configuration it was built
+/// with; the host's (which the simulator runs, `host-tests`'
+/// `the_simulator_runs_the_device_configuration`) must be the same number.
+fn check_device_fingerprint(qemu_stdout: &str) -> Result {
+    let host = exogait_device::DeviceConfig::exogait()
+        .map_err(|e| format!("device configuration refused on the host: {e:?}"))?
+        .fingerprint();
+    let target = qemu_stdout
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("device: fingerprint=0x"))
+        .and_then(|h| u32::from_str_radix(h.trim(), 16).ok())
+        .ok_or("the QEMU image printed no device fingerprint")?;
+    if target == host {
+        println!("device configuration: firmware and host agree (0x{host:08x})");
         Ok(())
     } else {
-        Err(format!("QEMU self-test failed ({status})"))
+        Err(format!(
+            "the firmware runs another device configuration (0x{target:08x}) than the host \
+             and the simulator (0x{host:08x})"
+        ))
     }
 }
 

@@ -72,7 +72,7 @@ pub struct Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT> {
 }
 
 /// The controller's configuration (validated once in [`Controller::new`]).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ControllerConfig {
     /// Tick period, s.
     pub dt_s: f32,
@@ -198,6 +198,11 @@ impl<'t> Controller<'t> {
             pending_reset: None,
             tick: 0,
         })
+    }
+
+    /// The configuration it was built with.
+    pub fn config(&self) -> &ControllerConfig {
+        &self.cfg
     }
 
     /// The sequencer (phase, reference).

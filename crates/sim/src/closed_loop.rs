@@ -14,42 +14,23 @@ use std::cell::Cell;
 use std::rc::Rc;
 
 use embedded_hal::digital::{self, InputPin, OutputPin};
-use gait_control::controller::{
-    Controller, ControllerConfig, FORCE_CAL_POINTS, Hardware, TickReport,
-};
-use gait_control::drivers::as5048a::{As5048a, Calibration, Direction};
-use gait_control::drivers::buttons::{Button, ButtonConfig};
-use gait_control::drivers::mcp3208::{Channel, ForceCalibration, ForceChannels, Mcp3208};
-use gait_control::drivers::motor::{Motor, MotorConfig};
-use gait_control::drivers::status::Indicator;
+use exogait_device::{BoardIo, DeviceConfig};
+use gait_control::controller::{Controller, Hardware, TickReport};
 use gait_control::faults::{FaultSet, Reaction};
-use gait_control::operator::{AllowedGaits, Gait, OperatorConfig};
-use gait_control::position_loop::JointGains;
-use gait_control::sequencer::{GaitTables, Phase, SequencerConfig};
-use gait_control::supervisor::{Supervisor, SupervisorConfig};
+use gait_control::operator::Gait;
+use gait_control::sequencer::{GaitTables, Phase};
 use gait_core::BodyModel;
 use gait_core::gait::StanceAnkleProfile;
+use gait_core::tables::GaitTable;
 
-use crate::as5048a::{EncoderMount, Mounting, SimAs5048a};
-use crate::mcp3208::{ForceSensorCal, SimMcp3208};
+use crate::as5048a::SimAs5048a;
+use crate::mcp3208::SimMcp3208;
 use crate::motor::{SimBridgePin, SimPwm};
 use crate::pilot::PilotTarget;
 use crate::pins::{PressedLevel, SimButton, SimEStop};
 use crate::plant::{Plant, PlantConfig, Side, SimError, TrueState};
 use crate::shared::SharedF64;
-use crate::wiring::{ENCODER_MOUNTS, FULL_SCALE_TORQUE_NM, Wiring};
-
-/// Ankle encoder mountings (left, right).
-pub const ANKLE_MOUNTS: [EncoderMount; 2] = [
-    EncoderMount {
-        zero_counts: 3000,
-        mounting: Mounting::Positive,
-    },
-    EncoderMount {
-        zero_counts: 12000,
-        mounting: Mounting::Negative,
-    },
-];
+use crate::wiring::{Wiring, mount_of};
 
 /// The buttons' and the e-stop's pins have one type on the board (erased
 /// GPIO); here one enum stands for both.
@@ -119,101 +100,6 @@ impl OutputPin for SimLed {
 pub type SimHardware =
     Hardware<SimAs5048a, SimMcp3208, SimPwm, SimBridgePin, SimBridgePin, SimInput, SimLed>;
 
-/// Torque limit of the simulated hip and knee drives, N·m. Sized for stair
-/// ascent at the paper's stair: with flat feet the 5-link model lifts the
-/// body on the stance knee alone once the trailing foot leaves the floor,
-/// 208 N·m static at the 43° start posture and about 320 N·m with the
-/// table's accelerations (at 200 N·m the first stair swing faults).
-/// Walking needs well under 200 N·m.
-pub const DRIVE_TORQUE_LIMIT_NM: f32 = 350.0;
-
-/// The device's tuning for the simulated exoskeleton (also the reference
-/// for the board's values): joint gains, sequencer thresholds, force
-/// calibrations matching [`ForceSensorCal`], the feed-forward model.
-pub fn controller_config(model: BodyModel<f32>) -> Result<ControllerConfig, RigError> {
-    let hip = JointGains {
-        kp_nm_per_rad: 2000.0,
-        ki_nm_per_rad_s: 1000.0,
-        kd_nm_s_per_rad: 80.0,
-        integral_limit_nm: 25.0,
-        torque_limit_nm: DRIVE_TORQUE_LIMIT_NM,
-        slew_nm_per_tick: 12.0,
-    };
-    let knee = JointGains {
-        kp_nm_per_rad: 2000.0,
-        ki_nm_per_rad_s: 1000.0,
-        kd_nm_s_per_rad: 60.0,
-        integral_limit_nm: 20.0,
-        torque_limit_nm: DRIVE_TORQUE_LIMIT_NM,
-        slew_nm_per_tick: 12.0,
-    };
-    Ok(ControllerConfig {
-        dt_s: 0.001,
-        gains: [hip, knee, hip, knee],
-        // The simulated pilot does not shift weight onto the front foot
-        // before a swing (no weight-shift model), so "weight on the stance
-        // foot" is a lower bar here than on a device.
-        sequencer: SequencerConfig {
-            crutch_ready_n: 30.0,
-            stance_foot_ready_n: 100.0,
-            ..SequencerConfig::DEFAULT
-        },
-        force_calibration: [
-            force_calibration(&ForceSensorCal::FOOT, FOOT_POINTS_N)?,
-            force_calibration(&ForceSensorCal::FOOT, FOOT_POINTS_N)?,
-            force_calibration(&ForceSensorCal::CRUTCH, CRUTCH_POINTS_N)?,
-            force_calibration(&ForceSensorCal::CRUTCH, CRUTCH_POINTS_N)?,
-        ],
-        e_stop_active_high: true,
-        rate_filter_hz: 40.0,
-        still_rate_rad_s: 0.2,
-        model,
-    })
-}
-
-/// A calibration table for a sensor, as a clinic would record it: four
-/// (counts, newtons) points spread over the sensor's 12-bit range.
-fn force_calibration(
-    sensor: &ForceSensorCal,
-    points_n: [f32; FORCE_CAL_POINTS],
-) -> Result<ForceCalibration<FORCE_CAL_POINTS>, RigError> {
-    let counts = points_n.map(|n| sensor.counts(f64::from(n)));
-    ForceCalibration::new(counts, points_n, 50, 4090, -50.0, 2500.0)
-        .map_err(|_| RigError::Config("force calibration refused"))
-}
-
-/// Calibration points of the foot sensors (to 2.2 kN) and the crutch
-/// sensors (to 550 N), within each sensor's 12-bit range.
-const FOOT_POINTS_N: [f32; FORCE_CAL_POINTS] = [0.0, 600.0, 1400.0, 2200.0];
-const CRUTCH_POINTS_N: [f32; FORCE_CAL_POINTS] = [0.0, 150.0, 350.0, 550.0];
-
-/// Motor drive settings matching the simulated bridges.
-pub fn motor_config() -> MotorConfig {
-    MotorConfig {
-        torque_limit_nm: DRIVE_TORQUE_LIMIT_NM,
-        full_scale_torque_nm: FULL_SCALE_TORQUE_NM as f32,
-        torque_constant_nm_per_a: 0.12,
-        gear_ratio: 100.0,
-        continuous_current_a: 8.0,
-        i2t_warning_a2s: 300.0,
-        i2t_fault_a2s: 600.0,
-        derated_limit_nm: 160.0,
-        slew_nm_per_tick: 12.0,
-        soft_start_ticks: 40,
-        dt_s: 0.001,
-    }
-}
-
-fn calibration(mount: &EncoderMount) -> Calibration {
-    Calibration {
-        zero_offset_counts: mount.zero_counts,
-        direction: match mount.mounting {
-            Mounting::Positive => Direction::Positive,
-            Mounting::Negative => Direction::Negative,
-        },
-    }
-}
-
 /// Why a rig could not be built.
 #[derive(Debug)]
 pub enum RigError {
@@ -221,6 +107,8 @@ pub enum RigError {
     Sim(SimError),
     /// A controller, supervisor or driver configuration was refused.
     Config(&'static str),
+    /// The device configuration was refused.
+    Device(exogait_device::DeviceError),
 }
 
 impl core::fmt::Display for RigError {
@@ -228,6 +116,7 @@ impl core::fmt::Display for RigError {
         match self {
             Self::Sim(e) => write!(f, "plant: {e:?}"),
             Self::Config(m) => write!(f, "configuration: {m}"),
+            Self::Device(e) => write!(f, "device configuration: {e:?}"),
         }
     }
 }
@@ -273,54 +162,105 @@ pub struct Rig<'t> {
     pub controller: Controller<'t>,
     /// Every tick so far.
     pub trace: Vec<Sample>,
+    device: DeviceConfig,
     support_ticks: u64,
     pilot: PilotBehaviour,
     transfer_from_phi1: Option<f64>,
-    transfer_s: f32,
 }
 
-/// Where the pilot's stance shank should be, given the controller's phase:
-/// the planned profile during a swing; during the weight transfer a smooth
-/// move from where the shank was at landing to the profile's start (as the
-/// controller's transfer plans it); otherwise held at the profile's start.
+/// Where the pilot's stance shank should be, given the controller's phase
+/// and the table it plays: the table's stance shank during a swing; during
+/// the weight transfer a smooth move from where the shank was at landing to
+/// the table's start (as the controller's transfer plans it); otherwise
+/// held at the table's start.
 fn pilot_target(
     b: &PilotBehaviour,
     phase: &Phase,
+    table: Option<&GaitTable<'_>>,
     transfer_from: Option<f64>,
     transfer_s: f32,
     now_s: f64,
 ) -> PilotTarget {
+    let start = |fallback: f64| table.map_or(fallback, |t| f64::from(t.first()[0]));
     match *b {
         PilotBehaviour::Fixed(t) => t,
-        PilotBehaviour::FollowsPlan(profile) => match *phase {
-            Phase::Swing { t_s, .. } => PilotTarget::Profile {
+        PilotBehaviour::FollowsPlan(profile) => follow(
+            phase,
+            profile.at(0.0),
+            transfer_from,
+            transfer_s,
+            |t_s| PilotTarget::Profile {
                 profile,
-                t0_s: now_s - f64::from(t_s),
+                t0_s: now_s - t_s,
             },
-            Phase::Transfer { t_s, .. } => {
-                let to = profile.at(0.0);
-                let from = transfer_from.unwrap_or(to);
-                let x = if transfer_s > 0.0 {
-                    f64::from(t_s / transfer_s).clamp(0.0, 1.0)
-                } else {
-                    1.0
-                };
-                let s = x * x * (3.0 - 2.0 * x);
-                PilotTarget::Hold {
-                    phi1_rad: from + s * (to - from),
+        ),
+        PilotBehaviour::FollowsTable => {
+            let to = start(0.0);
+            follow(phase, to, transfer_from, transfer_s, |t_s| match table {
+                Some(tb) => {
+                    let (phi1, rate) = table_stance_shank(tb, t_s);
+                    PilotTarget::Track {
+                        phi1_rad: phi1,
+                        rate_rad_s: rate,
+                        t0_s: now_s,
+                    }
                 }
+                None => PilotTarget::Hold { phi1_rad: to },
+            })
+        }
+    }
+}
+
+/// The stance shank a table plans at `t_s` and its rate (central
+/// differences over one table period, inside the table), rad and rad/s;
+/// held at the last sample once the table has ended.
+pub fn table_stance_shank(table: &GaitTable<'_>, t_s: f64) -> (f64, f64) {
+    let h = f64::from(table.period_s());
+    let end = f64::from(table.duration_s());
+    let at = |t: f64| f64::from(table.at_time(t as f32)[0]);
+    if t_s >= end {
+        return (at(end), 0.0);
+    }
+    let tc = t_s.max(h).min(end - h);
+    (at(t_s), (at(tc + h) - at(tc - h)) / (2.0 * h))
+}
+
+/// The pilot's target in each phase: `swing(t)` during a swing `t` seconds
+/// in; the smoothstep from the landing's shank to `start` during the
+/// transfer; `start` otherwise.
+fn follow(
+    phase: &Phase,
+    start: f64,
+    transfer_from: Option<f64>,
+    transfer_s: f32,
+    swing: impl FnOnce(f64) -> PilotTarget,
+) -> PilotTarget {
+    match *phase {
+        Phase::Swing { t_s, .. } => swing(f64::from(t_s)),
+        Phase::Transfer { t_s, .. } => {
+            let from = transfer_from.unwrap_or(start);
+            let x = if transfer_s > 0.0 {
+                f64::from(t_s / transfer_s).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            let s = x * x * (3.0 - 2.0 * x);
+            PilotTarget::Hold {
+                phi1_rad: from + s * (start - from),
             }
-            _ => PilotTarget::Hold {
-                phi1_rad: profile.at(0.0),
-            },
-        },
+        }
+        _ => PilotTarget::Hold { phi1_rad: start },
     }
 }
 
 /// How a rig starts.
 #[derive(Clone, Copy, Debug)]
 pub struct RigSetup {
-    /// The plant's parameters (terrain, pilot, model).
+    /// The device (the plant's body model and ankle springs, the drives,
+    /// the controller's configuration all come from it).
+    pub device: DeviceConfig,
+    /// The plant's parameters (terrain, pilot; its model and ankle spring
+    /// are replaced by the device's).
     pub plant: PlantConfig,
     /// Initial Φ (rad) and stance leg.
     pub phi: [f64; 5],
@@ -342,125 +282,104 @@ pub struct RigSetup {
 pub enum PilotBehaviour {
     /// A fixed target for the whole run.
     Fixed(PilotTarget),
-    /// A pilot who has learnt the gait (the paper's pilots practised 25
-    /// cycles first): during each swing the stance shank follows the
-    /// profile the gait was planned with, timed from the swing's start as
-    /// the controller reports it; between swings the shank is held at the
+    /// A pilot who has learnt a logistic stance-shank profile: during each
+    /// swing the stance shank follows it, timed from the swing's start as
+    /// the controller reports it; between swings it is held at the
     /// profile's start angle.
     FollowsPlan(StanceAnkleProfile<f64>),
+    /// A pilot who has learnt the gait (the paper's pilots practised 25
+    /// cycles first): during each swing the stance shank follows the one
+    /// the table being played plans (its φ1), timed from the swing's start;
+    /// between swings it is held at the table's start.
+    FollowsTable,
 }
 
-/// Table III with the heel-rocker ankle limits
-/// ([`gait_core::JointLimits::paper_with_heel_rocker`]): the plant's ankle
-/// stop and the supervisor's ankle envelope both use them, as the board does.
+/// The device's body model: Table III with its joint limits (the
+/// heel-rocker ankle, [`gait_core::JointLimits::paper_with_heel_rocker`]);
+/// the plant's ankle stop and the supervisor's ankle envelope both use them.
 pub fn heel_rocker_model() -> BodyModel<f64> {
-    let m = BodyModel::<f64>::paper_table_iii();
-    BodyModel::new(*m.links(), gait_core::JointLimits::paper_with_heel_rocker()).unwrap_or(m)
+    DeviceConfig::exogait().map_or_else(|_| BodyModel::paper_table_iii(), |d| d.body)
 }
 
 impl<'t> Rig<'t> {
-    /// Builds the plant, the peripherals, the drivers and the controller.
+    /// Builds the plant, the peripherals, the drivers and the controller,
+    /// all from `setup.device`.
     pub fn new(setup: &RigSetup, tables: GaitTables<'t>) -> Result<Self, RigError> {
+        let device = setup.device;
+        let plant_cfg = PlantConfig {
+            model: device.body,
+            ankle_stiffness_nm_per_rad: device.ankle_spring_nm_per_rad,
+            dt_s: f64::from(device.dt_s),
+            ..setup.plant
+        };
         let mut plant = Plant::with_posture(
-            setup.plant,
+            plant_cfg,
             setup.phi,
             [0.0; 5],
             setup.stance,
             setup.stance_foot_m,
         )?;
-        plant.set_pilot(pilot_target(&setup.pilot, &Phase::Standing, None, 0.0, 0.0));
-        let wiring = Wiring::new();
-        let joint_encoders: [SimAs5048a; 4] = [0, 1, 2, 3].map(|j| {
+        let wiring = Wiring::for_device(&device);
+        let joint_encoders: [SimAs5048a; 4] = std::array::from_fn(|j| {
             wiring
                 .encoder(j)
-                .unwrap_or_else(|| SimAs5048a::new(SharedF64::default(), ENCODER_MOUNTS[0]))
+                .unwrap_or_else(|| SimAs5048a::new(SharedF64::default(), wiring.encoder_mounts[0]))
         });
         let ankle_cells: [SharedF64; 2] = Default::default();
-        let ankle_encoders =
-            [0, 1].map(|a| SimAs5048a::new(ankle_cells[a].clone(), ANKLE_MOUNTS[a]));
+        let ankle_encoders: [SimAs5048a; 2] = std::array::from_fn(|a| {
+            SimAs5048a::new(ankle_cells[a].clone(), mount_of(&device.encoders[4 + a]))
+        });
         let adc = wiring.force_adc();
         let clock = wiring.clock.clone();
-        let mode = SimButton::new(clock.clone(), Vec::new(), PressedLevel::Low);
-        let go = SimButton::new(clock, Vec::new(), PressedLevel::Low);
-        let e_stop = SimEStop::new(PressedLevel::High);
-        let indicators: [SimLed; 3] = Default::default();
-
-        let mounts = [
-            ENCODER_MOUNTS[0],
-            ENCODER_MOUNTS[1],
-            ENCODER_MOUNTS[2],
-            ENCODER_MOUNTS[3],
-            ANKLE_MOUNTS[0],
-            ANKLE_MOUNTS[1],
-        ];
-        let devices = [
-            joint_encoders[0].clone(),
-            joint_encoders[1].clone(),
-            joint_encoders[2].clone(),
-            joint_encoders[3].clone(),
-            ankle_encoders[0].clone(),
-            ankle_encoders[1].clone(),
-        ];
-        let mut enc_iter = devices.into_iter().zip(mounts);
-        let encoders: [As5048a<SimAs5048a>; 6] = std::array::from_fn(|_| {
-            let (d, m) = enc_iter.next().unwrap_or_else(|| {
-                (
-                    SimAs5048a::new(SharedF64::default(), ENCODER_MOUNTS[0]),
-                    ENCODER_MOUNTS[0],
-                )
-            });
-            As5048a::new(d, calibration(&m))
-        });
-        let mut motors_vec = Vec::with_capacity(4);
-        for m in &wiring.motors {
-            let motor = Motor::new(m.pwm(), m.direction_pin(), m.enable_pin(), motor_config())
-                .map_err(|_| RigError::Config("motor configuration refused"))?;
-            motors_vec.push(motor);
-        }
-        let motors: [Motor<SimPwm, SimBridgePin, SimBridgePin>; 4] = motors_vec
-            .try_into()
-            .map_err(|_| RigError::Config("four motors"))?;
-        let hw = Hardware {
-            encoders,
-            adc: Mcp3208::new(adc.clone()),
-            force_channels: ForceChannels {
-                left_foot: Channel::Ch0,
-                right_foot: Channel::Ch1,
-                left_crutch: Channel::Ch2,
-                right_crutch: Channel::Ch3,
-            },
-            motors,
-            mode: Button::new(SimInput::Button(mode.clone()), ButtonConfig::DEFAULT_1KHZ),
-            go: Button::new(SimInput::Button(go.clone()), ButtonConfig::DEFAULT_1KHZ),
-            e_stop: SimInput::EStop(e_stop.clone()),
-            gait_led: Indicator::new(indicators[0].clone()),
-            fault_led: Indicator::new(indicators[1].clone()),
-            buzzer: Indicator::new(indicators[2].clone()),
+        let pressed = |active_high: bool| {
+            if active_high {
+                PressedLevel::High
+            } else {
+                PressedLevel::Low
+            }
         };
-        let model: BodyModel<f32> = setup.plant.model.cast();
-        let transfer_s = controller_config(model)?.sequencer.transfer_s;
-        let allowed_list: Vec<Gait> = std::iter::once(setup.gait)
-            .chain(
-                [Gait::Walk, Gait::StairUp, Gait::StairDown]
-                    .into_iter()
-                    .filter(|g| *g != setup.gait),
-            )
-            .filter(|g| tables.get(*g).is_some())
-            .collect();
-        let allowed = AllowedGaits::new(&allowed_list)
-            .map_err(|_| RigError::Config("no gait has a verified table"))?;
-        let supervisor = Supervisor::new(SupervisorConfig::default_for(model.limits()))
-            .map_err(|_| RigError::Config("supervisor configuration refused"))?;
-        let controller = Controller::new(
-            controller_config(model)?,
-            tables,
-            OperatorConfig {
-                allowed,
-                reset_hold_ticks: 3000,
-            },
-            supervisor,
-        )
-        .map_err(|_| RigError::Config("controller configuration refused"))?;
+        let button_level = pressed(matches!(
+            device.buttons.active,
+            gait_control::drivers::buttons::ActiveLevel::High
+        ));
+        let mode = SimButton::new(clock.clone(), Vec::new(), button_level);
+        let go = SimButton::new(clock, Vec::new(), button_level);
+        let e_stop = SimEStop::new(pressed(device.e_stop_active_high));
+        let indicators: [SimLed; 3] = Default::default();
+        let io = BoardIo {
+            encoders: [
+                joint_encoders[0].clone(),
+                joint_encoders[1].clone(),
+                joint_encoders[2].clone(),
+                joint_encoders[3].clone(),
+                ankle_encoders[0].clone(),
+                ankle_encoders[1].clone(),
+            ],
+            adc: adc.clone(),
+            pwm: std::array::from_fn(|j| wiring.motors[j].pwm()),
+            dir: std::array::from_fn(|j| wiring.motors[j].direction_pin()),
+            enable: std::array::from_fn(|j| wiring.motors[j].enable_pin()),
+            mode: SimInput::Button(mode.clone()),
+            go: SimInput::Button(go.clone()),
+            e_stop: SimInput::EStop(e_stop.clone()),
+            gait_led: indicators[0].clone(),
+            fault_led: indicators[1].clone(),
+            buzzer: indicators[2].clone(),
+        };
+        let hw = exogait_device::hardware(&device, io).map_err(RigError::Device)?;
+        let controller = exogait_device::build_controller(&device, tables, setup.gait)
+            .map_err(RigError::Device)?;
+        if controller.sequencer().tables().get(setup.gait).is_none() {
+            return Err(RigError::Config("no verified table for the gait"));
+        }
+        plant.set_pilot(pilot_target(
+            &setup.pilot,
+            &Phase::Standing,
+            tables.get(setup.gait),
+            None,
+            0.0,
+            0.0,
+        ));
         let rig = Self {
             plant,
             wiring,
@@ -475,10 +394,10 @@ impl<'t> Rig<'t> {
             hw,
             controller,
             trace: Vec::new(),
+            device,
             support_ticks: setup.support_ticks,
             pilot: setup.pilot,
             transfer_from_phi1: None,
-            transfer_s,
         };
         // Start the ankle readings at their true values (no lag to settle).
         let s = rig.plant.state();
@@ -487,6 +406,36 @@ impl<'t> Rig<'t> {
         }
         rig.publish();
         Ok(rig)
+    }
+
+    /// The device configuration the rig was built from.
+    pub fn device(&self) -> &DeviceConfig {
+        &self.device
+    }
+
+    /// The configuration the rig actually runs, read back from the live
+    /// controller, supervisor and drivers and from the simulated parts
+    /// (drives, encoder mountings, load cells): equal to [`Rig::device`]
+    /// when nothing in the simulator departs from the device.
+    pub fn running_config(&self) -> DeviceConfig {
+        let mut c = self.device;
+        c.controller = *self.controller.config();
+        c.supervisor = *self.controller.supervisor().config();
+        for (m, d) in c.motors.iter_mut().zip(&self.hw.motors) {
+            *m = *d.config();
+        }
+        for (e, h) in c.encoders.iter_mut().zip(&self.hw.encoders) {
+            *e = h.calibration();
+        }
+        c.body = self.plant.config().model;
+        c.ankle_spring_nm_per_rad = self.plant.config().ankle_stiffness_nm_per_rad;
+        c.force_channels = self.hw.force_channels;
+        for (d, m) in c.drives.iter_mut().zip(&self.wiring.motors) {
+            if let Some(spec) = m.drive_spec() {
+                *d = spec;
+            }
+        }
+        c
     }
 
     fn publish(&self) {
@@ -544,11 +493,14 @@ impl<'t> Rig<'t> {
             }
             _ => self.transfer_from_phi1 = None,
         }
+        let seq = self.controller.sequencer();
+        let table = seq.tables().get(seq.gait()).copied();
         let target = pilot_target(
             &self.pilot,
             &report.phase,
+            table.as_ref(),
             self.transfer_from_phi1,
-            self.transfer_s,
+            self.device.controller.sequencer.transfer_s,
             self.plant.time_s(),
         );
         if target != self.plant.pilot() {
@@ -558,6 +510,7 @@ impl<'t> Rig<'t> {
         if self.now() >= self.support_ticks {
             self.plant.step(torques)?;
         }
+        self.wiring.integrate_thermal(self.plant.config().dt_s);
         self.publish();
         self.wiring.clock.tick();
         self.trace.push(Sample {

@@ -1,13 +1,21 @@
 //! A simulated sign-magnitude H-bridge driving one joint motor: a PWM
 //! channel (magnitude), a direction pin and an enable pin.
 //!
-//! The joint torque it produces is
+//! The joint torque it is asked for is
 //! `enable · (direction high ? +1 : −1) · duty / max_duty · full_scale_torque_nm`
 //! (N·m at the joint, anatomical flexion positive), the meaning of
 //! gait-control's `MotorConfig::full_scale_torque_nm` and of its direction
-//! pin (high = positive torque). Electrical and mechanical dynamics of the
-//! motor (current loop, back-EMF, friction) are not modelled: the bridge is
-//! an ideal torque source, updated as soon as a pin or duty changes.
+//! pin (high = positive torque).
+//!
+//! With a drive ([`SimMotor::with_drive`], the device's
+//! `exogait_device::drive::DriveSpec`) the torque it puts out is what that
+//! drive can: at most the peak torque; while driving, no more than the
+//! supply can push through the winding against the back-EMF at the joint's
+//! speed (the torque–speed line); and, like the amplifier's own I²t
+//! protection, derated linearly from the device's warning level to its
+//! fault level, where the current is held at the derated limit. The current
+//! loop's own dynamics, friction and the rotor's reflected inertia are not
+//! modelled (docs/device.md).
 //!
 //! The three parts are separate values (the driver owns them) that share
 //! one bridge state; the harness keeps a [`SimMotor`] handle to read the
@@ -18,6 +26,8 @@ use std::rc::Rc;
 
 use embedded_hal::digital::{self, OutputPin};
 use embedded_hal::pwm::{self, SetDutyCycle};
+use exogait_device::drive::DriveSpec;
+use gait_control::drivers::motor::MotorConfig;
 
 /// A simulated PWM failure.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,15 +88,63 @@ struct Bridge {
     enable_errors: u32,
     reversals_under_duty: u32,
     writes: u64,
+    drive: Option<Drive>,
+}
+
+/// The drive behind a bridge and its thermal state.
+#[derive(Clone, Copy, Debug)]
+struct Drive {
+    spec: DriveSpec,
+    /// The device's I²t levels and derated limit (the motor driver's).
+    limits: MotorConfig,
+    /// ∫(I² − I_nom²) dt, clamped at 0, A²·s.
+    i2t_a2s: f64,
+    /// The joint's speed, rad/s (flexion positive).
+    joint_speed_rad_s: f64,
+}
+
+impl Drive {
+    /// The torque magnitude the drive allows now in direction `sign`, N·m.
+    fn limit_nm(&self, sign: f64) -> f64 {
+        let speed = f64::from(
+            self.spec
+                .available_torque_nm(self.joint_speed_rad_s as f32, sign as f32),
+        );
+        let l = &self.limits;
+        let (warn, fault) = (f64::from(l.i2t_warning_a2s), f64::from(l.i2t_fault_a2s));
+        let peak = f64::from(l.torque_limit_nm);
+        let derated = f64::from(l.derated_limit_nm);
+        let thermal = if self.i2t_a2s <= warn {
+            peak
+        } else if self.i2t_a2s >= fault {
+            derated
+        } else {
+            peak - (peak - derated) * (self.i2t_a2s - warn) / (fault - warn)
+        };
+        speed.min(thermal)
+    }
 }
 
 impl Bridge {
-    fn torque_nm(&self) -> f64 {
+    /// The torque the bridge is asked for, N·m.
+    fn commanded_nm(&self) -> f64 {
         if !self.enable_high {
             return 0.0;
         }
         let sign = if self.dir_high { 1.0 } else { -1.0 };
         sign * f64::from(self.duty) / f64::from(self.max_duty) * self.full_scale_torque_nm
+    }
+
+    /// The torque it puts out, N·m.
+    fn torque_nm(&self) -> f64 {
+        let asked = self.commanded_nm();
+        match &self.drive {
+            Some(d) => {
+                let limit = d.limit_nm(asked.signum());
+                asked.clamp(-limit, limit)
+            }
+            None => asked,
+        }
     }
 }
 
@@ -129,7 +187,54 @@ impl SimMotor {
             enable_errors: 0,
             reversals_under_duty: 0,
             writes: 0,
+            drive: None,
         })))
+    }
+
+    /// A bridge in front of `spec`, with the device's motor-driver settings
+    /// `limits` (full scale, I²t levels, derated limit).
+    pub fn with_drive(max_duty: u16, spec: DriveSpec, limits: MotorConfig) -> Self {
+        let m = Self::new(max_duty, f64::from(limits.full_scale_torque_nm));
+        m.0.borrow_mut().drive = Some(Drive {
+            spec,
+            limits,
+            i2t_a2s: 0.0,
+            joint_speed_rad_s: 0.0,
+        });
+        m
+    }
+
+    /// The joint's speed now, rad/s (the torque–speed line uses it).
+    pub fn set_joint_speed(&self, rad_s: f64) {
+        if let Some(d) = self.0.borrow_mut().drive.as_mut() {
+            d.joint_speed_rad_s = if rad_s.is_finite() { rad_s } else { 0.0 };
+        }
+    }
+
+    /// Advances the drive's winding model by `dt_s` at the present output.
+    pub fn integrate_thermal(&self, dt_s: f64) {
+        let out = self.torque_nm();
+        let mut b = self.0.borrow_mut();
+        if let Some(d) = b.drive.as_mut() {
+            let i = out / f64::from(d.spec.joint_torque_per_amp());
+            let nominal = f64::from(d.spec.motor.nominal_current_a);
+            d.i2t_a2s = (d.i2t_a2s + (i * i - nominal * nominal) * dt_s).max(0.0);
+        }
+    }
+
+    /// The winding model's ∫(I² − I_nom²) dt now, A²·s (0 without a drive).
+    pub fn i2t_a2s(&self) -> f64 {
+        self.0.borrow().drive.map_or(0.0, |d| d.i2t_a2s)
+    }
+
+    /// The drive behind the bridge, if it models one.
+    pub fn drive_spec(&self) -> Option<DriveSpec> {
+        self.0.borrow().drive.map(|d| d.spec)
+    }
+
+    /// The torque asked for (before the drive's limits), N·m.
+    pub fn commanded_nm(&self) -> f64 {
+        self.0.borrow().commanded_nm()
     }
 
     /// The PWM channel to give the driver.

@@ -30,6 +30,16 @@ pub enum PilotTarget {
         /// Simulation time at which the profile's t = 0, s.
         t0_s: f64,
     },
+    /// Track a moving target set each control tick: φ1 at `t0_s` and its
+    /// rate (extrapolated linearly within the tick).
+    Track {
+        /// φ1 at `t0_s`, rad.
+        phi1_rad: f64,
+        /// dφ1/dt, rad/s.
+        rate_rad_s: f64,
+        /// Simulation time of `phi1_rad`, s.
+        t0_s: f64,
+    },
     /// Track the profile with its time measured from the last leg swap (or
     /// from the start): each new stance restarts it.
     ProfileFromLanding {
@@ -89,6 +99,11 @@ impl PilotTarget {
             Self::Off => None,
             Self::Hold { phi1_rad } => Some((*phi1_rad, 0.0)),
             Self::Profile { profile, t0_s } => Some(eval(profile, t_s - t0_s)),
+            Self::Track {
+                phi1_rad,
+                rate_rad_s,
+                t0_s,
+            } => Some((phi1_rad + rate_rad_s * (t_s - t0_s), *rate_rad_s)),
             Self::ProfileFromLanding { profile } => Some(eval(profile, since_swap_s)),
         }
     }

@@ -2,13 +2,14 @@
 //! flash, standing in the walk table's start posture, with a pilot who knows
 //! the gait; and the main job, one walking step from GO to landing.
 
+use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
 use gait_control::sequencer::GaitTables;
 use gait_core::BodyModel;
 use gait_core::foot::StanceFoot;
-use gait_core::problem::{PeriodicStep, StepCase};
+use gait_core::tables::GaitTable;
 
-use crate::closed_loop::{PilotBehaviour, Rig, RigError, RigSetup, heel_rocker_model};
+use crate::closed_loop::{PilotBehaviour, Rig, RigError, RigSetup};
 use crate::pilot::PilotConfig;
 use crate::plant::{PlantConfig, Side, SimError};
 use crate::summary::{RunSummary, summarise};
@@ -40,77 +41,117 @@ pub fn walk_rig(pilot: PilotConfig, tables: GaitTables<'static>) -> Result<Rig<'
     gait_rig(Gait::Walk, pilot, tables)
 }
 
-/// The paper's staircase (rise 0.0935 m, tread 0.275 m, 12 steps), its first
-/// riser halfway between the feet of the stair-ascent start posture: the
-/// stance foot at x = 0 stands on the first step, the trailing foot on the
-/// floor 0.275 m behind.
-pub const PAPER_STAIRS: Terrain = Terrain::Stairs {
-    start_x_m: -0.1375,
-    rise_m: 0.0935,
-    tread_m: 0.275,
-    steps: 12,
-};
+/// Where a table puts the feet: the landing point of its swing ankle
+/// relative to the stance foot (flat-foot frame, m) and the world layout
+/// that goes with it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TableGeometry {
+    /// The swing ankle's landing point relative to the stance ankle's
+    /// flat-foot position, m: (tread or step length, rise).
+    pub landing_m: [f64; 2],
+    /// The ground for it: level, or a staircase up or down.
+    pub terrain: Terrain,
+    /// World position of the first stance ankle, m (on its tread).
+    pub stance_foot_m: [f64; 2],
+}
 
-/// The paper's staircase walked down: the top floor at height 0 up to the
-/// first (downward) riser, then 12 steps of 0.0935 m down. The stance foot
-/// at x = 0 stands on the first tread (y = −0.0935), the trailing foot on
-/// the top floor 0.275 m behind, on the ball of its foot (0.14 m ahead of
-/// its ankle, [`gait_core::foot::TOE_M`]). The riser at x = −0.12 puts that
-/// ball 1.5 cm inside the top floor's edge and the stance heel (5 cm
-/// behind its ankle) 7 cm onto its tread; the simulated steps are 8 mm short
-/// (docs/model.md), so 8 steps keep every heel on its tread.
-pub const PAPER_STAIRS_DOWN: Terrain = Terrain::Stairs {
-    start_x_m: -0.12,
-    rise_m: -0.0935,
-    tread_m: 0.275,
-    steps: 12,
-};
+/// A rise smaller than this is level walking, m.
+const LEVEL_RISE_M: f64 = 0.005;
+/// How far inside the top floor's edge a descent's trailing toe stands, m.
+const DESCENT_TOE_INSIDE_EDGE_M: f64 = 0.015;
+
+/// The geometry of `table` on `model`: the landing point from its last
+/// posture (the stance ankle may have rolled onto its toe, a descent); the
+/// staircase's first riser halfway between the feet for an ascent (the
+/// stance foot on the first step, the trailing foot on the floor), or just
+/// ahead of the trailing foot's toe for a descent (the stance foot on the
+/// first tread down, the trailing foot on the top floor); 12 steps.
+pub fn table_geometry(table: &GaitTable<'_>, model: &BodyModel<f64>) -> TableGeometry {
+    let foot = StanceFoot::for_model(model);
+    let last = table.last().map(f64::from);
+    let landing_m = foot.points(model, &last)[4];
+    let [tread, rise] = landing_m;
+    let (terrain, stance_y) = if rise.abs() < LEVEL_RISE_M {
+        (Terrain::Level, 0.0)
+    } else if rise > 0.0 {
+        (
+            Terrain::Stairs {
+                start_x_m: -0.5 * tread,
+                rise_m: rise,
+                tread_m: tread,
+                steps: 12,
+            },
+            rise,
+        )
+    } else {
+        (
+            Terrain::Stairs {
+                start_x_m: -tread + foot.toe()[0] + DESCENT_TOE_INSIDE_EDGE_M,
+                rise_m: rise,
+                tread_m: tread,
+                steps: 12,
+            },
+            rise,
+        )
+    };
+    TableGeometry {
+        landing_m,
+        terrain,
+        stance_foot_m: [0.0, stance_y],
+    }
+}
 
 /// The device standing in `gait`'s start posture, left leg in front as
-/// stance (on the first step for stair ascent, see [`PAPER_STAIRS`]; on the
-/// first tread down for descent, [`PAPER_STAIRS_DOWN`]), the
-/// pilot following the plan the table was optimised with, the plant held
-/// still for the first 60 ms while the drives soft-start (40 ms).
+/// stance (on the first step for stair ascent, on the first tread down for
+/// descent, [`table_geometry`]), the pilot following the table, the plant
+/// held still for the first 60 ms while the drives soft-start.
 pub fn gait_rig(
     gait: Gait,
     pilot: PilotConfig,
     tables: GaitTables<'static>,
 ) -> Result<Rig<'static>, RigError> {
-    let first = tables
+    let device = DeviceConfig::exogait().map_err(RigError::Device)?;
+    table_rig(&device, gait, pilot, tables)
+}
+
+/// [`gait_rig`] for any device configuration and tables.
+pub fn table_rig<'t>(
+    device: &DeviceConfig,
+    gait: Gait,
+    pilot: PilotConfig,
+    tables: GaitTables<'t>,
+) -> Result<Rig<'t>, RigError> {
+    let table = tables
         .get(gait)
-        .map(|t| t.first().map(f64::from))
+        .copied()
         .ok_or(RigError::Config("no verified table for the gait"))?;
-    // The flash tables are optimised on these cases (gait-opt's tables):
-    // the pilot has learnt their stance-shank profiles.
-    let (step, terrain, foot_y) = match gait {
-        Gait::Walk => (PeriodicStep::walk(), Terrain::Level, 0.0),
-        Gait::StairUp => (PeriodicStep::stair_up(), PAPER_STAIRS, 0.0935),
-        Gait::StairDown => (PeriodicStep::stair_down(), PAPER_STAIRS_DOWN, -0.0935),
-    };
-    let case = StepCase::periodic(&step, &BodyModel::paper_table_iii())
-        .map_err(|_| RigError::Config("no periodic case for the gait"))?;
+    let geometry = table_geometry(&table, &device.body);
     let setup = RigSetup {
+        device: *device,
         plant: PlantConfig {
-            model: heel_rocker_model(),
             pilot,
-            terrain,
+            terrain: geometry.terrain,
             // After an impact the trailing foot lifts off by a centimetre or
             // two and hovers through the weight transfer; with the default
             // 1 cm its settling back onto a stair tread counted as a landing
             // and swapped the legs back at the start of the next swing.
-            // Swings clear 16 cm.
-            lift_clearance_m: 0.03,
+            lift_clearance_m: LIFT_CLEARANCE_M,
             ..PlantConfig::default()
         },
-        phi: first,
+        phi: table.first().map(f64::from),
         stance: Side::Left,
-        stance_foot_m: [0.0, foot_y],
-        pilot: PilotBehaviour::FollowsPlan(case.stance),
+        stance_foot_m: geometry.stance_foot_m,
+        pilot: PilotBehaviour::FollowsTable,
         gait,
         support_ticks: 60,
     };
     Rig::new(&setup, tables)
 }
+
+/// Height the swing ankle must rise before a landing counts in the rigs, m
+/// (gaits lift the foot 3–8 cm; the trailing foot hovers 1–2 cm after an
+/// impact).
+pub const LIFT_CLEARANCE_M: f64 = 0.025;
 
 /// When GO is pressed in [`walk_step`] (tick), and for how long.
 pub const GO_AT_TICK: u64 = 400;
@@ -118,9 +159,9 @@ pub const GO_AT_TICK: u64 = 400;
 pub const GO_TICKS: u64 = 1200;
 
 /// One closed-loop run and what it did.
-pub struct StepRun {
+pub struct StepRun<'t> {
     /// The rig, with its trace.
-    pub rig: Rig<'static>,
+    pub rig: Rig<'t>,
     /// The summary.
     pub summary: RunSummary,
     /// Why the simulation stopped early (the plant fell or blew up), if it
@@ -131,19 +172,19 @@ pub struct StepRun {
 /// The main job: GO and walking with the flash table until `steps`
 /// landings have happened and 1.5 s more (or a safe hold has lasted 1 s, or
 /// `max_s` in all).
-pub fn walk_step(max_s: f64) -> Result<StepRun, RigError> {
+pub fn walk_step(max_s: f64) -> Result<StepRun<'static>, RigError> {
     walk(max_s, 1)
 }
 
 /// See [`walk_step`]; `steps` landings.
-pub fn walk(max_s: f64, steps: usize) -> Result<StepRun, RigError> {
+pub fn walk(max_s: f64, steps: usize) -> Result<StepRun<'static>, RigError> {
     run_gait(Gait::Walk, max_s, steps)
 }
 
 /// `gait` from standing (see [`gait_rig`]): GO, then steps until `steps`
 /// landings have happened and 1.5 s more (or a safe hold has lasted 1 s, or
 /// `max_s` in all).
-pub fn run_gait(gait: Gait, max_s: f64, steps: usize) -> Result<StepRun, RigError> {
+pub fn run_gait(gait: Gait, max_s: f64, steps: usize) -> Result<StepRun<'static>, RigError> {
     run_gait_with(gait, max_s, steps, |_| {})
 }
 
@@ -154,15 +195,29 @@ pub fn run_gait_with(
     max_s: f64,
     steps: usize,
     prepare: impl FnOnce(&mut Rig<'static>),
-) -> Result<StepRun, RigError> {
-    let tables = flash_tables();
-    let planned_landing_x_m = tables.get(gait).map_or(0.0, |t| {
-        let m = heel_rocker_model();
-        let last = t.last().map(f64::from);
-        // The stance ankle may have rolled onto its toe (descent).
-        StanceFoot::for_model(&m).points(&m, &last)[4][0]
-    });
-    let mut rig = gait_rig(gait, strong_pilot(), tables)?;
+) -> Result<StepRun<'static>, RigError> {
+    let device = DeviceConfig::exogait().map_err(RigError::Device)?;
+    run_tables_with(&device, flash_tables(), gait, strong_pilot(), max_s, steps, prepare)
+}
+
+/// `gait` from `tables` on `device` with `pilot`, from standing (see
+/// [`table_rig`]): GO, then steps until `steps` landings have happened and
+/// 1.5 s more (or a safe hold has lasted 1 s, or `max_s` in all).
+pub fn run_tables_with<'t>(
+    device: &DeviceConfig,
+    tables: GaitTables<'t>,
+    gait: Gait,
+    pilot: PilotConfig,
+    max_s: f64,
+    steps: usize,
+    prepare: impl FnOnce(&mut Rig<'t>),
+) -> Result<StepRun<'t>, RigError> {
+    let table = tables
+        .get(gait)
+        .copied()
+        .ok_or(RigError::Config("no verified table for the gait"))?;
+    let planned_landing_x_m = table_geometry(&table, &device.body).landing_m[0];
+    let mut rig = table_rig(device, gait, pilot, tables)?;
     Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
     prepare(&mut rig);
     let max_ticks = (max_s * 1000.0) as u64;

@@ -8,6 +8,9 @@
 //! knee, right hip, right knee ([`crate::plant::joint`]).
 
 use embedded_hal::spi;
+use exogait_device::DeviceConfig;
+use exogait_device::sensors::LoadCellSpec;
+use gait_control::drivers::as5048a::{Calibration, Direction};
 
 use crate::as5048a::{EncoderMount, Mounting, SimAs5048a};
 use crate::mcp3208::{ForceSensorCal, SimMcp3208};
@@ -64,6 +67,32 @@ pub struct Wiring {
     pub motors: [SimMotor; 4],
     /// The tick counter.
     pub clock: SimClock,
+    /// How each joint encoder is mounted (joint order).
+    pub encoder_mounts: [EncoderMount; 4],
+    /// The sensors on ADC channels 0…3 (see [`channel`]).
+    pub force_sensors: [ForceSensorCal; 4],
+}
+
+/// The mounting a calibration sheet describes: the encoder reads
+/// `zero_offset_counts` at the joint's zero, turning the way `direction`
+/// says. Building the simulated device from its own calibration sheet
+/// makes the calibration exact, as on a freshly calibrated device.
+pub fn mount_of(cal: &Calibration) -> EncoderMount {
+    EncoderMount {
+        zero_counts: cal.zero_offset_counts,
+        mounting: match cal.direction {
+            Direction::Positive => Mounting::Positive,
+            Direction::Negative => Mounting::Negative,
+        },
+    }
+}
+
+/// A load cell's characteristic as the simulated ADC input.
+pub fn sensor_of(cell: &LoadCellSpec) -> ForceSensorCal {
+    ForceSensorCal {
+        offset_counts: f64::from(cell.zero_counts),
+        counts_per_n: f64::from(cell.counts_per_n),
+    }
 }
 
 impl Default for Wiring {
@@ -73,35 +102,63 @@ impl Default for Wiring {
 }
 
 impl Wiring {
-    /// Cells at zero, motors with [`MAX_DUTY`] and [`FULL_SCALE_TORQUE_NM`].
+    /// A bench harness: cells at zero, ideal torque-source bridges with
+    /// [`MAX_DUTY`] and [`FULL_SCALE_TORQUE_NM`], encoders mounted as
+    /// [`ENCODER_MOUNTS`], linear foot and crutch sensors
+    /// ([`ForceSensorCal::FOOT`], [`ForceSensorCal::CRUTCH`]). The
+    /// closed-loop rig uses [`Wiring::for_device`].
     pub fn new() -> Self {
         Self {
             joint_angles: Default::default(),
             forces: Default::default(),
             motors: std::array::from_fn(|_| SimMotor::new(MAX_DUTY, FULL_SCALE_TORQUE_NM)),
             clock: SimClock::new(),
+            encoder_mounts: ENCODER_MOUNTS,
+            force_sensors: [
+                ForceSensorCal::FOOT,
+                ForceSensorCal::FOOT,
+                ForceSensorCal::CRUTCH,
+                ForceSensorCal::CRUTCH,
+            ],
+        }
+    }
+
+    /// The device as shipped: its drives behind the bridges (peak torque,
+    /// torque–speed line, I²t derating), encoders mounted as its
+    /// calibration sheet says, its load cells on the ADC.
+    pub fn for_device(cfg: &DeviceConfig) -> Self {
+        let [e0, e1, e2, e3, ..] = cfg.encoders;
+        Self {
+            joint_angles: Default::default(),
+            forces: Default::default(),
+            motors: std::array::from_fn(|j| {
+                let (spec, limits) = (cfg.drives[j], cfg.motors[j]);
+                SimMotor::with_drive(MAX_DUTY, spec, limits)
+            }),
+            clock: SimClock::new(),
+            encoder_mounts: [e0, e1, e2, e3].map(|c| mount_of(&c)),
+            force_sensors: [
+                sensor_of(&cfg.foot_sensor),
+                sensor_of(&cfg.foot_sensor),
+                sensor_of(&cfg.crutch_sensor),
+                sensor_of(&cfg.crutch_sensor),
+            ],
         }
     }
 
     /// The encoder of joint `j` (order of [`crate::plant::joint`]), mounted
-    /// as [`ENCODER_MOUNTS`] says.
+    /// as [`Wiring::encoder_mounts`] says.
     pub fn encoder(&self, j: usize) -> Option<SimAs5048a> {
         let angle = self.joint_angles.get(j)?.clone();
-        let mount = *ENCODER_MOUNTS.get(j)?;
+        let mount = *self.encoder_mounts.get(j)?;
         Some(SimAs5048a::new(angle, mount))
     }
 
-    /// The force ADC with the four sensors connected (foot and crutch
-    /// calibrations of [`ForceSensorCal`]).
+    /// The force ADC with the four sensors connected
+    /// ([`Wiring::force_sensors`]).
     pub fn force_adc(&self) -> SimMcp3208 {
         let adc = SimMcp3208::new();
-        let cals = [
-            ForceSensorCal::FOOT,
-            ForceSensorCal::FOOT,
-            ForceSensorCal::CRUTCH,
-            ForceSensorCal::CRUTCH,
-        ];
-        for (ch, (cell, cal)) in self.forces.iter().zip(cals).enumerate() {
+        for (ch, (cell, cal)) in self.forces.iter().zip(self.force_sensors).enumerate() {
             adc.connect(ch, cell.clone(), cal);
         }
         adc
@@ -122,6 +179,9 @@ impl Wiring {
         for (cell, v) in self.forces.iter().zip(f) {
             cell.set(v);
         }
+        for (m, &w) in self.motors.iter().zip(&state.joint_rates_rad_s) {
+            m.set_joint_speed(w);
+        }
     }
 
     /// One control period of the plant: steps it under the bridges'
@@ -129,9 +189,17 @@ impl Wiring {
     /// clock. The controller's tick goes between two calls.
     pub fn step(&self, plant: &mut Plant) -> Result<Option<Landing>, SimError> {
         let landing = plant.step(self.motor_torques_nm())?;
+        self.integrate_thermal(plant.config().dt_s);
         self.publish(&plant.state());
         self.clock.tick();
         Ok(landing)
+    }
+
+    /// Advances every drive's winding model over one plant step.
+    pub fn integrate_thermal(&self, dt_s: f64) {
+        for m in &self.motors {
+            m.integrate_thermal(dt_s);
+        }
     }
 
     /// The torques the motor bridges produce now (input of

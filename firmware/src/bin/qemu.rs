@@ -209,6 +209,15 @@ fn bench(ctr: &mut InstrCounter) {
 /// Runs the board's controller on the standing rig: instructions per tick
 /// (average and worst) and a health check. Returns the number of failures.
 fn control_tick_bench(ctr: &mut InstrCounter) -> usize {
+    let device = match board_config::device() {
+        Ok(d) => d,
+        Err(e) => {
+            hprintln!("FAIL control: device configuration refused: {:?}", e);
+            return 1;
+        }
+    };
+    // xtask compares this with the host's (the simulator's) configuration.
+    hprintln!("device: fingerprint=0x{:08x}", device.fingerprint());
     let mut controller = match board_config::build_controller() {
         Ok(c) => c,
         Err(e) => {
@@ -216,7 +225,7 @@ fn control_tick_bench(ctr: &mut InstrCounter) -> usize {
             return 1;
         }
     };
-    let mut hw = match board_config::hardware(qemu_rig::standing()) {
+    let mut hw = match board_config::hardware(qemu_rig::standing(&device)) {
         Ok(h) => h,
         Err(e) => {
             hprintln!("FAIL control: hardware refused: {:?}", e);

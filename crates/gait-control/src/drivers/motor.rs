@@ -167,6 +167,11 @@ where
     DIR: OutputPin<Error = PinE>,
     EN: OutputPin<Error = PinE>,
 {
+    /// The configuration it limits with.
+    pub fn config(&self) -> &MotorConfig {
+        &self.cfg
+    }
+
     /// Takes the pins and checks the configuration. Reads the PWM's maximum
     /// duty once. Writes nothing: call [`Motor::disable`] first thing at
     /// boot (the board also holds enable low in hardware).

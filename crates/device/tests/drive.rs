@@ -1,0 +1,60 @@
+//! The joint-level figures derived from the parts' datasheets.
+#![allow(clippy::unwrap_used, clippy::indexing_slicing, missing_docs)]
+
+use exogait_device::DeviceConfig;
+use exogait_device::parts::{JOINT_DRIVE, JOINT_PEAK_TORQUE_NM};
+
+#[test]
+fn the_joint_drive_gives_150_nm_peak_and_its_torque_speed_line() {
+    let d = JOINT_DRIVE;
+    assert!((d.peak_torque_nm() - JOINT_PEAK_TORQUE_NM).abs() < 1e-3);
+    assert!(d.peak_torque_nm() <= 150.0 + 1e-3);
+    assert!(d.current_limit_a <= d.amplifier.peak_current_a);
+    // 5.39 A × 70.5 mN·m/A × 100 × 0.73.
+    assert!((d.continuous_torque_nm() - 27.74).abs() < 0.05, "{}", d.continuous_torque_nm());
+    // 135 rpm/V × 36 V / 100 = 48.6 rpm = 5.09 rad/s.
+    assert!((d.no_load_speed_rad_s() - 5.089).abs() < 0.01);
+    // Full torque at standstill and below the corner; none at no-load speed
+    // when driving; braking always has the peak.
+    let corner = d.full_torque_speed_rad_s();
+    assert!(corner > 3.0 && corner < d.no_load_speed_rad_s(), "{corner}");
+    assert!((d.available_torque_nm(0.0, 1.0) - 150.0).abs() < 1e-3);
+    assert!((d.available_torque_nm(0.99 * corner, 1.0) - 150.0).abs() < 1e-3);
+    assert!(d.available_torque_nm(d.no_load_speed_rad_s(), 1.0) < 1.0);
+    assert!((d.available_torque_nm(4.5, -1.0) - 150.0).abs() < 1e-3);
+    // The line between, from V = R I + k_e ω: at 4.5 rad/s driving,
+    // I = (36 − 0.0707 · 450) / 0.363.
+    let ke = 60.0 / (2.0 * std::f32::consts::PI * 135.0);
+    let i = (36.0 - ke * 450.0) / 0.363;
+    assert!((d.available_torque_nm(4.5, 1.0) - i * 0.0705 * 100.0 * 0.73).abs() < 0.05);
+}
+
+#[test]
+fn the_motor_driver_uses_the_drive_figures() {
+    let cfg = DeviceConfig::exogait().unwrap();
+    for m in cfg.motors {
+        m.validate().unwrap();
+        assert!((m.torque_limit_nm - JOINT_DRIVE.peak_torque_nm()).abs() < 1e-3);
+        assert!(m.derated_limit_nm > JOINT_DRIVE.continuous_torque_nm());
+        // The driver's current estimate at the peak is the current limit.
+        let current = m.torque_limit_nm / (m.gear_ratio * m.torque_constant_nm_per_a);
+        assert!((current - JOINT_DRIVE.current_limit_a).abs() < 1e-3);
+        assert!(m.i2t_warning_a2s < m.i2t_fault_a2s);
+    }
+    for g in cfg.controller.gains {
+        assert!(g.torque_limit_nm <= JOINT_DRIVE.peak_torque_nm() + 1e-3);
+    }
+}
+
+#[test]
+fn the_fingerprint_changes_with_any_value() {
+    let a = DeviceConfig::exogait().unwrap();
+    let b = DeviceConfig::exogait().unwrap();
+    assert_eq!(a.fingerprint(), b.fingerprint());
+    let mut c = a;
+    c.controller.gains[1].kd_nm_s_per_rad += 1e-3;
+    assert_ne!(a.fingerprint(), c.fingerprint());
+    let mut d = a;
+    d.supervisor.tracking_error_ticks += 1;
+    assert_ne!(a.fingerprint(), d.fingerprint());
+}
