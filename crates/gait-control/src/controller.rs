@@ -152,6 +152,8 @@ pub struct Controller<'t> {
     /// A clinician reset waiting for the supervisor to see cleared motor
     /// flags: (safe posture when asked, ticks still to wait).
     pending_reset: Option<(bool, u8)>,
+    /// Integral of the other foot's load error in double support, N.
+    other_foot_integral_n: f32,
     tick: u32,
 }
 
@@ -196,6 +198,7 @@ impl<'t> Controller<'t> {
             motors_enabled: false,
             primed: false,
             pending_reset: None,
+            other_foot_integral_n: 0.0,
             tick: 0,
         })
     }
@@ -322,19 +325,17 @@ impl<'t> Controller<'t> {
                 .unwrap_or(0.0),
             plan.stance,
         );
-        // What the other foot may carry: the whole body between steps
-        // (planned double support); at the start of a swing a share that
-        // falls to nothing over SWING_UNLOAD_S, as the foot is unloaded and
-        // lifts; then nothing. Not from the foot's sensor during a swing: a
-        // swing foot brushing the ground then switched the model's load on
-        // and off, and the feed-forward bounced the foot (with ±6 N of
-        // sensor noise the third step faulted). In a safe hold, what the
-        // sensor reads (NaN: nothing).
+        // What the other foot may carry: the share the plan gives it (the
+        // whole body between steps; along a swing what the table plans for
+        // its swing foot, so a table can shift the weight in double support
+        // before it lifts the foot). Not from the foot's sensor during a
+        // swing: a swing foot brushing the ground then switched the model's
+        // load on and off, and the feed-forward bounced the foot. In a safe
+        // hold, what the sensor reads (NaN: nothing).
         let weight = self.cfg.model.total_mass_kg() * GRAVITY_M_S2 as f32;
-        let other_load = match self.seq.phase() {
-            Phase::Standing | Phase::WaitingReady { .. } | Phase::Transfer { .. } => weight,
-            Phase::Swing { t_s, .. } => weight * (1.0 - t_s / SWING_UNLOAD_S).clamp(0.0, 1.0),
-            Phase::SafeHold { .. } => {
+        let other_load = match plan.other_foot_share {
+            Some(share) => weight * share.clamp(0.0, 1.0),
+            None => {
                 let other_foot = forces_n
                     .get(plan.stance.other().foot())
                     .copied()
@@ -346,18 +347,61 @@ impl<'t> Controller<'t> {
                 }
             }
         };
-        let feedforward = self.feedforward(
+        let planned = self.feedforward(
             &plan.angle_rad,
             plan.swing,
             plan.stance,
             stance_ankle,
             other_load,
         );
+        let mut feedforward = planned.torques_nm;
+        // The other foot's load in double support: measured against the
+        // plan, the difference pushed by the other leg (proportional and
+        // integral), so that the share the plan gives it is what it carries.
+        // Without it the share is a free internal force of the closed chain
+        // that the legs' position loops and the pilot settle between them.
+        let other_share = plan.other_foot_share.unwrap_or(0.0).clamp(0.0, 1.0);
+        let measured = forces_n
+            .get(plan.stance.other().foot())
+            .copied()
+            .unwrap_or(f32::NAN);
+        if other_share > 0.0 && measured.is_finite() {
+            let error = planned.other_foot_n - measured;
+            self.other_foot_integral_n = (self.other_foot_integral_n
+                + OTHER_FOOT_KI_PER_S * error * dt)
+                .clamp(-OTHER_FOOT_INTEGRAL_N, OTHER_FOOT_INTEGRAL_N);
+            let push_n = other_share * (OTHER_FOOT_KP * error + self.other_foot_integral_n);
+            for (i, (f, &per)) in feedforward
+                .iter_mut()
+                .zip(&planned.per_other_foot_newton)
+                .enumerate()
+            {
+                if plan.stance.other().has_joint(i) {
+                    *f += push_n * per;
+                }
+            }
+        } else {
+            self.other_foot_integral_n = 0.0;
+        }
         let mut command = [0.0f32; JOINTS];
         let mut saturated = [false; JOINTS];
+        // In double support the chain is closed: the stance leg and the
+        // pilot set the posture, and the other leg's torques set how much
+        // of the body its foot carries. Stiff position loops on both legs
+        // would fight each other through the ground and decide that share
+        // by their tracking errors; the other leg's loop is softened by the
+        // share its foot is planned to carry, so its feed-forward, which
+        // plans that share, is what it applies.
         for i in 0..JOINTS {
             let (Some(lp), Some(g)) = (self.loops.get_mut(i), self.cfg.gains.get(i)) else {
                 continue;
+            };
+            let softened;
+            let g = if plan.stance.other().has_joint(i) && other_share > 0.0 {
+                softened = g.with_stiffness(1.0 - DOUBLE_SUPPORT_COMPLIANCE * other_share);
+                &softened
+            } else {
+                g
             };
             let sp = Setpoint {
                 angle_rad: plan.angle_rad.get(i).copied().unwrap_or(f32::NAN),
@@ -656,7 +700,7 @@ impl<'t> Controller<'t> {
         stance: Side,
         stance_ankle: f32,
         other_load_n: f32,
-    ) -> [f32; JOINTS] {
+    ) -> FeedForward {
         let model = &self.cfg.model;
         // Past the table's end (waiting for the landing) the reference holds
         // the last posture: statics, not the table's final rates.
@@ -705,13 +749,39 @@ impl<'t> Controller<'t> {
         let single = joint_torques(&foot::inverse_dynamics(model, &foot, &phi, &dphi, &ddphi));
         let shared = foot::share_load(model, &foot, &phi, &single, other_load_n);
         let ff = joint_torques_from_theta_torques(&shared.torques, side);
-        ff.map(|v| if v.is_finite() { v } else { 0.0 })
+        let (_, per_newton_up) = foot::second_foot_torques(model, &foot, &phi);
+        let per_newton = joint_torques_from_theta_torques(&per_newton_up.map(|v| -v), side);
+        let clean = |v: f32| if v.is_finite() { v } else { 0.0 };
+        FeedForward {
+            torques_nm: ff.map(clean),
+            other_foot_n: clean(shared.reaction_n[1]),
+            per_other_foot_newton: per_newton.map(clean),
+        }
     }
 }
 
-/// Time over which the feed-forward moves the load off the swing foot at
-/// the start of a swing, s.
-const SWING_UNLOAD_S: f32 = 0.15;
+/// The model's torques along the reference and the load it plans for the
+/// other foot.
+struct FeedForward {
+    /// Joint torques, joint order, N·m.
+    torques_nm: [f32; JOINTS],
+    /// Vertical force the other foot is planned to carry, N.
+    other_foot_n: f32,
+    /// Joint torques (joint order) that one more newton pushed down by the
+    /// other foot takes, N·m/N.
+    per_other_foot_newton: [f32; JOINTS],
+}
+
+/// How much of its position feedback the other leg gives up while its foot
+/// is planned to carry the whole body (0: none, 1: all of it).
+const DOUBLE_SUPPORT_COMPLIANCE: f32 = 0.8;
+
+/// Proportional gain of the other foot's load loop (share of the error
+/// pushed at once).
+const OTHER_FOOT_KP: f32 = 0.5;
+/// Its integral gain, 1/s, and the integral's clamp, N.
+const OTHER_FOOT_KI_PER_S: f32 = 5.0;
+const OTHER_FOOT_INTEGRAL_N: f32 = 300.0;
 
 const BAD_ENCODER: EncoderSense = EncoderSense {
     status: EncoderStatus::BusError,

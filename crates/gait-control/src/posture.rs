@@ -40,6 +40,11 @@ impl Side {
         }
     }
 
+    /// Whether joint `j` (joint order) is on this leg.
+    pub fn has_joint(self, j: usize) -> bool {
+        j == self.hip() || j == self.hip() + 1
+    }
+
     /// Index of this side's ankle.
     pub fn ankle(self) -> usize {
         match self {

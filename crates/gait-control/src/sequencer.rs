@@ -182,6 +182,12 @@ pub struct Plan {
     pub swing: Option<(Gait, Side, f32)>,
     /// The stance leg now.
     pub stance: Side,
+    /// Share (0 … 1) of the body's weight the other foot may carry: all of
+    /// it between steps (both feet planned down), during a swing what the
+    /// table plans for its swing foot
+    /// ([`gait_core::playback::other_foot_share`]); `None` in a safe hold,
+    /// where only the foot's sensor can tell.
+    pub other_foot_share: Option<f32>,
 }
 
 /// Gait execution state.
@@ -203,6 +209,12 @@ pub struct Sequencer<'t> {
     /// [`Sequencer::with_model`]); without, it blends joint angles.
     model: Option<BodyModel<f32>>,
     transfer: Option<TransferPlan>,
+    /// The swing foot's toe at the start of the table being played (stance
+    /// foot's flat frame), m.
+    swing_start_m: [f32; 2],
+    /// When the table's swing foot was planned fully lifted in the present
+    /// swing, s (landing is looked for only after that).
+    lifted_at_s: Option<f32>,
 }
 
 /// A weight transfer in double support: both feet stay where they are, the
@@ -238,6 +250,8 @@ impl<'t> Sequencer<'t> {
             blend_to: posture,
             model: None,
             transfer: None,
+            swing_start_m: [0.0; 2],
+            lifted_at_s: None,
         }
     }
 
@@ -332,6 +346,27 @@ impl<'t> Sequencer<'t> {
             Some(joints)
         });
         planned.unwrap_or_else(|| self.blended(fraction))
+    }
+
+    /// The swing foot's toe, planned at table time `t_s` (stance foot's
+    /// flat frame), m; `None` without a model or table.
+    fn planned_swing_toe(&self, t_s: f32) -> Option<[f32; 2]> {
+        let model = self.model.as_ref()?;
+        let table = self.tables.get(self.gait)?;
+        let foot = gait_core::foot::StanceFoot::for_model(model);
+        Some(gait_core::playback::swing_toe(
+            model,
+            &foot,
+            &table.at_time(t_s),
+        ))
+    }
+
+    /// The other foot's share at table time `t_s` of the present swing (1
+    /// without a model: the foot is taken as down).
+    fn swing_share(&self, t_s: f32) -> f32 {
+        self.planned_swing_toe(t_s).map_or(1.0, |p| {
+            gait_core::playback::other_foot_share(p, self.swing_start_m)
+        })
     }
 
     /// Current phase.
@@ -469,6 +504,7 @@ impl<'t> Sequencer<'t> {
     ) -> Plan {
         let cfg = self.cfg;
         let mut swing = None;
+        let mut other_share = Some(1.0);
         let next_reference = match self.phase {
             Phase::Standing => self.blend_to,
             Phase::WaitingReady { stance } => {
@@ -478,6 +514,8 @@ impl<'t> Sequencer<'t> {
                     self.blend_to
                 } else if self.ready(sensed, stance) {
                     self.phase = Phase::Swing { stance, t_s: 0.0 };
+                    self.swing_start_m = self.planned_swing_toe(0.0).unwrap_or([0.0; 2]);
+                    self.lifted_at_s = None;
                     events(SeqEvent::SwingStarted(self.gait, stance));
                     self.table_reference(stance, 0.0)
                 } else {
@@ -492,8 +530,17 @@ impl<'t> Sequencer<'t> {
                     .get(stance.other().foot())
                     .copied()
                     .unwrap_or(f32::NAN);
-                let landed = t >= cfg.landing_window_fraction * duration
-                    && swing_foot >= cfg.landing_contact_n;
+                let share = self.swing_share(t);
+                if self.lifted_at_s.is_none() && share <= 0.0 {
+                    self.lifted_at_s = Some(t);
+                }
+                // Contact counts as the landing only once the table has
+                // lifted the foot and played the given fraction of its time
+                // in the air (earlier contact is a scuff).
+                let landed = self.lifted_at_s.is_some_and(|lift| {
+                    t >= lift + cfg.landing_window_fraction * (duration - lift)
+                }) && swing_foot >= cfg.landing_contact_n;
+                other_share = Some(share);
                 let reference = self.table_reference(stance, t);
                 if landed {
                     events(SeqEvent::Landed);
@@ -552,6 +599,7 @@ impl<'t> Sequencer<'t> {
                 }
             }
             Phase::SafeHold { t_s } => {
+                other_share = None;
                 let t = t_s + dt_s;
                 let frac = if cfg.hold_ramp_s > 0.0 {
                     t / cfg.hold_ramp_s
@@ -576,6 +624,11 @@ impl<'t> Sequencer<'t> {
             rate_rad_s: rate,
             swing,
             stance: self.stance,
+            other_foot_share: if matches!(self.phase, Phase::SafeHold { .. }) {
+                None
+            } else {
+                other_share
+            },
         }
     }
 

@@ -150,11 +150,21 @@ pub fn double_support_statics<T: Real>(
     share_load(model, phi, &single, max_load_n)
 }
 
+/// How much more a newton-metre at the stance ankle counts than one at a
+/// motor when the load is shared between the feet: the ankle torque is the
+/// pilot's, carried by the shoulders through the crutches, while the hip and
+/// knee drives are built for it. With 25 (a factor 5 on the torque) the
+/// sharing leaves the pilot a fifth of what an even weighting would where
+/// the drives can take it; the drives' own limits are the table
+/// generator's business (docs/model.md, "Load sharing").
+pub const ANKLE_EFFORT_WEIGHT: f64 = 25.0;
+
 /// Given the joint torques `single` that a motion needs with the stance
 /// foot alone (T_Θ from [`inverse_dynamics`]), the ground force F on the
-/// second foot (at most `max_load_n` upwards) that minimises Σ T_θi² over
-/// all five joints — the motors' effort and the pilot's ankle torque alike —
-/// and the joint torques with it, T_Θ(F) = single − Aᵀ Jᵀ F.
+/// second foot (at most `max_load_n` upwards) that minimises the effort
+/// w T_θ1² + Σ_{i≥2} T_θi² (w = [`ANKLE_EFFORT_WEIGHT`]: the pilot's ankle
+/// torque counts more than the motors'), and the joint torques with it,
+/// T_Θ(F) = single − Aᵀ Jᵀ F.
 ///
 /// F is kept physical: pushing (F_y ≥ 0), at most `max_load_n`, inside the
 /// friction cone |F_x| ≤ μ F_y. When a bound is active the other component
@@ -170,18 +180,18 @@ pub fn share_load<T: Real>(
     share_load_with_base(model, phi, single, max_load_n, zero, zero)
 }
 
-/// [`share_load`] with the toe rocker ([`crate::foot::share_load`]): the
-/// stance ankle moves with φ1 at `base_d1` = ∂(ankle)/∂φ1, and the second
-/// foot's contact point moves with φ5 beyond its ankle at `swing_d5` (its
-/// toe, turning with the shank): the force then also acts on φ1 and φ5.
-pub fn share_load_with_base<T: Real>(
+/// The joint torques T_Θ that a unit ground force on the second foot takes
+/// away, for a force along x and along y: Aᵀ Jᵀ e_x and Aᵀ Jᵀ e_y, with J
+/// the Jacobian of the second foot's contact point (its ankle, moved by the
+/// stance ankle's `base_d1` = ∂ankle/∂φ1 and by `swing_d5` = ∂contact/∂φ5
+/// beyond the ankle). A force F there changes the joint torques a motion
+/// needs by −(Fx·mx + Fy·my).
+pub fn second_foot_torques<T: Real>(
     model: &BodyModel<T>,
     phi: &Phi<T>,
-    single: &[T; LINKS],
-    max_load_n: T,
     base_d1: [T; 2],
     swing_d5: [T; 2],
-) -> DoubleSupportStatics<T> {
+) -> ([T; LINKS], [T; LINKS]) {
     let l = model.lengths();
     // Jᵀ e_x and Jᵀ e_y: ∂p5/∂φ_i = l_i (cos φ_i, −sin φ_i) for the links
     // between the stance ankle and the swing ankle (not the torso).
@@ -207,11 +217,32 @@ pub fn share_load_with_base<T: Real>(
             *y += swing_d5[1];
         }
     }
-    let mx = joint_torques(&jx);
-    let my = joint_torques(&jy);
-    let dot =
-        |a: &[T; LINKS], b: &[T; LINKS]| a.iter().zip(b).fold(T::zero(), |s, (&u, &v)| s + u * v);
-    // Effort E(F) = |c − Fx mx − Fy my|²: a convex quadratic.
+    (joint_torques(&jx), joint_torques(&jy))
+}
+
+/// [`share_load`] with the toe rocker ([`crate::foot::share_load`]): the
+/// stance ankle moves with φ1 at `base_d1` = ∂(ankle)/∂φ1, and the second
+/// foot's contact point moves with φ5 beyond its ankle at `swing_d5` (its
+/// toe, turning with the shank): the force then also acts on φ1 and φ5.
+pub fn share_load_with_base<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    single: &[T; LINKS],
+    max_load_n: T,
+    base_d1: [T; 2],
+    swing_d5: [T; 2],
+) -> DoubleSupportStatics<T> {
+    let (mx, my) = second_foot_torques(model, phi, base_d1, swing_d5);
+    let w = T::lit(ANKLE_EFFORT_WEIGHT);
+    let dot = |a: &[T; LINKS], b: &[T; LINKS]| {
+        a.iter()
+            .zip(b)
+            .enumerate()
+            .fold(T::zero(), |s, (i, (&u, &v))| {
+                s + if i == 0 { w * u * v } else { u * v }
+            })
+    };
+    // Effort E(F) = |c − Fx mx − Fy my|²_W: a convex quadratic.
     let (a11, a12, a22) = (dot(&mx, &mx), dot(&mx, &my), dot(&my, &my));
     let (b1, b2) = (dot(single, &mx), dot(single, &my));
     let max = if max_load_n.finite() {

@@ -309,6 +309,19 @@ pub fn share_load<T: Real>(
     dynamics::share_load_with_base(model, phi, single, max_load_n, d1, [-a[0], -a[1]])
 }
 
+/// [`dynamics::second_foot_torques`] with these feet (see [`share_load`]).
+pub fn second_foot_torques<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    phi: &Phi<T>,
+) -> ([T; LINKS], [T; LINKS]) {
+    let d1 = foot.ankle(first(phi)).d1;
+    let [.., phi5] = *phi;
+    let lean = crate::kinematics::wrap_pi(phi5 - T::pi());
+    let a = foot.ankle(lean).d1;
+    dynamics::second_foot_torques(model, phi, d1, [-a[0], -a[1]])
+}
+
 /// Kinetic plus gravitational energy on this foot (heights from the flat
 /// foot's ankle), J.
 pub fn energy<T: Real>(

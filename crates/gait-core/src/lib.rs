@@ -16,6 +16,7 @@
 
 pub mod anthropometry;
 pub mod bezier;
+pub mod clinical;
 pub mod dynamics;
 pub mod flash_tables;
 pub mod foot;
@@ -23,6 +24,7 @@ pub mod gait;
 pub mod ik;
 pub mod kinematics;
 pub mod model;
+pub mod playback;
 pub mod problem;
 pub mod scalar;
 pub mod tables;

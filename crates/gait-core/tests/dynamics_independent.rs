@@ -338,7 +338,7 @@ fn double_support_statics_satisfy_virtual_work() {
 /// cap): no point of a fine grid over the region does better.
 #[test]
 fn shared_load_is_the_constrained_optimum() {
-    use gait_core::dynamics::{FOOT_FRICTION, share_load};
+    use gait_core::dynamics::{ANKLE_EFFORT_WEIGHT, FOOT_FRICTION, share_load};
     use gait_core::ik::{IkSolver, IkTarget};
     let m = BodyModel::<f64>::paper_table_iii();
     let ik = IkSolver::new(&m);
@@ -355,7 +355,10 @@ fn shared_load_is_the_constrained_optimum() {
     // A motion, not only statics: some accelerations.
     let ddphi = [0.5, -2.0, 3.0, 4.0, -5.0];
     let single = joint_torques(&inverse_dynamics(&m, &phi, &[0.0; LINKS], &ddphi));
-    let effort = |t: &[f64; LINKS]| t.iter().map(|v| v * v).sum::<f64>();
+    // The pilot's ankle counts ANKLE_EFFORT_WEIGHT times a motor.
+    let effort = |t: &[f64; LINKS]| {
+        ANKLE_EFFORT_WEIGHT * t[0] * t[0] + t[1..].iter().map(|v| v * v).sum::<f64>()
+    };
     let (ex, ey) = (
         share_probe(&m, &phi, 1.0, 0.0),
         share_probe(&m, &phi, 0.0, 1.0),

@@ -14,6 +14,7 @@
 //! See `docs/optimiser.md` for the method and the measured figures.
 
 pub mod baseline;
+pub mod clinical;
 pub mod encoding;
 pub mod phi_cost;
 #[cfg(feature = "plot")]

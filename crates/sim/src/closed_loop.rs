@@ -175,6 +175,7 @@ pub struct Rig<'t> {
 /// held at the table's start.
 fn pilot_target(
     b: &PilotBehaviour,
+    swapped: bool,
     phase: &Phase,
     table: Option<&GaitTable<'_>>,
     transfer_from: Option<f64>,
@@ -198,7 +199,7 @@ fn pilot_target(
             let to = start(0.0);
             follow(phase, to, transfer_from, transfer_s, |t_s| match table {
                 Some(tb) => {
-                    let (phi1, rate) = table_stance_shank(tb, t_s);
+                    let (phi1, rate) = table_stance_shank(tb, t_s, swapped);
                     PilotTarget::Track {
                         phi1_rad: phi1,
                         rate_rad_s: rate,
@@ -214,10 +215,20 @@ fn pilot_target(
 /// The stance shank a table plans at `t_s` and its rate (central
 /// differences over one table period, inside the table), rad and rad/s;
 /// held at the last sample once the table has ended.
-pub fn table_stance_shank(table: &GaitTable<'_>, t_s: f64) -> (f64, f64) {
+/// With `swapped` (the plant has already put the swing foot down and made
+/// it the stance foot, the controller not yet), the shank of that foot in
+/// the table's posture.
+pub fn table_stance_shank(table: &GaitTable<'_>, t_s: f64, swapped: bool) -> (f64, f64) {
     let h = f64::from(table.period_s());
     let end = f64::from(table.duration_s());
-    let at = |t: f64| f64::from(table.at_time(t as f32)[0]);
+    let at = |t: f64| {
+        let phi = table.at_time(t as f32).map(f64::from);
+        if swapped {
+            gait_core::kinematics::swap_legs(&phi)[0]
+        } else {
+            phi[0]
+        }
+    };
     if t_s >= end {
         return (at(end), 0.0);
     }
@@ -374,6 +385,7 @@ impl<'t> Rig<'t> {
         }
         plant.set_pilot(pilot_target(
             &setup.pilot,
+            false,
             &Phase::Standing,
             tables.get(setup.gait),
             None,
@@ -495,8 +507,18 @@ impl<'t> Rig<'t> {
         }
         let seq = self.controller.sequencer();
         let table = seq.tables().get(seq.gait()).copied();
+        // The plant may have put the swing foot down a few ticks before the
+        // controller counts the landing.
+        let swapped = match report.phase {
+            Phase::Swing { stance, .. } => {
+                let plant_left = self.plant.stance() == Side::Left;
+                plant_left != (stance == gait_control::posture::Side::Left)
+            }
+            _ => false,
+        };
         let target = pilot_target(
             &self.pilot,
+            swapped,
             &report.phase,
             table.as_ref(),
             self.transfer_from_phi1,

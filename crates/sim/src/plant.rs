@@ -352,6 +352,8 @@ pub struct Plant {
     last_swap_s: f64,
     pilot_target: PilotTarget,
     lifted: bool,
+    /// World x of the swing ankle at the last leg swap (or the start), m.
+    swing_start_x_m: f64,
     /// World x where the swing foot's current ground contact began, and
     /// whether that contact is on the toe (the anchor restarts when the
     /// contact point moves between the ankle and the toe).
@@ -400,6 +402,15 @@ fn role_angles(phi: &Phi<f64>, dphi: &Phi<f64>) -> ([f64; LINKS], [f64; LINKS]) 
     (q, [dphi[0], dt[1], -dt[2], dt[3], -dt[4]])
 }
 
+/// A swing foot that has moved this far along the ground from where it was
+/// at the last leg swap has been lifted, m.
+const MIN_STEP_TRAVEL_M: f64 = 0.1;
+
+/// A lifted swing foot whose ground contact carries this much has landed,
+/// N (well below the controller's 80 N landing threshold, so the plant's
+/// leg swap never lags the controller's).
+const LANDED_LOAD_N: f64 = 30.0;
+
 /// Standing upright, feet together: Φ = (0, 0, 0, π, π).
 pub const STANDING: Phi<f64> = [0.0, 0.0, 0.0, PI, PI];
 
@@ -439,6 +450,7 @@ impl Plant {
             last_swap_s: 0.0,
             pilot_target: PilotTarget::Hold { phi1_rad: phi[0] },
             lifted: false,
+            swing_start_x_m: 0.0,
             contact_anchor_x: None,
             contact_n: [0.0; 2],
             motor_nm: [0.0; 4],
@@ -448,6 +460,7 @@ impl Plant {
             landings: Vec::new(),
         };
         plant.lifted = plant.swing_height_above_ground_m() > cfg.lift_clearance_m;
+        plant.swing_start_x_m = plant.swing_foot_world()[0];
         plant.update_contact_anchor();
         plant.refresh_outputs()?;
         Ok(plant)
@@ -844,13 +857,23 @@ impl Plant {
     fn detect_landing(&mut self) -> Option<Landing> {
         let above = self.swing_height_above_ground_m();
         if !self.lifted {
-            if above > self.cfg.lift_clearance_m {
+            // Lifted: clear of the ground by the clearance, or carried
+            // forward (or back) a good part of a step — a low swing whose
+            // foot, still leaning on its toe's geometry, never shows the
+            // clearance; a foot hovering after an impact does neither.
+            let travel = (self.swing_foot_world()[0] - self.swing_start_x_m).abs();
+            if above > self.cfg.lift_clearance_m || travel >= MIN_STEP_TRAVEL_M {
                 self.lifted = true;
             }
             return None;
         }
         let v = self.swing_foot_velocity();
-        if above > self.cfg.landing_tolerance_m || v[1] >= 0.0 {
+        // Touching down, or already standing on it: a foot set down at rest
+        // (a table that lands with zero speed) may settle into the ground
+        // without ever moving down through the tolerance band.
+        let touching = above <= self.cfg.landing_tolerance_m && v[1] < 0.0;
+        let loaded = self.contact_n[1] >= LANDED_LOAD_N;
+        if !(touching || loaded) {
             return None;
         }
         let foot = self.swing_foot_world();
@@ -906,6 +929,7 @@ impl Plant {
         self.stance_foot_m = new_stance_foot;
         self.last_swap_s = self.time_s;
         self.lifted = false;
+        self.swing_start_x_m = self.swing_foot_world()[0];
         self.contact_anchor_x = None;
         self.update_contact_anchor();
         // A failure here would repeat at the next step's first stage and be

@@ -1,0 +1,77 @@
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, missing_docs)]
+use exogait_device::DeviceConfig;
+use gait_control::operator::Gait;
+use gait_control::sequencer::{GaitTables, Phase};
+use gait_core::tables::{GaitKind, GaitTable};
+use gait_opt::clinical::*;
+
+fn table_bytes(kind: GaitKind, phi: &[[f64; 5]]) -> Vec<u8> {
+    gait_opt::tables::table_image(kind, phi).unwrap()
+}
+
+fn play(device: &DeviceConfig, kind: GaitKind, image: &[u8], steps: usize) {
+    let table = GaitTable::parse(image).unwrap();
+    let gait = match kind { GaitKind::Walk => Gait::Walk, GaitKind::StairUp => Gait::StairUp, GaitKind::StairDown => Gait::StairDown };
+    let mut tables = GaitTables::default();
+    match gait { Gait::Walk => tables.walk = Some(table), Gait::StairUp => tables.stair_up = Some(table), Gait::StairDown => tables.stair_down = Some(table) }
+    let run = sim::scenario::run_tables_with(device, tables, gait, sim::scenario::strong_pilot(), 40.0, steps, |_| {}).unwrap();
+    let tr = &run.rig.trace;
+    let transfer = device.controller.sequencer.transfer_s as f64;
+    let lever = 0.45;
+    // per step windows
+    let mut starts = vec![];
+    for w in tr.windows(2) { if matches!(w[1].report.phase, Phase::Swing{..}) && !matches!(w[0].report.phase, Phase::Swing{..}) { starts.push(w[1].state.time_s); } }
+    let lands: Vec<f64> = run.rig.plant.landings().iter().map(|l| l.time_s).collect();
+    for (i, &t0) in starts.iter().enumerate() {
+        let Some(&t1) = lands.get(i) else { break };
+        let t1 = t1 + transfer;
+        let (mut f, mut bal, mut pk, mut sat) = (0.0, 0.0, 0.0f64, 0.0);
+        for s in tr.iter().filter(|s| s.state.time_s > t0 && s.state.time_s <= t1) {
+            f += (s.state.crutch_forces_n[0] + s.state.crutch_forces_n[1]) * 0.001;
+            bal += s.state.pilot_torque_nm.abs() / lever * 0.001;
+            pk = pk.max(s.state.crutch_forces_n[0]);
+            if s.state.pilot_torque_nm.abs() >= 299.9 { sat += 0.001; }
+        }
+        println!("  step {i}: F {f:.0} N·s balance {bal:.0} N·s peak {pk:.0} N sat {sat:.3} s ({:.2}..{:.2})", t0, t1);
+    }
+    println!("  {}", run.summary.to_string().lines().filter(|l| l.starts_with("landings") || l.starts_with("faults") || l.starts_with("steps") || l.starts_with("first") || l.starts_with("foot")).collect::<Vec<_>>().join("\n  "));
+    if let Some(e) = run.ended_by { println!("  ended by {e:?}"); }
+    let peak_cmd = tr.iter().flat_map(|s| s.report.command_nm).fold(0.0f32, |a, b| a.max(b.abs()));
+    let i2t = run.rig.wiring.motors.iter().map(|m| m.i2t_a2s()).fold(0.0, f64::max);
+    println!("  peak command {peak_cmd:.0} N·m, i2t max {i2t:.0} A²s");
+}
+
+fn main() {
+    let device = DeviceConfig::exogait().unwrap();
+    let which = std::env::args().nth(1).unwrap_or("walk".into());
+    let evals: usize = std::env::args().nth(2).map(|s| s.parse().unwrap()).unwrap_or(6000);
+    let kind = match which.as_str() { "walk" => GaitKind::Walk, "up" => GaitKind::StairUp, _ => GaitKind::StairDown };
+    let case = ClinicalCase::for_gait(kind, &device);
+    // human baseline at periodic geometry
+    let t = std::time::Instant::now();
+    let r = optimize_clinical(&case, &ClinicalConfig { seed: 1, max_evals: evals }, &mut |_, _| {}).unwrap();
+    println!("{which}: {:.1} s, {} evals", t.elapsed().as_secs_f64(), r.evaluations);
+    println!("{:#?}", r.evaluation);
+    println!("start {:?} lift {:.3}", r.step.start, r.step.lift_fraction);
+    let img = table_bytes(kind, &r.phi);
+    std::fs::write(format!("/tmp/clin_{which}.bin"), &img).unwrap();
+    play(&device, kind, &img, 4);
+    if std::env::var("DUMP").is_ok() { trace_dump(&device, kind, &img, &case); }
+}
+
+#[allow(dead_code)]
+pub fn trace_dump(device: &DeviceConfig, kind: GaitKind, image: &[u8], case: &ClinicalCase) {
+    let table = GaitTable::parse(image).unwrap();
+    let phi: Vec<[f64;5]> = (0..table.len()).map(|k| table.sample(k).unwrap().map(f64::from)).collect();
+    let mut pred = vec![];
+    gait_core::playback::for_each_sample::<f64, gait_core::playback::PlaybackError>(&case.model, &case.foot, 30.0, phi.len(), 0.01, |k| phi.get(k).copied(), |s| { pred.push(*s); Ok(()) }).unwrap();
+    let mut tables = GaitTables::default();
+    tables.walk = Some(table);
+    let _ = kind;
+    let run = sim::scenario::run_tables_with(device, tables, Gait::Walk, sim::scenario::strong_pilot(), 6.0, 1, |_| {}).unwrap();
+    for s in run.rig.trace.iter().step_by(50) {
+        let (tt, ph) = match s.report.phase { Phase::Swing { t_s, .. } => (t_s as f64, "swing"), Phase::Transfer{..} => (-1.0, "xfer"), Phase::WaitingReady{..} => (-1.0,"wait"), Phase::Standing => (-1.0,"stand"), _ => (-1.0,"hold") };
+        let p = if tt >= 0.0 { pred.get((tt / 0.01) as usize).map(|p| (p.pilot_nm, p.other_share, p.reaction_n[1], p.torques)) } else { None };
+        println!("{:.2} {ph:5} pilot {:7.1} pred {:?} feet {:?} ff {:?} cmd {:?} err {:?} phi1 {:.4} rfoot {:?}", s.state.time_s, s.state.pilot_torque_nm, p.map(|p| (p.0.round(), (p.1*100.0).round()/100.0, p.2.round(), p.3.map(|v| v.round()))), s.state.foot_forces_n.map(|v| v.round()), s.report.feedforward_nm.map(|v| v.round()), s.report.command_nm.map(|v| v.round()), (0..4).map(|j| ((s.state.joint_angles_rad[j] - s.report.reference_rad[j] as f64)*1000.0).round()).collect::<Vec<_>>(), s.state.phi[0], s.state.feet_m[1].map(|v| (v*1000.0).round()));
+    }
+}
