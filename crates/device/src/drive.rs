@@ -43,6 +43,8 @@ pub struct GearboxSpec {
     pub ratio: f32,
     /// Rated torque at 2,000 rpm input, N·m.
     pub rated_torque_nm: f32,
+    /// Limit for average torque, N·m.
+    pub average_torque_nm: f32,
     /// Limit for repeated peak torque, N·m.
     pub repeated_peak_torque_nm: f32,
     /// Limit for momentary torque, N·m.
@@ -100,9 +102,16 @@ impl DriveSpec {
             .min(self.gearbox.repeated_peak_torque_nm)
     }
 
-    /// Continuous joint torque, N·m: the motor's nominal current.
+    /// Continuous joint torque, N·m: the motor's nominal current, or the
+    /// gearbox's average-torque rating if that is lower.
     pub fn continuous_torque_nm(&self) -> f32 {
-        self.motor.nominal_current_a * self.joint_torque_per_amp()
+        (self.motor.nominal_current_a * self.joint_torque_per_amp())
+            .min(self.gearbox.average_torque_nm)
+    }
+
+    /// The motor current that gives the continuous joint torque, A.
+    pub fn continuous_current_a(&self) -> f32 {
+        self.continuous_torque_nm() / self.joint_torque_per_amp()
     }
 
     /// Back-EMF constant, V per (rad/s) of the motor.
@@ -141,13 +150,13 @@ impl DriveSpec {
         (current * self.joint_torque_per_amp()).min(peak)
     }
 
-    /// The winding's I²t budget, A²·s: τ_w · I_nom². A cold winding reaches
-    /// its limit temperature after about this much ∫(I² − I_nom²) dt under a
-    /// large current (first-order thermal model, I ≫ I_nom).
+    /// The drive's I²t budget, A²·s: τ_w · I_c², with I_c the continuous
+    /// current. A cold winding reaches its limit temperature after about
+    /// this much ∫(I² − I_c²) dt under a large current (first-order thermal
+    /// model, I ≫ I_c).
     pub fn i2t_budget_a2s(&self) -> f32 {
-        self.motor.winding_time_constant_s
-            * self.motor.nominal_current_a
-            * self.motor.nominal_current_a
+        let c = self.continuous_current_a();
+        self.motor.winding_time_constant_s * c * c
     }
 
     /// The motor driver's configuration (gait-control) for this drive at a
@@ -166,7 +175,7 @@ impl DriveSpec {
                 * 1e-3
                 * self.gearbox.efficiency,
             gear_ratio: self.gearbox.ratio,
-            continuous_current_a: self.motor.nominal_current_a,
+            continuous_current_a: self.continuous_current_a(),
             i2t_warning_a2s: self.i2t_warning_share * self.i2t_budget_a2s(),
             i2t_fault_a2s: self.i2t_fault_share * self.i2t_budget_a2s(),
             derated_limit_nm: (1.5 * self.continuous_torque_nm()).min(peak),

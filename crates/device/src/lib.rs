@@ -108,13 +108,13 @@ pub enum DeviceError {
 /// asks 10 N·m: the pilot's plan assumes the joints follow), Kd 80 for a
 /// damping ratio near 0.7 on a swinging leg (≈ 0.9 kg·m² about the hip),
 /// Ki 1,000 clamped at 25 N·m for model mismatch; the loop's limit is the
-/// drive's peak torque; slew 12 N·m per tick.
+/// drive's peak torque (filled in from the drive); slew 12 N·m per tick.
 const HIP_GAINS: JointGains = JointGains {
     kp_nm_per_rad: 2_000.0,
     ki_nm_per_rad_s: 1_000.0,
     kd_nm_s_per_rad: 80.0,
     integral_limit_nm: 25.0,
-    torque_limit_nm: parts::JOINT_PEAK_TORQUE_NM,
+    torque_limit_nm: 0.0, // the drive's peak torque, set in `exogait`
     slew_nm_per_tick: 12.0,
 };
 
@@ -125,15 +125,14 @@ const KNEE_GAINS: JointGains = JointGains {
     ki_nm_per_rad_s: 1_000.0,
     kd_nm_s_per_rad: 60.0,
     integral_limit_nm: 20.0,
-    torque_limit_nm: parts::JOINT_PEAK_TORQUE_NM,
+    torque_limit_nm: 0.0, // the drive's peak torque, set in `exogait`
     slew_nm_per_tick: 12.0,
 };
 
 /// Gait execution: 30 N on each crutch tip (planted, not only touching),
-/// 100 N on the stance foot, the default timings.
+/// the default timings and thresholds.
 const SEQUENCER: SequencerConfig = SequencerConfig {
     crutch_ready_n: 30.0,
-    stance_foot_ready_n: 100.0,
     ..SequencerConfig::DEFAULT
 };
 
@@ -163,7 +162,10 @@ impl DeviceConfig {
         let model32: BodyModel<f32> = body.cast();
         let controller = ControllerConfig {
             dt_s: DT_S,
-            gains: [HIP_GAINS, KNEE_GAINS, HIP_GAINS, KNEE_GAINS],
+            gains: [HIP_GAINS, KNEE_GAINS, HIP_GAINS, KNEE_GAINS].map(|g| JointGains {
+                torque_limit_nm: JOINT_DRIVE.peak_torque_nm(),
+                ..g
+            }),
             sequencer: SEQUENCER,
             force_calibration: [foot(0)?, foot(1)?, crutch(2)?, crutch(3)?],
             e_stop_active_high: true,

@@ -4,54 +4,60 @@
 use crate::drive::{AmplifierSpec, DriveSpec, GearboxSpec, MotorSpec};
 use crate::sensors::LoadCellSpec;
 
-/// maxon EC 90 flat ∅90 mm, brushless, 90 W, with Hall sensors, 24 V
-/// winding, part 323772 (maxon catalogue, values at nominal voltage).
-pub const EC90_FLAT_323772: MotorSpec = MotorSpec {
-    name: "maxon EC 90 flat 90 W, 24 V winding (323772)",
-    nominal_voltage_v: 24.0,
-    nominal_torque_mnm: 387.0,
-    nominal_current_a: 5.39,
-    torque_constant_mnm_per_a: 70.5,
-    speed_constant_rpm_per_v: 135.0,
-    terminal_resistance_ohm: 0.363,
-    rotor_inertia_gcm2: 3060.0,
-    winding_time_constant_s: 52.6,
+/// TQ RoboDrive ILM 85x26, 48 V winding (frameless, 10 pole pairs): the
+/// figures of TQ's product page as carried in IHMC's motor parameter file
+/// (`docs/device.md` has the sources and what could not be checked). The
+/// speed constant is 1/k_t; the winding's thermal time constant comes from
+/// IHMC's fitted thermal model (0.265 K/W × 121.6 J/K).
+pub const ILM85X26: MotorSpec = MotorSpec {
+    name: "TQ RoboDrive ILM 85x26, 48 V",
+    nominal_voltage_v: 48.0,
+    nominal_torque_mnm: 2_900.0,
+    nominal_current_a: 11.5,
+    torque_constant_mnm_per_a: 253.0,
+    speed_constant_rpm_per_v: 37.74,
+    terminal_resistance_ohm: 0.32,
+    rotor_inertia_gcm2: 1_150.0,
+    winding_time_constant_s: 32.0,
 };
 
-/// Harmonic Drive CSG-25-100-2A component set (efficiency: the CSD-25-100
-/// table at 500–1,000 rpm input, 73–78 %; 73 % taken).
-pub const CSG_25_100: GearboxSpec = GearboxSpec {
-    name: "Harmonic Drive CSG-25-100-2A",
-    ratio: 100.0,
-    rated_torque_nm: 87.0,
-    repeated_peak_torque_nm: 204.0,
-    momentary_torque_nm: 369.0,
-    efficiency: 0.73,
+/// Harmonic Drive CSG-25-80-2A component set (catalogue ratings at ratio
+/// 80; efficiency at 500–1,000 rpm input, as the CSD-25 tables give for
+/// these ratios).
+pub const CSG_25_80: GearboxSpec = GearboxSpec {
+    name: "Harmonic Drive CSG-25-80-2A",
+    ratio: 80.0,
+    rated_torque_nm: 82.0,
+    average_torque_nm: 113.0,
+    repeated_peak_torque_nm: 178.0,
+    momentary_torque_nm: 332.0,
+    efficiency: 0.75,
 };
 
-/// maxon ESCON 70/10 servo controller (current mode) on the device's 36 V
+/// maxon ESCON 70/10 servo controller (current mode) on the device's 48 V
 /// battery bus.
-pub const ESCON_70_10_AT_36V: AmplifierSpec = AmplifierSpec {
-    name: "maxon ESCON 70/10 at 36 V",
-    supply_v: 36.0,
+pub const ESCON_70_10_AT_48V: AmplifierSpec = AmplifierSpec {
+    name: "maxon ESCON 70/10 at 48 V",
+    supply_v: 48.0,
     continuous_current_a: 10.0,
     peak_current_a: 30.0,
 };
 
-/// Peak joint torque the device allows, N·m: the drive's current limit is
-/// set for it (the gearbox would take 204 N·m).
+/// The most a joint may be driven with, N·m (the product's ceiling; the
+/// drive below stays under it).
 pub const JOINT_PEAK_TORQUE_NM: f32 = 150.0;
 
-/// The hip and knee drive: EC 90 flat + CSG-25-100 + ESCON 70/10, current
-/// limit 29.1 A (150 N·m at the joint). Derived at the joint: 150 N·m peak,
-/// 27.7 N·m continuous, 5.1 rad/s no-load, full torque up to 3.6 rad/s.
-/// I²t: derating from 30 % of the winding's budget (τ_w·I_nom² ≈ 1,528
-/// A²·s), fault at 60 %.
+/// The hip and knee drive: ILM 85x26 + CSG-25-80 + ESCON 70/10 at 48 V.
+/// Derived at the joint: 150 N·m peak (the amplifier's current limit is
+/// set to it, 9.9 A; the gear would take 178 N·m), 113 N·m continuous (the
+/// gear's average-torque rating, below the motor's 175 N·m), 2.37 rad/s
+/// no-load, full torque to 2.2 rad/s. I²t: derating from 30 % of the
+/// winding's budget (τ_w · I_cont²), fault at 60 %.
 pub const JOINT_DRIVE: DriveSpec = DriveSpec {
-    motor: EC90_FLAT_323772,
-    gearbox: CSG_25_100,
-    amplifier: ESCON_70_10_AT_36V,
-    current_limit_a: JOINT_PEAK_TORQUE_NM / (70.5e-3 * 100.0 * 0.73),
+    motor: ILM85X26,
+    gearbox: CSG_25_80,
+    amplifier: ESCON_70_10_AT_48V,
+    current_limit_a: JOINT_PEAK_TORQUE_NM / (0.253 * 80.0 * 0.75),
     i2t_warning_share: 0.3,
     i2t_fault_share: 0.6,
 };

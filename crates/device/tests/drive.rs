@@ -5,28 +5,30 @@ use exogait_device::DeviceConfig;
 use exogait_device::parts::{JOINT_DRIVE, JOINT_PEAK_TORQUE_NM};
 
 #[test]
-fn the_joint_drive_gives_150_nm_peak_and_its_torque_speed_line() {
+fn the_joint_drive_peak_continuous_and_torque_speed_line() {
     let d = JOINT_DRIVE;
-    assert!((d.peak_torque_nm() - JOINT_PEAK_TORQUE_NM).abs() < 1e-3);
-    assert!(d.peak_torque_nm() <= 150.0 + 1e-3);
+    // The current limit gives the product's 150 N·m ceiling, below the
+    // gear's repeated-peak rating.
+    assert!((d.peak_torque_nm() - JOINT_PEAK_TORQUE_NM).abs() < 1e-3, "{}", d.peak_torque_nm());
+    assert!(d.peak_torque_nm() <= d.gearbox.repeated_peak_torque_nm);
     assert!(d.current_limit_a <= d.amplifier.peak_current_a);
-    // 5.39 A × 70.5 mN·m/A × 100 × 0.73.
-    assert!((d.continuous_torque_nm() - 27.74).abs() < 0.05, "{}", d.continuous_torque_nm());
-    // 135 rpm/V × 36 V / 100 = 48.6 rpm = 5.09 rad/s.
-    assert!((d.no_load_speed_rad_s() - 5.089).abs() < 0.01);
-    // Full torque at standstill and below the corner; none at no-load speed
-    // when driving; braking always has the peak.
+    // The gear's average-torque rating (the motor alone: 11.5 A × 0.253 ×
+    // 80 × 0.75 = 175 N·m).
+    assert!((d.continuous_torque_nm() - 113.0).abs() < 1e-3);
+    assert!(d.continuous_current_a() <= d.amplifier.continuous_current_a);
+    // 48 V / 0.253 V·s/rad / 80 = 2.37 rad/s.
+    assert!((d.no_load_speed_rad_s() - 2.371).abs() < 0.01, "{}", d.no_load_speed_rad_s());
     let corner = d.full_torque_speed_rad_s();
-    assert!(corner > 3.0 && corner < d.no_load_speed_rad_s(), "{corner}");
+    assert!(corner > 2.0 && corner < d.no_load_speed_rad_s(), "{corner}");
     assert!((d.available_torque_nm(0.0, 1.0) - 150.0).abs() < 1e-3);
     assert!((d.available_torque_nm(0.99 * corner, 1.0) - 150.0).abs() < 1e-3);
     assert!(d.available_torque_nm(d.no_load_speed_rad_s(), 1.0) < 1.0);
-    assert!((d.available_torque_nm(4.5, -1.0) - 150.0).abs() < 1e-3);
-    // The line between, from V = R I + k_e ω: at 4.5 rad/s driving,
-    // I = (36 − 0.0707 · 450) / 0.363.
-    let ke = 60.0 / (2.0 * std::f32::consts::PI * 135.0);
-    let i = (36.0 - ke * 450.0) / 0.363;
-    assert!((d.available_torque_nm(4.5, 1.0) - i * 0.0705 * 100.0 * 0.73).abs() < 0.05);
+    assert!((d.available_torque_nm(2.3, -1.0) - 150.0).abs() < 1e-3);
+    // The line between, from V = R I + k_e ω: at 2.3 rad/s driving,
+    // I = (48 − 0.253 · 184) / 0.32.
+    let ke = 60.0 / (2.0 * std::f32::consts::PI * 37.74);
+    let i = (48.0 - ke * 184.0) / 0.32;
+    assert!((d.available_torque_nm(2.3, 1.0) - i * 0.253 * 80.0 * 0.75).abs() < 0.1);
 }
 
 #[test]

@@ -48,6 +48,28 @@ fn main() {
     let kind = match which.as_str() { "walk" => GaitKind::Walk, "up" => GaitKind::StairUp, _ => GaitKind::StairDown };
     let case = ClinicalCase::for_gait(kind, &device);
     // human baseline at periodic geometry
+    if std::env::var("LEAN").is_ok() {
+        let h = gait_opt::human::human_gait(&case, &gait_opt::default_data_dir(), 0.0).unwrap();
+        for i in 0..13 {
+            let c = -0.3 + 0.075 * i as f64;
+            let phi: Vec<[f64;5]> = h.phi.iter().map(|p| { let mut q = *p; q[2] += c; q }).collect();
+            let ev = evaluate_phi(&case, &phi).unwrap();
+            println!("lean {c:.2}: balance {:.0} pilot {:.0} joints {:?} start share {:.2}", ev.balance_ns, ev.pilot_peak_nm, ev.joint_peak_nm.map(|v| v.round()), ev.start_trailing_share);
+        }
+        return;
+    }
+    if std::env::var("HUMAN").is_ok() {
+        let h = gait_opt::human::playable_human_gait(&case, &gait_opt::default_data_dir()).unwrap(); let lean = h.torso_lean_rad;
+        let ev = evaluate_phi(&case, &h.phi).unwrap();
+        println!("HUMAN {which}: lean {lean:.2} use {:.2} scale", ev.drive_use); println!("x {:.2} balance {:.0} pilot peak {:.0} ankle peak {:.0} joints {:?} speeds {:?} i2t {:?} clearance {:.3} sole {:.3} start share {:.2} pen {:.0}", h.amplitude_scale, ev.balance_ns, ev.pilot_peak_nm, ev.ankle_peak_nm, ev.joint_peak_nm.map(|v| v.round()), ev.joint_speed_peak_rad_s.map(|v| (v*100.0).round()/100.0), ev.i2t_ratio, ev.clearance_m, ev.sole_margin_m, ev.start_trailing_share, ev.penalty);
+        let mins = h.phi.iter().map(|p| gait_core::kinematics::anatomical_angles(&gait_core::kinematics::theta_from_phi(p))).fold([9.0f64;5], |m, a| [m[0].min(a[0]), m[1].min(a[1]), m[2].min(a[2]), m[3].min(a[3]), m[4].min(a[4])]);
+        println!("min anatomical (ankle, st knee, st hip, sw hip, sw knee) deg {:?}", mins.map(|v| (v.to_degrees()*10.0).round()/10.0));
+        let img = table_bytes(kind, &h.phi);
+        geom(&img);
+        play(&device, kind, &img, 4);
+        if std::env::var("DUMP").is_ok() { trace_dump(&device, kind, &img, &case); }
+        return;
+    }
     let t = std::time::Instant::now();
     let r = optimize_clinical(&case, &ClinicalConfig { seed: 1, max_evals: evals }, &mut |_, _| {}).unwrap();
     println!("{which}: {:.1} s, {} evals", t.elapsed().as_secs_f64(), r.evaluations);
@@ -72,6 +94,8 @@ pub fn trace_dump(device: &DeviceConfig, kind: GaitKind, image: &[u8], case: &Cl
     for s in run.rig.trace.iter().step_by(50) {
         let (tt, ph) = match s.report.phase { Phase::Swing { t_s, .. } => (t_s as f64, "swing"), Phase::Transfer{..} => (-1.0, "xfer"), Phase::WaitingReady{..} => (-1.0,"wait"), Phase::Standing => (-1.0,"stand"), _ => (-1.0,"hold") };
         let p = if tt >= 0.0 { pred.get((tt / 0.01) as usize).map(|p| (p.pilot_nm, p.other_share, p.reaction_n[1], p.torques)) } else { None };
-        println!("{:.2} {ph:5} pilot {:7.1} pred {:?} feet {:?} ff {:?} cmd {:?} err {:?} phi1 {:.4} rfoot {:?}", s.state.time_s, s.state.pilot_torque_nm, p.map(|p| (p.0.round(), (p.1*100.0).round()/100.0, p.2.round(), p.3.map(|v| v.round()))), s.state.foot_forces_n.map(|v| v.round()), s.report.feedforward_nm.map(|v| v.round()), s.report.command_nm.map(|v| v.round()), (0..4).map(|j| ((s.state.joint_angles_rad[j] - s.report.reference_rad[j] as f64)*1000.0).round()).collect::<Vec<_>>(), s.state.phi[0], s.state.feet_m[1].map(|v| (v*1000.0).round()));
+        println!("{:.2} {ph:5} pilot {:7.1} pred {:?} feet {:?} ff {:?} cmd {:?} err {:?} phi1 {:.4} rfoot {:?}", s.state.time_s, s.state.pilot_torque_nm, p.map(|p| (p.0.round(), (p.1*100.0).round()/100.0, p.2.round(), p.3.map(|v| v.round()))), s.state.foot_forces_n.map(|v| v.round()), s.report.feedforward_nm.map(|v| v.round()), s.report.command_nm.map(|v| v.round()), (0..4).map(|j| ((s.state.joint_angles_rad[j] - s.report.reference_rad[j] as f64)*1000.0).round()).collect::<Vec<_>>(), s.state.phi[0], (s.state.feet_m[1].map(|v| (v*1000.0).round()), s.state.swing_lifted, s.state.stance));
     }
 }
+#[allow(dead_code)]
+pub fn geom(img: &[u8]) { let t = GaitTable::parse(img).unwrap(); let d = DeviceConfig::exogait().unwrap(); println!("GEOM {:?}", sim::scenario::table_geometry(&t, &d.body)); }

@@ -29,8 +29,11 @@ use crate::posture::{JOINTS, Side, joints_from_phi};
 pub struct SequencerConfig {
     /// Each crutch must carry at least this before a swing starts, N.
     pub crutch_ready_n: f32,
-    /// The stance foot must carry at least this before a swing starts, N.
-    pub stance_foot_ready_n: f32,
+    /// The feet together must carry at least this before a swing starts,
+    /// N: the device stands on the ground. How the weight is split between
+    /// them is the table's plan (a step may start with the weight on the
+    /// trailing foot and shift it in double support before the lift-off).
+    pub feet_ready_n: f32,
     /// Swing-foot force that counts as ground contact, N.
     pub landing_contact_n: f32,
     /// Landing is accepted from this fraction of the table's duration on
@@ -62,7 +65,7 @@ impl SequencerConfig {
     /// the table's start, 0.3 s hold ramp.
     pub const DEFAULT: Self = Self {
         crutch_ready_n: 60.0,
-        stance_foot_ready_n: 300.0,
+        feet_ready_n: 400.0,
         landing_contact_n: 80.0,
         landing_window_fraction: 0.6,
         landing_timeout_s: 1.0,
@@ -635,10 +638,9 @@ impl<'t> Sequencer<'t> {
     fn ready(&self, sensed: &Sensed, stance: Side) -> bool {
         let c = self.cfg;
         let crutches = sensed.crutches_n.iter().all(|&f| f >= c.crutch_ready_n);
-        let foot = sensed
-            .feet_n
-            .get(stance.foot())
-            .is_some_and(|&f| f >= c.stance_foot_ready_n);
+        // A NaN (faulted sensor) makes the sum NaN: never ready.
+        let [left, right] = sensed.feet_n;
+        let foot = left + right >= c.feet_ready_n;
         let planned = self.tables.get(self.gait).map(|t| t.first()[0]);
         let ankle = match (planned, sensed.ankles_rad.get(stance.ankle())) {
             (Some(p), Some(&a)) => (a - p).abs() <= c.start_ankle_tolerance_rad,

@@ -35,27 +35,25 @@ use crate::scalar::Real;
 
 /// A rise smaller than this is level walking, m.
 pub const LEVEL_RISE_M: f64 = 0.005;
-/// How far inside the top floor's edge a descent's trailing toe stands, m.
-pub const DESCENT_TOE_INSIDE_EDGE_M: f64 = 0.015;
+/// How far behind the riser ahead of it the trailing foot's toe stands, m.
+pub const TOE_BEHIND_RISER_M: f64 = 0.015;
 /// The heel's length behind the ankle, m (the sole runs from here to the
 /// toe; Winter's proportions, as [`crate::foot::TOE_M`]).
 pub const HEEL_M: f64 = 0.05;
 
 /// Where the staircase a step of `spacing` (tread, rise) climbs or
 /// descends has its riser just behind the stance foot, as x from the
-/// stance ankle, m; `None` on level ground. Ascent: halfway between the
-/// feet (the stance foot on the first step, the trailing one on the floor).
-/// Descent: just ahead of the trailing foot's toe, which stands
-/// [`DESCENT_TOE_INSIDE_EDGE_M`] inside the top floor's edge. The simulator
-/// lays its staircases out by this rule.
+/// stance ankle, m; `None` on level ground. Just ahead of the trailing
+/// foot's toe, which stands [`TOE_BEHIND_RISER_M`] behind it (on the floor
+/// going up, on the top floor's edge going down); the stance foot stands on
+/// the tread beyond, its heel well on it. The simulator lays its staircases
+/// out by this rule.
 pub fn riser_behind_stance_x<T: Real>(spacing: [T; 2], foot: &StanceFoot<T>) -> Option<T> {
     let [tread, rise] = spacing;
     if rise.abs() < T::lit(LEVEL_RISE_M) {
         None
-    } else if rise > T::zero() {
-        Some(-tread * T::lit(0.5))
     } else {
-        Some(-tread + foot.toe_m + T::lit(DESCENT_TOE_INSIDE_EDGE_M))
+        Some(-tread + foot.toe_m + T::lit(TOE_BEHIND_RISER_M))
     }
 }
 

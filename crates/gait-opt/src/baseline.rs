@@ -47,6 +47,8 @@ pub enum Source {
     ReznickStairI20,
     /// Riener et al. 2002 stair ascent (digitised).
     RienerStairAscent,
+    /// Reznick et al. 2021 stair descent mean at 20° (primary for descent).
+    ReznickStairD20,
 }
 
 impl Source {
@@ -81,6 +83,20 @@ impl Source {
                 "stair_riener_cortino/riener_stair_ascent_1000pt.csv (Riener et al. 2002, digitised): \
                  heel strike 0 %, toe-off 63 %, pelvis taken upright"
             }
+            Self::ReznickStairD20 => {
+                "stair_reznick_cortino/reznick_stair_descent_mean_150pt.csv, 20° columns (Reznick et al. 2021): \
+                 thigh segment angle; file origin shifted: foot contact at 24 % of the file (just after \
+                 the knee's minimum, SOURCES.md), toe-off 62 % later"
+            }
+        }
+    }
+
+    /// The primary source for a gait table's movement.
+    pub fn for_gait(kind: gait_core::tables::GaitKind) -> Self {
+        match kind {
+            gait_core::tables::GaitKind::Walk => Self::Fukuchi2018Walk,
+            gait_core::tables::GaitKind::StairUp => Self::ReznickStairI20,
+            gait_core::tables::GaitKind::StairDown => Self::ReznickStairD20,
         }
     }
 }
@@ -321,6 +337,13 @@ fn load(source: Source, dir: &Path) -> Result<Curves, BaselineError> {
             )?;
             (v, 0.0, 63.0, None)
         }
+        Source::ReznickStairD20 => {
+            let v = take(
+                "stair_reznick_cortino/reznick_stair_descent_mean_150pt.csv",
+                &["pct_linspace", "thigh_d20_deg", "knee_d20_deg"],
+            )?;
+            (v, 24.0, 86.0, None)
+        }
     };
     let (mut v, hs, to, tilt) = c;
     let tilt_col = tilt.and_then(|i| v.get(i).cloned());
@@ -339,7 +362,7 @@ fn load(source: Source, dir: &Path) -> Result<Curves, BaselineError> {
     // so interpolation wraps cleanly; a 150-point linspace file (Reznick)
     // has no repeat and is re-labelled with a period of 150 samples.
     if pct.last().is_some_and(|&p| p >= 100.0 - 1e-9) {
-        if source == Source::ReznickStairI20 {
+        if matches!(source, Source::ReznickStairI20 | Source::ReznickStairD20) {
             let n = pct.len() as f64;
             pct = (0..pct.len()).map(|i| 100.0 * i as f64 / n).collect();
         } else {
@@ -375,23 +398,81 @@ fn phi_from_angles(a: [f64; 4]) -> Phi<f64> {
     [phi1, phi2, 0.0, phi4, phi4 + knee_sw]
 }
 
-/// Minimum-norm change of (φ2, φ4, φ5) that puts FK's p5 on `target`
-/// (Gauss–Newton with the 2×3 Jacobian's pseudo-inverse).
+/// The swing ankle of Φ in the stance foot's flat frame: FK, shifted by the
+/// stance ankle's roll onto its toe when the problem has a foot.
+fn swing_ankle(problem: &PaperProblem<f64>, phi: &Phi<f64>) -> [f64; 2] {
+    match &problem.case.foot {
+        Some(f) => gait_core::playback::swing_ankle(&problem.model, f, phi),
+        None => forward_kinematics(&problem.model, phi)[4],
+    }
+}
+
+/// Where the swing ankle of Φ must be for its foot to stand at the flat
+/// position `target`: `target` itself, or, for a trailing foot whose shank
+/// leans past the ankle's stop (a descent, the problem having a foot),
+/// raised onto its toe as the toe rocker puts it.
+fn standing_ankle(problem: &PaperProblem<f64>, phi: &Phi<f64>, target: [f64; 2]) -> [f64; 2] {
+    match &problem.case.foot {
+        Some(f) => {
+            let lean = gait_core::kinematics::wrap_pi(phi[4] - std::f64::consts::PI);
+            let a = f.ankle(lean).position_m;
+            [target[0] + a[0], target[1] + a[1]]
+        }
+        None => target,
+    }
+}
+
+/// Puts the first and last samples' swing ankle on the case's start and
+/// landing points (the feet standing there) by the weighted least change
+/// of (φ2, φ4, φ5) at each end, blended linearly in time between them;
+/// returns the two end changes.
+pub fn correct_ends(
+    problem: &PaperProblem<f64>,
+    phi: &mut [Phi<f64>],
+    thigh_weight: f64,
+) -> Result<[[f64; 3]; 2], BaselineError> {
+    let (Some(&first), Some(&last)) = (phi.first(), phi.last()) else {
+        return Err(BaselineError::Unreachable("no samples".into()));
+    };
+    let d0 = end_correction(problem, &first, problem.case.start_m, thigh_weight)
+        .ok_or_else(|| BaselineError::Unreachable("start point out of reach".into()))?;
+    let d1 = end_correction(problem, &last, problem.case.landing_m, thigh_weight)
+        .ok_or_else(|| BaselineError::Unreachable("landing point out of reach".into()))?;
+    let n = phi.len().saturating_sub(1).max(1);
+    for (k, p) in phi.iter_mut().enumerate() {
+        let w = k as f64 / n as f64;
+        for (j, &i) in [1usize, 3, 4].iter().enumerate() {
+            if let (Some(v), Some(a), Some(b)) = (p.get_mut(i), d0.get(j), d1.get(j)) {
+                *v += (1.0 - w) * a + w * b;
+            }
+        }
+    }
+    Ok([d0, d1])
+}
+
+/// Minimum-norm change of (φ2, φ4, φ5) that puts the swing ankle on
+/// `target` (Gauss–Newton with the 2×3 Jacobian's pseudo-inverse); with a
+/// foot, the target follows the trailing foot's roll onto its toe.
 fn end_correction(
     problem: &PaperProblem<f64>,
     phi: &Phi<f64>,
     target: [f64; 2],
+    thigh_weight: f64,
 ) -> Option<[f64; 3]> {
     let [_, l2, _, l4, l5] = problem.model.lengths();
+    // Weighted least change: a rad of φ2 costs `thigh_weight` rad² of the
+    // others (its Jacobian column and its step scaled by 1/√w).
+    let s2 = 1.0 / thigh_weight.max(1e-9).sqrt();
     let mut q = *phi;
-    for _ in 0..50 {
-        let p5 = forward_kinematics(&problem.model, &q)[4];
-        let e = [target[0] - p5[0], target[1] - p5[1]];
-        if e[0].hypot(e[1]) < 1e-13 {
+    for _ in 0..80 {
+        let p5 = swing_ankle(problem, &q);
+        let goal = standing_ankle(problem, &q, target);
+        let e = [goal[0] - p5[0], goal[1] - p5[1]];
+        if e[0].hypot(e[1]) < 1e-11 {
             return Some([q[1] - phi[1], q[3] - phi[3], q[4] - phi[4]]);
         }
         // ∂p5/∂φ for p = l (sin φ, cos φ): l (cos φ, −sin φ).
-        let cols = [(1, l2), (3, l4), (4, l5)].map(|(i, l)| {
+        let cols = [(1, l2 * s2), (3, l4), (4, l5)].map(|(i, l)| {
             let a = q.get(i).copied().unwrap_or(0.0);
             [l * a.cos(), -l * a.sin()]
         });
@@ -411,9 +492,9 @@ fn end_correction(
             (m[1][1] * e[0] - m[0][1] * e[1]) / det,
             (-m[1][0] * e[0] + m[0][0] * e[1]) / det,
         ];
-        for ((i, _), c) in [(1, l2), (3, l4), (4, l5)].iter().zip(&cols) {
+        for ((i, scale), c) in [(1, s2), (3, 1.0), (4, 1.0)].iter().zip(&cols) {
             if let Some(v) = q.get_mut(*i) {
-                *v += c[0] * y[0] + c[1] * y[1];
+                *v += scale * (c[0] * y[0] + c[1] * y[1]);
             }
         }
     }
@@ -447,18 +528,47 @@ pub fn baseline_for_problem(
     source: Source,
     dir: &Path,
 ) -> Result<Baseline, BaselineError> {
+    baseline_window(problem, source, dir, Correction::StanceThighAndSwingLeg)
+}
+
+/// How the end corrections share the change between the joints.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Correction {
+    /// The least change of (φ2, φ4, φ5) (the paper-mode baseline).
+    StanceThighAndSwingLeg,
+    /// Mostly the swing leg: a change of the stance thigh φ2 counts
+    /// [`SWING_LEG_THIGH_WEIGHT`] times more, so the stance leg keeps the
+    /// data's angles as far as the landing allows (the comparison's human
+    /// gait: moving φ2 freely bent the walking stance knee 5.4° past its
+    /// stop).
+    SwingLeg,
+}
+
+/// Weight of a stance-thigh change against a swing-leg change in
+/// [`Correction::SwingLeg`].
+pub const SWING_LEG_THIGH_WEIGHT: f64 = 100.0;
+
+/// The baseline of `source` at `problem`'s geometry with the end
+/// corrections on `correction`'s joints (see [`baseline_for_problem`] for
+/// the construction).
+pub fn baseline_window(
+    problem: &PaperProblem<f64>,
+    source: Source,
+    dir: &Path,
+    correction: Correction,
+) -> Result<Baseline, BaselineError> {
     let curves = load(source, dir)?;
     let problem = *problem;
     let n = problem.sampling.intervals;
     let ts = problem.case.step_time_s;
     let dt = problem.sampling.dt_s;
     let to = curves.toe_off_pct;
-    let swing_len = 100.0 - (to - curves.heel_strike_pct);
+    let (sw_start, sw_len) = (to, 100.0 - (to - curves.heel_strike_pct));
     // Raw angles at each sample, radians: [thigh_st, knee_st, thigh_sw, knee_sw].
     let raw: Vec<[f64; 4]> = (0..=n)
         .map(|k| {
             let frac = (k as f64 * dt / ts).min(1.0);
-            let sw = to + swing_len * frac;
+            let sw = sw_start + sw_len * frac;
             let st = sw - 50.0;
             [
                 curves.thigh.at(st),
@@ -488,10 +598,7 @@ pub fn baseline_for_problem(
     };
     let travel = |phi: &[Phi<f64>]| -> f64 {
         match (phi.first(), phi.last()) {
-            (Some(a), Some(b)) => {
-                forward_kinematics(&problem.model, b)[4][0]
-                    - forward_kinematics(&problem.model, a)[4][0]
-            }
+            (Some(a), Some(b)) => swing_ankle(&problem, b)[0] - swing_ankle(&problem, a)[0],
             _ => 0.0,
         }
     };
@@ -513,21 +620,11 @@ pub fn baseline_for_problem(
     }
     let s = 0.5 * (lo + hi);
     let mut phi = scaled(s);
-    let (Some(&first), Some(&last)) = (phi.first(), phi.last()) else {
-        return Err(BaselineError::Unreachable("no samples".into()));
+    let thigh_weight = match correction {
+        Correction::StanceThighAndSwingLeg => 1.0,
+        Correction::SwingLeg => SWING_LEG_THIGH_WEIGHT,
     };
-    let d0 = end_correction(&problem, &first, problem.case.start_m)
-        .ok_or_else(|| BaselineError::Unreachable("start point out of reach".into()))?;
-    let d1 = end_correction(&problem, &last, problem.case.landing_m)
-        .ok_or_else(|| BaselineError::Unreachable("landing point out of reach".into()))?;
-    for (k, p) in phi.iter_mut().enumerate() {
-        let w = k as f64 / n as f64;
-        for (j, &i) in [1usize, 3, 4].iter().enumerate() {
-            if let (Some(v), Some(a), Some(b)) = (p.get_mut(i), d0.get(j), d1.get(j)) {
-                *v += (1.0 - w) * a + w * b;
-            }
-        }
-    }
+    let [d0, d1] = correct_ends(&problem, &mut phi, thigh_weight)?;
     let cost = cost_from_phi(&problem, &phi).map_err(BaselineError::Cost)?;
     Ok(Baseline {
         source,

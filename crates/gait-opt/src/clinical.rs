@@ -39,7 +39,7 @@ use gait_core::clinical::{
 use gait_core::foot::StanceFoot;
 use gait_core::ik::{IkOptions, KneeRange};
 use gait_core::kinematics::{Phi, anatomical_angles, theta_from_phi};
-use gait_core::model::{GRAVITY_M_S2, JointLimits, LINKS};
+use gait_core::model::{GRAVITY_M_S2, LINKS};
 use gait_core::playback::{self, PlaybackError, PlaybackSample};
 use gait_core::tables::GaitKind;
 
@@ -61,9 +61,10 @@ pub struct ClinicalLimits {
     pub joint_speed_rad_s: f64,
     /// Largest hip and knee acceleration, rad/s².
     pub joint_accel_rad_s2: f64,
-    /// Joint stops (Table I with the heel rocker).
-    pub joint_range: JointLimits<f64>,
-    /// How far inside each hip and knee stop the table stays, rad.
+    /// The supervisor's envelope, (lowest, highest) anatomical angle, rad:
+    /// hip, knee, and the stance ankle's dorsiflexion.
+    pub envelope_rad: [(f64, f64); 3],
+    /// How far inside the envelope the table stays, rad.
     pub range_margin_rad: f64,
     /// The exoskeleton ankle's passive spring, N·m/rad.
     pub ankle_spring_nm_per_rad: f64,
@@ -131,7 +132,6 @@ impl ClinicalCase {
         let model = device.body;
         let drive = device.drives[1];
         let seq = device.controller.sequencer;
-        let weight = model.total_mass_kg() * GRAVITY_M_S2;
         Self {
             gait,
             spacing_m,
@@ -146,16 +146,21 @@ impl ClinicalCase {
                 drive,
                 torque_share: 0.75,
                 i2t_share: 0.85,
-                joint_speed_rad_s: 2.5,
+                joint_speed_rad_s: 1.8,
                 joint_accel_rad_s2: 20.0,
-                joint_range: *model.limits(),
-                range_margin_rad: 10f64.to_radians(),
+                envelope_rad: {
+                    let sv = &device.supervisor;
+                    let r = |a: gait_control::supervisor::AngleRange| {
+                        (f64::from(a.min_rad), f64::from(a.max_rad))
+                    };
+                    [r(sv.joint_range[0]), r(sv.joint_range[1]), r(sv.ankle_range[0])]
+                },
+                range_margin_rad: 5f64.to_radians(),
                 ankle_spring_nm_per_rad: device.ankle_spring_nm_per_rad,
                 transfer_s: f64::from(seq.transfer_s),
-                // Stance foot at least twice the gate's load, with 100 N
-                // on the crutches.
-                start_trailing_share: 1.0
-                    - (2.0 * f64::from(seq.stance_foot_ready_n) + 100.0) / weight,
+                // The stance foot carries at least a fifth of the body at
+                // the start: the step begins from a stable double support.
+                start_trailing_share: 0.8,
                 // The clinical band is 3–8 cm; the table aims inside it so
                 // that tracking lag does not take the foot out.
                 clearance_m: (0.04, 0.07),
@@ -304,7 +309,8 @@ pub fn evaluate_phi(case: &ClinicalCase, phi: &[Phi<f64>]) -> Result<Evaluation,
     // I² sums per role (stance knee, stance hip, swing hip, swing knee).
     let mut i_sq = [0.0f64; 4];
     let zero = theta_from_phi(&[0.0; LINKS]);
-    let range = role_ranges(&l.joint_range, l.range_margin_rad);
+    let range = role_ranges(&l.envelope_rad, l.range_margin_rad);
+    let ankle_low = l.envelope_rad[2].0 + l.range_margin_rad;
     let (lo_clear, hi_clear) = l.clearance_m;
     let nosing = nosing_crossed(case);
     let mut crossing: Option<f64> = None;
@@ -322,6 +328,10 @@ pub fn evaluate_phi(case: &ClinicalCase, phi: &[Phi<f64>]) -> Result<Evaluation,
             lifted = true;
         }
         let angles = anatomical_angles(&theta_from_phi(&s.phi));
+        // The stance ankle reads φ1 (the stop once the heel is up): only
+        // its plantarflexion side can leave the envelope.
+        let below = (ankle_low - s.phi[0]).max(0.0);
+        pen += W_RANGE * below * below;
         let th = theta_from_phi(&s.dphi);
         let thdd = theta_from_phi(&s.ddphi);
         for j in 0..4 {
@@ -407,11 +417,12 @@ fn sq_excess(x: f64, limit: f64) -> f64 {
 }
 
 /// Allowed anatomical range of stance knee, stance hip, swing hip, swing
-/// knee: the stops less the margin (never past a stop at 0°: a straight knee
-/// is allowed).
-fn role_ranges(l: &JointLimits<f64>, margin: f64) -> [(f64, f64); 4] {
-    let knee = (-(l.knee_extension_rad - margin).max(0.0), l.knee_flexion_rad - margin);
-    let hip = (-(l.hip_extension_rad - margin).max(0.0), l.hip_flexion_rad - margin);
+/// knee: the supervisor's envelope less the margin (a straight knee, at
+/// the envelope's small hyperextension allowance, stays allowed).
+fn role_ranges(envelope: &[(f64, f64); 3], margin: f64) -> [(f64, f64); 4] {
+    let [hip, knee, _] = *envelope;
+    let hip = (hip.0 + margin, hip.1 - margin);
+    let knee = (knee.0.min(0.0), knee.1 - margin);
     [knee, hip, hip, knee]
 }
 

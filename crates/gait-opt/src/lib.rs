@@ -16,6 +16,7 @@
 pub mod baseline;
 pub mod clinical;
 pub mod encoding;
+pub mod human;
 pub mod phi_cost;
 #[cfg(feature = "plot")]
 pub mod plot;

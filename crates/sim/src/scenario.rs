@@ -6,6 +6,7 @@ use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
 use gait_control::sequencer::GaitTables;
 use gait_core::BodyModel;
+use gait_core::clinical::riser_behind_stance_x;
 use gait_core::foot::StanceFoot;
 use gait_core::tables::GaitTable;
 
@@ -55,44 +56,28 @@ pub struct TableGeometry {
     pub stance_foot_m: [f64; 2],
 }
 
-/// A rise smaller than this is level walking, m.
-const LEVEL_RISE_M: f64 = 0.005;
-/// How far inside the top floor's edge a descent's trailing toe stands, m.
-const DESCENT_TOE_INSIDE_EDGE_M: f64 = 0.015;
-
 /// The geometry of `table` on `model`: the landing point from its last
-/// posture (the stance ankle may have rolled onto its toe, a descent); the
-/// staircase's first riser halfway between the feet for an ascent (the
-/// stance foot on the first step, the trailing foot on the floor), or just
-/// ahead of the trailing foot's toe for a descent (the stance foot on the
-/// first tread down, the trailing foot on the top floor); 12 steps.
+/// posture (the stance ankle may have rolled onto its toe); on stairs the
+/// riser just ahead of the trailing foot's toe
+/// ([`gait_core::clinical::riser_behind_stance_x`], the rule the table
+/// generator designs for), the stance foot on the first step up or down;
+/// 12 steps.
 pub fn table_geometry(table: &GaitTable<'_>, model: &BodyModel<f64>) -> TableGeometry {
     let foot = StanceFoot::for_model(model);
     let last = table.last().map(f64::from);
     let landing_m = foot.points(model, &last)[4];
     let [tread, rise] = landing_m;
-    let (terrain, stance_y) = if rise.abs() < LEVEL_RISE_M {
-        (Terrain::Level, 0.0)
-    } else if rise > 0.0 {
-        (
+    let (terrain, stance_y) = match riser_behind_stance_x(landing_m, &foot) {
+        None => (Terrain::Level, 0.0),
+        Some(riser) => (
             Terrain::Stairs {
-                start_x_m: -0.5 * tread,
+                start_x_m: riser,
                 rise_m: rise,
                 tread_m: tread,
                 steps: 12,
             },
             rise,
-        )
-    } else {
-        (
-            Terrain::Stairs {
-                start_x_m: -tread + foot.toe()[0] + DESCENT_TOE_INSIDE_EDGE_M,
-                rise_m: rise,
-                tread_m: tread,
-                steps: 12,
-            },
-            rise,
-        )
+        ),
     };
     TableGeometry {
         landing_m,
