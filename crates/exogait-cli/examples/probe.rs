@@ -87,10 +87,10 @@ pub fn trace_dump(device: &DeviceConfig, kind: GaitKind, image: &[u8], case: &Cl
     let phi: Vec<[f64;5]> = (0..table.len()).map(|k| table.sample(k).unwrap().map(f64::from)).collect();
     let mut pred = vec![];
     gait_core::playback::for_each_sample::<f64, gait_core::playback::PlaybackError>(&case.model, &case.foot, 30.0, phi.len(), 0.01, |k| phi.get(k).copied(), |s| { pred.push(*s); Ok(()) }).unwrap();
+    let gait = match kind { GaitKind::Walk => Gait::Walk, GaitKind::StairUp => Gait::StairUp, GaitKind::StairDown => Gait::StairDown };
     let mut tables = GaitTables::default();
-    tables.walk = Some(table);
-    let _ = kind;
-    let run = sim::scenario::run_tables_with(device, tables, Gait::Walk, sim::scenario::strong_pilot(), 6.0, 1, |_| {}).unwrap();
+    match gait { Gait::Walk => tables.walk = Some(table), Gait::StairUp => tables.stair_up = Some(table), Gait::StairDown => tables.stair_down = Some(table) }
+    let run = sim::scenario::run_tables_with(device, tables, gait, sim::scenario::strong_pilot(), 6.0, 1, |_| {}).unwrap();
     for s in run.rig.trace.iter().step_by(50) {
         let (tt, ph) = match s.report.phase { Phase::Swing { t_s, .. } => (t_s as f64, "swing"), Phase::Transfer{..} => (-1.0, "xfer"), Phase::WaitingReady{..} => (-1.0,"wait"), Phase::Standing => (-1.0,"stand"), _ => (-1.0,"hold") };
         let p = if tt >= 0.0 { pred.get((tt / 0.01) as usize).map(|p| (p.pilot_nm, p.other_share, p.reaction_n[1], p.torques)) } else { None };

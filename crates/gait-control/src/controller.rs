@@ -208,6 +208,16 @@ impl<'t> Controller<'t> {
         &self.cfg
     }
 
+    /// The gait the next start would play: the one being played while a
+    /// gait runs, else the clinician's selection.
+    pub fn planned_gait(&self) -> crate::operator::Gait {
+        if self.seq.walking() {
+            self.seq.gait()
+        } else {
+            self.operator.selected()
+        }
+    }
+
     /// The sequencer (phase, reference).
     pub fn sequencer(&self) -> &Sequencer<'t> {
         &self.seq
@@ -390,15 +400,21 @@ impl<'t> Controller<'t> {
         // of the body its foot carries. Stiff position loops on both legs
         // would fight each other through the ground and decide that share
         // by their tracking errors; the other leg's loop is softened by the
-        // share its foot is planned to carry, so its feed-forward, which
-        // plans that share, is what it applies.
+        // share of the body its foot is planned to carry (stiff again as the
+        // plan unloads it before a lift-off), so its feed-forward, which
+        // plans that load, is what it applies.
+        let carried = if other_share > 0.0 && weight > 0.0 {
+            (planned.other_foot_n / weight).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         for i in 0..JOINTS {
             let (Some(lp), Some(g)) = (self.loops.get_mut(i), self.cfg.gains.get(i)) else {
                 continue;
             };
             let softened;
-            let g = if plan.stance.other().has_joint(i) && other_share > 0.0 {
-                softened = g.with_stiffness(1.0 - DOUBLE_SUPPORT_COMPLIANCE * other_share);
+            let g = if plan.stance.other().has_joint(i) && carried > 0.0 {
+                softened = g.with_stiffness(1.0 - DOUBLE_SUPPORT_COMPLIANCE * carried);
                 &softened
             } else {
                 g

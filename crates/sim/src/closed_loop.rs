@@ -506,7 +506,7 @@ impl<'t> Rig<'t> {
             _ => self.transfer_from_phi1 = None,
         }
         let seq = self.controller.sequencer();
-        let table = seq.tables().get(seq.gait()).copied();
+        let table = seq.tables().get(self.controller.planned_gait()).copied();
         // The plant may have put the swing foot down a few ticks before the
         // controller counts the landing.
         let swapped = match report.phase {
