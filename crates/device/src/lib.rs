@@ -19,6 +19,7 @@
 //! torque limit) is not here: it is the pilot's, in `sim::pilot`.
 #![no_std]
 
+pub mod admission;
 pub mod drive;
 pub mod parts;
 pub mod sensors;

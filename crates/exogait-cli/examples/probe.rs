@@ -71,7 +71,7 @@ fn main() {
         return;
     }
     let t = std::time::Instant::now();
-    let r = optimize_clinical(&case, &ClinicalConfig { seed: 1, max_evals: evals }, &mut |_, _| {}).unwrap();
+    let r = optimize_clinical(&case, &ClinicalConfig { seed: std::env::var("SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(1), max_evals: evals }, &mut |_, _| {}).unwrap();
     println!("{which}: {:.1} s, {} evals", t.elapsed().as_secs_f64(), r.evaluations);
     println!("{:#?}", r.evaluation);
     println!("start {:?} lift {:.3}", r.step.start, r.step.lift_fraction);
@@ -90,11 +90,13 @@ pub fn trace_dump(device: &DeviceConfig, kind: GaitKind, image: &[u8], case: &Cl
     let gait = match kind { GaitKind::Walk => Gait::Walk, GaitKind::StairUp => Gait::StairUp, GaitKind::StairDown => Gait::StairDown };
     let mut tables = GaitTables::default();
     match gait { Gait::Walk => tables.walk = Some(table), Gait::StairUp => tables.stair_up = Some(table), Gait::StairDown => tables.stair_down = Some(table) }
-    let run = sim::scenario::run_tables_with(device, tables, gait, sim::scenario::strong_pilot(), 6.0, 1, |_| {}).unwrap();
-    for s in run.rig.trace.iter().step_by(50) {
+    let run = sim::scenario::run_tables_with(device, tables, gait, sim::scenario::strong_pilot(), 12.0, 3, |_| {}).unwrap();
+    let from: f64 = std::env::var("FROM").ok().and_then(|v| v.parse().ok()).unwrap_or(0.0);
+    let every: usize = std::env::var("EVERY").ok().and_then(|v| v.parse().ok()).unwrap_or(50);
+    for s in run.rig.trace.iter().filter(|s| s.state.time_s >= from).step_by(every) {
         let (tt, ph) = match s.report.phase { Phase::Swing { t_s, .. } => (t_s as f64, "swing"), Phase::Transfer{..} => (-1.0, "xfer"), Phase::WaitingReady{..} => (-1.0,"wait"), Phase::Standing => (-1.0,"stand"), _ => (-1.0,"hold") };
         let p = if tt >= 0.0 { pred.get((tt / 0.01) as usize).map(|p| (p.pilot_nm, p.other_share, p.reaction_n[1], p.torques)) } else { None };
-        println!("{:.2} {ph:5} pilot {:7.1} pred {:?} feet {:?} ff {:?} cmd {:?} err {:?} phi1 {:.4} rfoot {:?}", s.state.time_s, s.state.pilot_torque_nm, p.map(|p| (p.0.round(), (p.1*100.0).round()/100.0, p.2.round(), p.3.map(|v| v.round()))), s.state.foot_forces_n.map(|v| v.round()), s.report.feedforward_nm.map(|v| v.round()), s.report.command_nm.map(|v| v.round()), (0..4).map(|j| ((s.state.joint_angles_rad[j] - s.report.reference_rad[j] as f64)*1000.0).round()).collect::<Vec<_>>(), s.state.phi[0], (s.state.feet_m[1].map(|v| (v*1000.0).round()), s.state.swing_lifted, s.state.stance));
+        println!("{:.3} {ph:5} pilot {:7.1} pred {:?} feet {:?} ff {:?} cmd {:?} err {:?} phi1 {:.4} rfoot {:?}", s.state.time_s, s.state.pilot_torque_nm, p.map(|p| (p.0.round(), (p.1*100.0).round()/100.0, p.2.round(), p.3.map(|v| v.round()))), s.state.foot_forces_n.map(|v| v.round()), s.report.feedforward_nm.map(|v| v.round()), s.report.command_nm.map(|v| v.round()), (0..4).map(|j| ((s.state.joint_angles_rad[j] - s.report.reference_rad[j] as f64)*1000.0).round()).collect::<Vec<_>>(), s.state.phi[0], (s.state.feet_m[1].map(|v| (v*1000.0).round()), s.state.swing_lifted, s.state.stance));
     }
 }
 #[allow(dead_code)]

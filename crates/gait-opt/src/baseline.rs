@@ -423,25 +423,26 @@ fn standing_ankle(problem: &PaperProblem<f64>, phi: &Phi<f64>, target: [f64; 2])
 }
 
 /// Puts the first and last samples' swing ankle on the case's start and
-/// landing points (the feet standing there) by the weighted least change
-/// of (φ2, φ4, φ5) at each end, blended linearly in time between them;
+/// landing points (the feet standing there) by the least change of
+/// (φ_`stance_link`, φ4, φ5) at each end (`stance_link` 1: the stance
+/// thigh, 0: the stance shank), blended linearly in time between them;
 /// returns the two end changes.
-pub fn correct_ends(
+fn correct_ends(
     problem: &PaperProblem<f64>,
     phi: &mut [Phi<f64>],
-    thigh_weight: f64,
+    stance_link: usize,
 ) -> Result<[[f64; 3]; 2], BaselineError> {
     let (Some(&first), Some(&last)) = (phi.first(), phi.last()) else {
         return Err(BaselineError::Unreachable("no samples".into()));
     };
-    let d0 = end_correction(problem, &first, problem.case.start_m, thigh_weight)
+    let d0 = end_correction(problem, &first, problem.case.start_m, stance_link)
         .ok_or_else(|| BaselineError::Unreachable("start point out of reach".into()))?;
-    let d1 = end_correction(problem, &last, problem.case.landing_m, thigh_weight)
+    let d1 = end_correction(problem, &last, problem.case.landing_m, stance_link)
         .ok_or_else(|| BaselineError::Unreachable("landing point out of reach".into()))?;
     let n = phi.len().saturating_sub(1).max(1);
     for (k, p) in phi.iter_mut().enumerate() {
         let w = k as f64 / n as f64;
-        for (j, &i) in [1usize, 3, 4].iter().enumerate() {
+        for (j, &i) in [stance_link, 3, 4].iter().enumerate() {
             if let (Some(v), Some(a), Some(b)) = (p.get_mut(i), d0.get(j), d1.get(j)) {
                 *v += (1.0 - w) * a + w * b;
             }
@@ -457,22 +458,23 @@ fn end_correction(
     problem: &PaperProblem<f64>,
     phi: &Phi<f64>,
     target: [f64; 2],
-    thigh_weight: f64,
+    stance_link: usize,
 ) -> Option<[f64; 3]> {
-    let [_, l2, _, l4, l5] = problem.model.lengths();
-    // Weighted least change: a rad of φ2 costs `thigh_weight` rad² of the
-    // others (its Jacobian column and its step scaled by 1/√w).
-    let s2 = 1.0 / thigh_weight.max(1e-9).sqrt();
+    let lengths = problem.model.lengths();
+    let [.., l4, l5] = lengths;
+    let ls = lengths.get(stance_link).copied().unwrap_or(0.0);
     let mut q = *phi;
     for _ in 0..80 {
         let p5 = swing_ankle(problem, &q);
         let goal = standing_ankle(problem, &q, target);
         let e = [goal[0] - p5[0], goal[1] - p5[1]];
         if e[0].hypot(e[1]) < 1e-11 {
-            return Some([q[1] - phi[1], q[3] - phi[3], q[4] - phi[4]]);
+            let ds = q.get(stance_link).copied().unwrap_or(0.0)
+                - phi.get(stance_link).copied().unwrap_or(0.0);
+            return Some([ds, q[3] - phi[3], q[4] - phi[4]]);
         }
         // ∂p5/∂φ for p = l (sin φ, cos φ): l (cos φ, −sin φ).
-        let cols = [(1, l2 * s2), (3, l4), (4, l5)].map(|(i, l)| {
+        let cols = [(stance_link, ls), (3, l4), (4, l5)].map(|(i, l)| {
             let a = q.get(i).copied().unwrap_or(0.0);
             [l * a.cos(), -l * a.sin()]
         });
@@ -492,9 +494,9 @@ fn end_correction(
             (m[1][1] * e[0] - m[0][1] * e[1]) / det,
             (-m[1][0] * e[0] + m[0][0] * e[1]) / det,
         ];
-        for ((i, scale), c) in [(1, s2), (3, 1.0), (4, 1.0)].iter().zip(&cols) {
+        for (i, c) in [stance_link, 3, 4].iter().zip(&cols) {
             if let Some(v) = q.get_mut(*i) {
-                *v += scale * (c[0] * y[0] + c[1] * y[1]);
+                *v += c[0] * y[0] + c[1] * y[1];
             }
         }
     }
@@ -536,17 +538,12 @@ pub fn baseline_for_problem(
 pub enum Correction {
     /// The least change of (φ2, φ4, φ5) (the paper-mode baseline).
     StanceThighAndSwingLeg,
-    /// Mostly the swing leg: a change of the stance thigh φ2 counts
-    /// [`SWING_LEG_THIGH_WEIGHT`] times more, so the stance leg keeps the
-    /// data's angles as far as the landing allows (the comparison's human
-    /// gait: moving φ2 freely bent the walking stance knee 5.4° past its
-    /// stop).
-    SwingLeg,
+    /// The least change of (φ1, φ4, φ5): the stance shank instead of the
+    /// stance thigh (the comparison's human gait). Reaching further with
+    /// the thigh straightens the stance knee — the walk's landing
+    /// correction bent it 5.4° past its stop —, with the shank it bends it.
+    StanceShankAndSwingLeg,
 }
-
-/// Weight of a stance-thigh change against a swing-leg change in
-/// [`Correction::SwingLeg`].
-pub const SWING_LEG_THIGH_WEIGHT: f64 = 100.0;
 
 /// The baseline of `source` at `problem`'s geometry with the end
 /// corrections on `correction`'s joints (see [`baseline_for_problem`] for
@@ -620,11 +617,11 @@ pub fn baseline_window(
     }
     let s = 0.5 * (lo + hi);
     let mut phi = scaled(s);
-    let thigh_weight = match correction {
-        Correction::StanceThighAndSwingLeg => 1.0,
-        Correction::SwingLeg => SWING_LEG_THIGH_WEIGHT,
+    let stance_link = match correction {
+        Correction::StanceThighAndSwingLeg => 1,
+        Correction::StanceShankAndSwingLeg => 0,
     };
-    let [d0, d1] = correct_ends(&problem, &mut phi, thigh_weight)?;
+    let [d0, d1] = correct_ends(&problem, &mut phi, stance_link)?;
     let cost = cost_from_phi(&problem, &phi).map_err(BaselineError::Cost)?;
     Ok(Baseline {
         source,

@@ -21,8 +21,9 @@ use gait_core::gait::StanceAnkleProfile;
 use gait_core::ik::IkOptions;
 use gait_core::kinematics::Phi;
 use gait_core::problem::{PaperProblem, StepCase};
+use gait_core::tables::GaitKind;
 
-use crate::baseline::{BaselineError, Source, baseline_for_problem};
+use crate::baseline::{BaselineError, Correction, Source, baseline_window};
 use crate::clinical::{ClinicalCase, evaluate_phi};
 
 /// A human-data step and what it was built from.
@@ -79,8 +80,8 @@ pub fn human_gait(
 ) -> Result<HumanGait, BaselineError> {
     let source = Source::for_gait(case.gait);
     let problem = human_problem(case.spacing_m, case.step_time_s, &case.model);
-    let b = baseline_for_problem(&problem, source, dir)?;
-    let phi = b
+    let b = baseline_window(&problem, source, dir, correction_for(case.gait))?;
+    let phi: Vec<Phi<f64>> = b
         .phi
         .iter()
         .map(|p| {
@@ -95,6 +96,17 @@ pub fn human_gait(
         amplitude_scale: b.amplitude_scale,
         torso_lean_rad: lean_rad,
     })
+}
+
+/// Which end correction makes the human step playable on the device: the
+/// paper mode's (the stance thigh and the swing leg) where it does, the
+/// stance shank instead of the thigh where the thigh's correction bends the
+/// stance knee past its stop (walking: by 5.4°; descent: by 7°).
+pub fn correction_for(gait: GaitKind) -> Correction {
+    match gait {
+        GaitKind::StairUp => Correction::StanceThighAndSwingLeg,
+        GaitKind::Walk | GaitKind::StairDown => Correction::StanceShankAndSwingLeg,
+    }
 }
 
 /// Largest share of the drive's available torque the replayed human gait

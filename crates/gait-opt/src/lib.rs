@@ -15,6 +15,7 @@
 
 pub mod baseline;
 pub mod clinical;
+pub mod clinical_report;
 pub mod encoding;
 pub mod human;
 pub mod phi_cost;

@@ -2,26 +2,13 @@
 //! the generated Rust module `crates/gait-core/src/flash_tables.rs` that
 //! the firmware links into flash.
 //!
-//! Which gaits and why (until a clinically constrained table family exists):
-//! every table is a **periodic** step (`gait_core::problem::PeriodicStep`):
-//! its landing posture, seen from the new stance foot, is its start posture,
-//! so steps chain with the legs alternating and the weight transfer between
-//! them moves no joint. The paper's own optima are not periodic: the walk
-//! lands with the new stance shank 0.3 rad ahead of the next start and the
-//! torso pitched 0.2 rad forward, and playing it step after step made every
-//! transfer pull the body backwards through the crutches.
-//! - **walk**: `PeriodicStep::walk` (the paper's step, r2(0) = 1) with the
-//!   velocity weight raised from 1,000 to 8,000 N²·m² per (m/s): the
-//!   paper-mode optimum lands at 2.2 m/s and exceeds the supervisor's
-//!   joint-velocity limits.
-//! - **stair ascent**: `PeriodicStep::stair_up` (the paper's stair), paper
-//!   v_p.
-//! - **stair descent**: `PeriodicStep::stair_down` (the paper's stair walked
-//!   down), paper v_p. It needs two things the paper does not have: the toe
-//!   rocker (`gait_core::foot`: the trailing heel is up in double support)
-//!   and the IK's continuous `KneeRange::Human` (the paper's range jumps as
-//!   the stance knee passes over the swing foot). docs/model.md, "Stair
-//!   descent".
+//! Every table is a **clinical-mode** step ([`crate::clinical`]) on the
+//! device's configuration (`exogait_device`): double support first, the
+//! predicted crutch load as the cost, within the drives and the
+//! supervisor's envelope, periodic (its landing posture, seen from the new
+//! stance foot, is its start posture, so steps chain with the legs
+//! alternating and the transfer between them moves no joint). The paper's
+//! own problem stays in paper mode ([`crate::solver`]), for the record.
 //!
 //! Deterministic: the optimiser is seeded and budgeted by evaluation count,
 //! so regenerating gives the same bytes; a test checks that the committed
@@ -33,12 +20,16 @@ use gait_core::BodyModel;
 use gait_core::gait::{ControlPoints, GaitError};
 use gait_core::kinematics::Phi;
 use gait_core::problem::{
-    JointMotionLimit, JointRangeLimit, PaperCase, PaperProblem, PeriodicError, PeriodicStep,
+    JointMotionLimit, JointRangeLimit, PaperProblem, PeriodicError, PeriodicStep,
     StepCase,
 };
 use gait_core::tables::{GaitKind, TableError, encode, image_len};
 
-use crate::solver::{OptimizeConfig, OptimizeError, optimize_problem};
+use exogait_device::DeviceConfig;
+
+use crate::clinical::{ClinicalCase, ClinicalConfig, ClinicalSearchError, optimize_clinical};
+use crate::clinical_report::{ClinicalReport, gait_name};
+use crate::solver::OptimizeError;
 
 /// Velocity weight of the flash walk table, N²·m² per (m/s).
 pub const WALK_VELOCITY_WEIGHT: f64 = 8000.0;
@@ -77,6 +68,10 @@ pub enum TableGenError {
     Table(TableError),
     /// The periodic case does not exist.
     Periodic(PeriodicError),
+    /// The clinical search failed.
+    Clinical(ClinicalSearchError),
+    /// The device configuration was refused.
+    Device(exogait_device::DeviceError),
 }
 
 impl std::fmt::Display for TableGenError {
@@ -86,6 +81,8 @@ impl std::fmt::Display for TableGenError {
             Self::Gait(e) => write!(f, "sampling: {e}"),
             Self::Table(e) => write!(f, "table: {e}"),
             Self::Periodic(e) => write!(f, "periodic case: {e}"),
+            Self::Clinical(e) => write!(f, "clinical search: {e}"),
+            Self::Device(e) => write!(f, "device configuration: {e:?}"),
         }
     }
 }
@@ -156,72 +153,81 @@ pub fn table_problem(
     Ok(problem)
 }
 
-fn optimised(
-    case: PaperCase,
-    step: &PeriodicStep<f64>,
-    velocity_weight: Option<f64>,
-) -> Result<(Vec<Phi<f64>>, String), TableGenError> {
-    let problem = table_problem(step, velocity_weight)?;
-    let mut config = OptimizeConfig::new(case);
-    if let Some(vp) = velocity_weight {
-        config.explore_velocity_weight = 2.0 * vp;
-    }
-    let r = optimize_problem(&problem, &config, &mut |_| {}).map_err(TableGenError::Optimize)?;
-    let phi = step_phi(&problem, &r.control_points).map_err(TableGenError::Gait)?;
-    let c = r.cost;
-    let figures = format!(
-        "J = {:.1} (torque {:.1}, velocity {:.1}, joint motion {:.1}; τ RMS {:.1} N·m, \
-         peak swing-ankle speed {:.2} m/s)",
-        c.j, c.torque, c.velocity, c.joint_motion, c.tau_rms_nm, c.peak_ankle_speed_m_s
+/// The search settings of each clinical flash table, (seed, evaluations):
+/// the seeds were chosen among the first ten by playing each result in the
+/// closed loop for four steps (docs/optimiser.md, "Clinical mode"): the
+/// prediction ranks the candidates, the closed loop decides.
+pub fn clinical_table_search(kind: GaitKind) -> ClinicalConfig {
+    let (seed, max_evals) = match kind {
+        GaitKind::Walk => (1, 12_000),
+        GaitKind::StairUp => (4, 16_000),
+        GaitKind::StairDown => (1, 12_000),
+    };
+    ClinicalConfig { seed, max_evals }
+}
+
+/// The clinical-mode table of `kind` on `device` (see the module
+/// documentation), with its report.
+pub fn clinical_table(
+    kind: GaitKind,
+    device: &DeviceConfig,
+) -> Result<(GeneratedTable, ClinicalReport), TableGenError> {
+    let case = ClinicalCase::for_gait(kind, device);
+    let config = clinical_table_search(kind);
+    let r = optimize_clinical(&case, &config, &mut |_, _| {}).map_err(TableGenError::Clinical)?;
+    let report = ClinicalReport::new(&case, &r, config.seed);
+    let e = &r.evaluation;
+    let ident = match kind {
+        GaitKind::Walk => "WALK",
+        GaitKind::StairUp => "STAIR_UP",
+        GaitKind::StairDown => "STAIR_DOWN",
+    };
+    let provenance = format!(
+        "clinical mode ({}: spacing ({}, {}) m, ts {} s), seed {}, {} evaluations; predicted \
+         balance impulse {:.1} N·s, pilot peak {:.1} N·m, joint peaks {:.0}/{:.0}/{:.0}/{:.0} N·m, \
+         clearance {:.3} m",
+        gait_name(kind),
+        case.spacing_m[0],
+        case.spacing_m[1],
+        case.step_time_s,
+        config.seed,
+        config.max_evals,
+        e.balance_ns,
+        e.pilot_peak_nm,
+        e.joint_peak_nm[0],
+        e.joint_peak_nm[1],
+        e.joint_peak_nm[2],
+        e.joint_peak_nm[3],
+        e.clearance_m
     );
-    Ok((phi, figures))
+    Ok((
+        GeneratedTable {
+            kind,
+            ident,
+            provenance,
+            image: table_image(kind, &r.phi).map_err(TableGenError::Table)?,
+        },
+        report,
+    ))
 }
 
-/// The walk table (see the module documentation).
+/// The walk table (clinical mode, the device's configuration).
 pub fn walk_table() -> Result<GeneratedTable, TableGenError> {
-    let (phi, j) = optimised(
-        PaperCase::Walk,
-        &PeriodicStep::walk(),
-        Some(WALK_VELOCITY_WEIGHT),
-    )?;
-    Ok(GeneratedTable {
-        kind: GaitKind::Walk,
-        ident: "WALK",
-        provenance: format!(
-            "periodic walk (PeriodicStep::walk) with v_p = {WALK_VELOCITY_WEIGHT} \
-             (paper: 1000), seed 1, 20,000 evaluations; {j}"
-        ),
-        image: table_image(GaitKind::Walk, &phi).map_err(TableGenError::Table)?,
-    })
+    Ok(clinical_table(GaitKind::Walk, &device()?)?.0)
 }
 
-/// The stair-ascent table (periodic, paper v_p).
+/// The stair-ascent table (clinical mode).
 pub fn stair_up_table() -> Result<GeneratedTable, TableGenError> {
-    let (phi, j) = optimised(PaperCase::StairUp, &PeriodicStep::stair_up(), None)?;
-    Ok(GeneratedTable {
-        kind: GaitKind::StairUp,
-        ident: "STAIR_UP",
-        provenance: format!(
-            "periodic stair ascent (PeriodicStep::stair_up), paper v_p, seed 1, \
-             20,000 evaluations; {j}"
-        ),
-        image: table_image(GaitKind::StairUp, &phi).map_err(TableGenError::Table)?,
-    })
+    Ok(clinical_table(GaitKind::StairUp, &device()?)?.0)
 }
 
-/// The stair-descent table (periodic, toe rocker, human knee range, paper
-/// v_p).
+/// The stair-descent table (clinical mode).
 pub fn stair_down_table() -> Result<GeneratedTable, TableGenError> {
-    let (phi, j) = optimised(PaperCase::StairUp, &PeriodicStep::stair_down(), None)?;
-    Ok(GeneratedTable {
-        kind: GaitKind::StairDown,
-        ident: "STAIR_DOWN",
-        provenance: format!(
-            "periodic stair descent (PeriodicStep::stair_down: toe rocker, \
-             KneeRange::Human), paper v_p, seed 1, 20,000 evaluations; {j}"
-        ),
-        image: table_image(GaitKind::StairDown, &phi).map_err(TableGenError::Table)?,
-    })
+    Ok(clinical_table(GaitKind::StairDown, &device()?)?.0)
+}
+
+fn device() -> Result<DeviceConfig, TableGenError> {
+    DeviceConfig::exogait().map_err(TableGenError::Device)
 }
 
 /// The source of `crates/gait-core/src/flash_tables.rs`.

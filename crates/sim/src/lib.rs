@@ -20,6 +20,7 @@
 
 pub mod as5048a;
 pub mod closed_loop;
+pub mod compare;
 pub mod impact;
 pub mod mcp3208;
 pub mod motor;

@@ -404,7 +404,7 @@ fn role_angles(phi: &Phi<f64>, dphi: &Phi<f64>) -> ([f64; LINKS], [f64; LINKS]) 
 
 /// A swing foot that has moved this far along the ground from where it was
 /// at the last leg swap has been lifted, m.
-const MIN_STEP_TRAVEL_M: f64 = 0.1;
+const MIN_STEP_TRAVEL_M: f64 = 0.2;
 
 /// A lifted swing foot whose ground contact carries this much has landed,
 /// N (well below the controller's 80 N landing threshold, so the plant's

@@ -199,3 +199,118 @@ where
     }
     Ok(())
 }
+
+/// Draws a comparison of two gaits on the same device to `path` (SVG or
+/// PNG by extension): both gaits' crutch forces and the pilot's torque on
+/// shared axes (time since each gait's first swing), and each step's crutch
+/// impulse F as bars.
+pub fn plot_comparison(
+    title: &str,
+    shipped: &crate::compare::GaitRun,
+    human: &crate::compare::GaitRun,
+    path: &Path,
+) -> Result<(), PlotError> {
+    ensure_font()?;
+    let size = (1400, 900);
+    let svg = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+    if svg {
+        let root = SVGBackend::new(path, size).into_drawing_area();
+        draw_comparison(title, shipped, human, &root)?;
+        root.present().map_err(draw_err)
+    } else {
+        let root = BitMapBackend::new(path, size).into_drawing_area();
+        draw_comparison(title, shipped, human, &root)?;
+        root.present().map_err(draw_err)
+    }
+}
+
+fn draw_comparison<DB: DrawingBackend>(
+    title: &str,
+    shipped: &crate::compare::GaitRun,
+    human: &crate::compare::GaitRun,
+    root: &DrawingArea<DB, Shift>,
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(draw_err)?;
+    let root = root.titled(title, ("sans-serif", 22)).map_err(draw_err)?;
+    let (top, bottom) = root.split_vertically(560);
+    let panels = top.split_evenly((1, 2));
+    // Time from each gait's first swing, thinned to every 10th tick.
+    let series = |run: &crate::compare::GaitRun, pick: &dyn Fn(&([f64; 2], f64)) -> f64| -> Series {
+        let t0 = run.steps.first().map_or(0.0, |s| s.start_s);
+        run.series
+            .iter()
+            .step_by(10)
+            .filter(|(t, ..)| *t >= t0)
+            .map(|(t, f, p)| (t - t0, pick(&(*f, *p))))
+            .collect()
+    };
+    let total = |x: &([f64; 2], f64)| x.0[0] + x.0[1];
+    let pilot = |x: &([f64; 2], f64)| x.1.abs();
+    if let Some(area) = panels.first() {
+        panel(
+            area,
+            "crutch force, both crutches (N)",
+            "t from the first swing (s)",
+            "N",
+            &[
+                ("shipped table".into(), series(shipped, &total), BLUE, false),
+                ("human-data gait".into(), series(human, &total), RED, false),
+            ],
+        )?;
+    }
+    if let Some(area) = panels.get(1) {
+        panel(
+            area,
+            "|pilot ankle torque| (N·m)",
+            "t from the first swing (s)",
+            "N·m",
+            &[
+                ("shipped table".into(), series(shipped, &pilot), BLUE, false),
+                ("human-data gait".into(), series(human, &pilot), RED, false),
+            ],
+        )?;
+    }
+    let steps = shipped.steps.len().max(human.steps.len()).max(1);
+    let top_f = shipped
+        .steps
+        .iter()
+        .chain(&human.steps)
+        .map(|s| s.impulse_ns)
+        .fold(1.0f64, f64::max)
+        * 1.15;
+    let mut chart = ChartBuilder::on(&bottom)
+        .caption("crutch impulse F per step (N·s): shipped (blue), human (red)", ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(55)
+        .build_cartesian_2d(0.0..steps as f64, 0.0..top_f)
+        .map_err(draw_err)?;
+    chart
+        .configure_mesh()
+        .x_desc("step")
+        .y_desc("N·s")
+        .draw()
+        .map_err(draw_err)?;
+    let bars = |run: &crate::compare::GaitRun, offset: f64, colour: RGBColor| {
+        run.steps
+            .iter()
+            .enumerate()
+            .map(move |(i, s)| {
+                let x = i as f64 + offset;
+                Rectangle::new([(x, 0.0), (x + 0.35, s.impulse_ns)], colour.filled())
+            })
+            .collect::<Vec<_>>()
+    };
+    chart
+        .draw_series(bars(shipped, 0.12, BLUE))
+        .map_err(draw_err)?;
+    chart
+        .draw_series(bars(human, 0.53, RED))
+        .map_err(draw_err)?;
+    Ok(())
+}

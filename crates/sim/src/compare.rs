@@ -1,0 +1,242 @@
+//! The paper's Table II in the closed loop: a gait table played step by
+//! step by the real controller on the simulated device and pilot, and the
+//! crutch load of each step, so that two tables (the one the firmware ships
+//! and the human-data gait) can be compared on the same device.
+//!
+//! Per step, over its window — from the start of its swing to its landing
+//! plus the weight transfer (the sequencer's `transfer_s`), the paper's
+//! window of a step:
+//! - F = T_s Σ (f_l + f_r), the crutch impulse from the plant's true crutch
+//!   forces, N·s;
+//! - its balance part: F less the pilot's constant lean on the crutches
+//!   (Σ |τ_pilot| / lever · T_s: what the gait changes);
+//! - each crutch's peak force, N;
+//! - the time the pilot's torque was at its limit, s;
+//! - where the foot landed against the table's plan, m.
+
+use exogait_device::DeviceConfig;
+use gait_control::operator::Gait;
+use gait_control::sequencer::{GaitTables, Phase};
+use gait_core::tables::{GaitKind, GaitTable};
+
+use crate::closed_loop::{Rig, RigError};
+use crate::pilot::PilotConfig;
+use crate::scenario::{GO_AT_TICK, GO_TICKS, table_geometry, table_rig};
+
+/// One step's crutch load.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepLoad {
+    /// Start of the swing, s.
+    pub start_s: f64,
+    /// End of the window (landing + transfer, or the end of the run), s.
+    pub end_s: f64,
+    /// F = T_s Σ (f_l + f_r), N·s.
+    pub impulse_ns: f64,
+    /// F less the pilot's constant lean, N·s.
+    pub balance_ns: f64,
+    /// Peak force of the left and right crutch, N.
+    pub peak_n: [f64; 2],
+    /// Time the pilot's torque was at its limit, s.
+    pub saturated_s: f64,
+    /// Landing x less the plan's, m (`None`: the step did not land).
+    pub landing_error_m: Option<f64>,
+}
+
+/// A gait played for a number of steps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GaitRun {
+    /// Every step whose swing started.
+    pub steps: Vec<StepLoad>,
+    /// Landings (leg is implied: they alternate), world x, m.
+    pub landings_m: Vec<[f64; 2]>,
+    /// Faults latched, as ("0x0401", name).
+    pub faults: Vec<(String, &'static str)>,
+    /// Why the simulation stopped early, if it did.
+    pub ended_by: Option<String>,
+    /// Time, crutch forces (left, right) and pilot torque of every tick,
+    /// for plots.
+    pub series: Vec<(f64, [f64; 2], f64)>,
+}
+
+impl GaitRun {
+    /// Steps that landed.
+    pub fn landed(&self) -> usize {
+        self.steps
+            .iter()
+            .filter(|s| s.landing_error_m.is_some())
+            .count()
+    }
+
+    /// Mean over the landed steps of a quantity (`None` without one).
+    pub fn mean(&self, f: impl Fn(&StepLoad) -> f64) -> Option<f64> {
+        let landed: Vec<f64> = self
+            .steps
+            .iter()
+            .filter(|s| s.landing_error_m.is_some())
+            .map(f)
+            .collect();
+        (!landed.is_empty()).then(|| landed.iter().sum::<f64>() / landed.len() as f64)
+    }
+
+    /// Highest crutch peak over the landed steps, N.
+    pub fn peak_n(&self) -> Option<f64> {
+        self.steps
+            .iter()
+            .filter(|s| s.landing_error_m.is_some())
+            .map(|s| s.peak_n[0].max(s.peak_n[1]))
+            .reduce(f64::max)
+    }
+}
+
+/// The gait of a table kind.
+pub fn gait_of(kind: GaitKind) -> Gait {
+    match kind {
+        GaitKind::Walk => Gait::Walk,
+        GaitKind::StairUp => Gait::StairUp,
+        GaitKind::StairDown => Gait::StairDown,
+    }
+}
+
+/// Tables holding only `table`, under its kind.
+pub fn tables_of<'t>(table: GaitTable<'t>) -> GaitTables<'t> {
+    let mut t = GaitTables::default();
+    match table.kind() {
+        GaitKind::Walk => t.walk = Some(table),
+        GaitKind::StairUp => t.stair_up = Some(table),
+        GaitKind::StairDown => t.stair_down = Some(table),
+    }
+    t
+}
+
+/// Plays `table` on `device` with `pilot` from standing: GO, then `steps`
+/// steps (the run ends 1.5 s after the last landing asked for, 1 s into a
+/// safe hold, or at `max_s`); `prepare` is applied to the rig before the
+/// first tick. Returns the rig too (its trace, for plots and tests).
+pub fn play<'t>(
+    device: &DeviceConfig,
+    table: GaitTable<'t>,
+    pilot: PilotConfig,
+    steps: usize,
+    max_s: f64,
+    prepare: impl FnOnce(&mut Rig<'t>),
+) -> Result<(GaitRun, Rig<'t>), RigError> {
+    let gait = gait_of(table.kind());
+    let geometry = table_geometry(&table, &device.body);
+    let mut rig = table_rig(device, gait, pilot, tables_of(table))?;
+    Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
+    prepare(&mut rig);
+    let max_ticks = (max_s / f64::from(device.dt_s)) as u64;
+    let mut ended_by = None;
+    let mut landed_at: Option<usize> = None;
+    let mut held_since: Option<usize> = None;
+    for _ in 0..max_ticks {
+        if let Err(e) = rig.tick() {
+            ended_by = Some(e.to_string());
+            break;
+        }
+        if landed_at.is_none() && rig.plant.landings().len() >= steps.max(1) {
+            landed_at = Some(rig.trace.len());
+        }
+        if landed_at.is_some_and(|k| rig.trace.len() > k + 1500) {
+            break;
+        }
+        if held_since.is_none()
+            && rig.worst_reaction() >= gait_control::faults::Reaction::SafeHold
+        {
+            held_since = Some(rig.trace.len());
+        }
+        if held_since.is_some_and(|k| rig.trace.len() > k + 1000) {
+            break;
+        }
+    }
+    let run = measure(&rig, device, &pilot, geometry.landing_m, ended_by);
+    Ok((run, rig))
+}
+
+/// The per-step figures of a rig's trace (see the module documentation).
+fn measure(
+    rig: &Rig<'_>,
+    device: &DeviceConfig,
+    pilot: &PilotConfig,
+    step_m: [f64; 2],
+    ended_by: Option<String>,
+) -> GaitRun {
+    let dt = f64::from(device.dt_s);
+    let transfer = f64::from(device.controller.sequencer.transfer_s);
+    let trace = &rig.trace;
+    let starts: Vec<f64> = trace
+        .windows(2)
+        .filter(|w| {
+            matches!(w[1].report.phase, Phase::Swing { .. })
+                && !matches!(w[0].report.phase, Phase::Swing { .. })
+        })
+        .map(|w| w[1].state.time_s - dt)
+        .collect();
+    let landings = rig.plant.landings();
+    let end_of_run = trace.last().map_or(0.0, |s| s.state.time_s);
+    let limit = pilot.torque_limit_nm - 1e-9;
+    let steps = starts
+        .iter()
+        .enumerate()
+        .map(|(i, &start)| {
+            // The landing that ends this step: the first after its start.
+            let landing = landings.iter().find(|l| l.time_s > start);
+            let next_start = starts.get(i + 1).copied().unwrap_or(f64::INFINITY);
+            let end = landing.map_or(end_of_run, |l| (l.time_s + transfer).min(next_start));
+            let mut s = StepLoad {
+                start_s: start,
+                end_s: end,
+                impulse_ns: 0.0,
+                balance_ns: 0.0,
+                peak_n: [0.0; 2],
+                saturated_s: 0.0,
+                landing_error_m: None,
+            };
+            for t in trace
+                .iter()
+                .filter(|t| t.state.time_s > start && t.state.time_s <= end)
+            {
+                let f = t.state.crutch_forces_n;
+                s.impulse_ns += (f[0] + f[1]) * dt;
+                s.balance_ns += t.state.pilot_torque_nm.abs() / pilot.crutch_lever_m * dt;
+                s.peak_n = [s.peak_n[0].max(f[0]), s.peak_n[1].max(f[1])];
+                if t.state.pilot_torque_nm.abs() >= limit {
+                    s.saturated_s += dt;
+                }
+            }
+            if let Some(l) = landing.filter(|l| l.time_s < next_start) {
+                let k = (i + 1) as f64;
+                s.landing_error_m = Some(l.position_m[0] - step_m[0] * k);
+            }
+            s
+        })
+        .collect();
+    GaitRun {
+        steps,
+        landings_m: landings.iter().map(|l| l.position_m).collect(),
+        faults: rig
+            .faults()
+            .iter()
+            .map(|c| (format!("0x{:04x}", c.code()), c.name()))
+            .collect(),
+        ended_by,
+        series: trace
+            .iter()
+            .map(|t| {
+                (
+                    t.state.time_s,
+                    t.state.crutch_forces_n,
+                    t.state.pilot_torque_nm,
+                )
+            })
+            .collect(),
+    }
+}
+
+/// Reduction of `ours` against `theirs`, %: 100 (1 − ours/theirs).
+pub fn reduction_pct(ours: Option<f64>, theirs: Option<f64>) -> Option<f64> {
+    match (ours, theirs) {
+        (Some(a), Some(b)) if b.abs() > 1e-12 => Some(100.0 * (1.0 - a / b)),
+        _ => None,
+    }
+}
