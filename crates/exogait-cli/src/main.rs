@@ -5,6 +5,7 @@
 //! `crates/exogait-cli/README.md`.
 
 mod commands;
+mod compare;
 mod cost;
 mod jsonl;
 mod model_file;
@@ -66,6 +67,9 @@ enum Command {
     /// paper's staircase); prints the metrics (exit 1 if the first step did
     /// not land within 5 cm of the plan).
     Simulate(simulate::SimulateArgs),
+    /// The shipped table against the human-data gait, same device and
+    /// pilot, in the closed loop (the paper's Table II).
+    Compare(compare::CompareArgs),
 }
 
 fn main() -> ExitCode {
@@ -76,6 +80,13 @@ fn main() -> ExitCode {
             return ExitCode::from(EXIT_FATAL);
         }
         return ExitCode::from(simulate::run(args));
+    }
+    if let Command::Compare(args) = &cli.command {
+        if cli.model.is_some() {
+            eprintln!("exogait: --model does not apply to compare (the device's model is fixed)");
+            return ExitCode::from(EXIT_FATAL);
+        }
+        return ExitCode::from(compare::run(args));
     }
     if let Command::Cost { file } = &cli.command {
         if cli.model.is_some() {
@@ -142,7 +153,10 @@ fn main() -> ExitCode {
             jsonl::run(stdin, stdout, |r| commands::ik(&solver, r))
         }
         // Handled above.
-        Command::Optimize(_) | Command::Cost { .. } | Command::Simulate(_) => {
+        Command::Optimize(_)
+        | Command::Cost { .. }
+        | Command::Simulate(_)
+        | Command::Compare(_) => {
             Ok(jsonl::Summary::default())
         }
     };

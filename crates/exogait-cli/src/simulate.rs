@@ -10,6 +10,7 @@ use gait_control::operator::Gait;
 
 /// Which gait to simulate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[value(rename_all = "kebab-case")]
 pub enum SimGait {
     /// Level walking.
     Walk,
@@ -18,6 +19,17 @@ pub enum SimGait {
     /// Stair descent on the same staircase walked down (the trailing heel
     /// lifts: the feet's toe rocker).
     StairDown,
+}
+
+impl SimGait {
+    /// The table kind.
+    pub fn kind(self) -> gait_core::tables::GaitKind {
+        match self {
+            Self::Walk => gait_core::tables::GaitKind::Walk,
+            Self::StairUp => gait_core::tables::GaitKind::StairUp,
+            Self::StairDown => gait_core::tables::GaitKind::StairDown,
+        }
+    }
 }
 
 /// Options of `exogait simulate`.

@@ -149,7 +149,9 @@ pub fn play<'t>(
             break;
         }
     }
-    let run = measure(&rig, device, &pilot, geometry.landing_m, ended_by);
+    let mut run = measure(&rig, device, &pilot, geometry.landing_m, ended_by);
+    // A swing started after the last step asked for is not one of them.
+    run.steps.truncate(steps);
     Ok((run, rig))
 }
 

@@ -925,6 +925,10 @@ impl Plant {
         // leg's and the torso's angular velocities, stop the new swing leg.
         .unwrap_or([w5, w4, w3, 0.0, 0.0]);
         self.phi = phi_new;
+        // The pilot's target was the old stance shank's: until the harness
+        // gives one for the new stance shank, the pilot holds it where it is
+        // (a target of the other shank would read as a 0.2 rad error).
+        self.pilot_target = PilotTarget::Hold { phi1_rad: phi_new[0] };
         self.stance = self.stance.other();
         self.stance_foot_m = new_stance_foot;
         self.last_swap_s = self.time_s;
