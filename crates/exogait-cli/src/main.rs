@@ -11,6 +11,7 @@ mod jsonl;
 mod model_file;
 mod optimize;
 mod simulate;
+mod table;
 
 use std::io;
 use std::path::PathBuf;
@@ -70,6 +71,9 @@ enum Command {
     /// The shipped table against the human-data gait, same device and
     /// pilot, in the closed loop (the paper's Table II).
     Compare(compare::CompareArgs),
+    /// An `optimize` report as a gait table in the flash format (checked
+    /// against the device first).
+    Table(table::TableArgs),
 }
 
 fn main() -> ExitCode {
@@ -80,6 +84,13 @@ fn main() -> ExitCode {
             return ExitCode::from(EXIT_FATAL);
         }
         return ExitCode::from(simulate::run(args));
+    }
+    if let Command::Table(args) = &cli.command {
+        if cli.model.is_some() {
+            eprintln!("exogait: --model does not apply to table (tables are for the device)");
+            return ExitCode::from(EXIT_FATAL);
+        }
+        return ExitCode::from(table::run(args));
     }
     if let Command::Compare(args) = &cli.command {
         if cli.model.is_some() {
@@ -156,7 +167,8 @@ fn main() -> ExitCode {
         Command::Optimize(_)
         | Command::Cost { .. }
         | Command::Simulate(_)
-        | Command::Compare(_) => {
+        | Command::Compare(_)
+        | Command::Table(_) => {
             Ok(jsonl::Summary::default())
         }
     };

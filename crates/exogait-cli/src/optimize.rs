@@ -52,6 +52,11 @@ pub const STAIR_DOWN_STANCE: StanceAnkleProfile<f64> = StanceAnkleProfile {
     t_c_s: 1.14,
 };
 
+/// Weight of the squared excess over a model file's joint limits, N²·m²
+/// per rad² per sample (1° over for a tenth of the step costs about a good
+/// step's whole torque part).
+const MODEL_LIMIT_WEIGHT: f64 = 1.0e7;
+
 /// Which step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum CaseArg {
@@ -81,6 +86,11 @@ pub enum ModeArg {
     /// The step built from the geometry options (their defaults are the
     /// paper's values).
     Custom,
+    /// The device's own problem: double support first, the predicted
+    /// crutch load as the cost, within the device's drives and supervisor
+    /// (the flash tables are made so); geometry options apply, --model
+    /// sets the body and its joint limits.
+    Clinical,
 }
 
 /// `exogait optimize` options.
@@ -240,15 +250,106 @@ pub fn setup(a: &OptimizeArgs, model: Option<BodyModel<f64>>) -> Result<Setup, S
         foot: None,
         ik: gait_core::ik::IkOptions::paper(),
     };
+    let given = model.is_some();
     let model = model.unwrap_or_else(BodyModel::paper_table_iii);
+    let mut problem = PaperProblem::new(case, model);
+    if given {
+        // The model file's joint limits hold: a soft limit at the stops
+        // themselves, heavy enough that the optimum stays inside.
+        problem.joint_range_limit = Some(gait_core::problem::JointRangeLimit {
+            limits: *model.limits(),
+            margin_rad: 0.0,
+            weight: MODEL_LIMIT_WEIGHT,
+        });
+    }
     Ok(Setup {
-        problem: PaperProblem::new(case, model),
+        problem,
         paper: false,
     })
 }
 
+/// Runs `exogait optimize --mode clinical`: writes a clinical report.
+fn run_clinical(a: &OptimizeArgs, model: Option<BodyModel<f64>>) -> Result<(), Failure> {
+    use gait_core::tables::GaitKind;
+    use gait_opt::clinical::{ClinicalCase, ClinicalConfig, optimize_clinical};
+    use gait_opt::clinical_report::ClinicalReport;
+    if a.plot.is_some() {
+        return Err(Failure::Usage(
+            "--plot draws paper-mode reports; play a clinical report with \
+             `exogait simulate --table REPORT.json --plot FILE`"
+                .into(),
+        ));
+    }
+    let stride = positive("stride", a.stride, 0.05, 1.2).map_err(Failure::Usage)?;
+    let step_time = positive("step-time", a.step_time, 0.5, 5.0).map_err(Failure::Usage)?;
+    let rise = positive("rise", a.rise, 0.0, 0.25).map_err(Failure::Usage)?;
+    let tread = positive("tread", a.tread, 0.05, 0.6).map_err(Failure::Usage)?;
+    let device = exogait_device::DeviceConfig::exogait()
+        .map_err(|e| Failure::Usage(format!("device configuration: {e:?}")))?;
+    let kind = match a.case {
+        CaseArg::Walk => GaitKind::Walk,
+        CaseArg::StairUp => GaitKind::StairUp,
+        CaseArg::StairDown => GaitKind::StairDown,
+    };
+    let mut case = ClinicalCase::for_gait(kind, &device);
+    if let Some(s) = stride {
+        case.spacing_m = [s / 2.0, 0.0];
+    }
+    if let Some(t) = tread {
+        case.spacing_m[0] = t;
+    }
+    if let Some(r) = rise {
+        case.spacing_m[1] = if kind == GaitKind::StairDown { -r } else { r };
+    }
+    if let Some(t) = step_time {
+        case.step_time_s = t;
+    }
+    if let Some(m) = model {
+        case = case.with_model(m);
+    }
+    let config = ClinicalConfig {
+        seed: a.seed,
+        max_evals: a.evals,
+    };
+    let r = optimize_clinical(&case, &config, &mut |_, _| {})
+        .map_err(|e| Failure::Search(e.to_string()))?;
+    let report = ClinicalReport::new(&case, &r, a.seed);
+    let text = report
+        .to_json()
+        .map_err(|e| Failure::Usage(format!("report: {e}")))?;
+    std::fs::write(&a.out, text + "\n")
+        .map_err(|e| Failure::Usage(format!("--out {}: cannot write: {e}", a.out.display())))?;
+    let e = &r.evaluation;
+    println!(
+        "{} (clinical mode): spacing ({}, {}) m, ts {} s, seed {}\n\
+         predicted balance impulse {:.1} N·s (J {:.1}, penalties {:.1}); pilot peak {:.1} N·m; \
+         joint peaks {:.0}/{:.0}/{:.0}/{:.0} N·m; clearance {:.3} m\n\
+         {} evaluations; report {}",
+        a.case.label(),
+        case.spacing_m[0],
+        case.spacing_m[1],
+        case.step_time_s,
+        a.seed,
+        e.balance_ns,
+        e.j,
+        e.penalty,
+        e.pilot_peak_nm,
+        e.joint_peak_nm[0],
+        e.joint_peak_nm[1],
+        e.joint_peak_nm[2],
+        e.joint_peak_nm[3],
+        e.clearance_m,
+        r.evaluations,
+        a.out.display()
+    );
+    Ok(())
+}
+
 /// Runs `exogait optimize`.
 pub fn run(a: &OptimizeArgs, model: Option<BodyModel<f64>>) -> Result<(), Failure> {
+    if a.mode == Some(ModeArg::Clinical) {
+        return run_clinical(a, model);
+    }
     let s = setup(a, model).map_err(Failure::Usage)?;
     if a.evals < 200 {
         return Err(Failure::Usage(format!(

@@ -52,11 +52,17 @@ pub struct SimulateArgs {
     /// turn) and ±ADC counts on the force ADC (of 4,096), e.g. `3,10`.
     #[arg(long, value_name = "ENC,ADC", value_parser = parse_noise)]
     pub sensor_noise: Option<(u16, u16)>,
+    /// Play this table (flash format, `exogait table`) or `optimize`
+    /// report instead of the flash table; its kind sets the gait. Refused
+    /// before the run when the device cannot play it.
+    #[arg(long, value_name = "FILE")]
+    pub table: Option<std::path::PathBuf>,
 }
 
-/// Runs the step; exit status 0 when the swing foot landed within 5 cm of
-/// the planned point, 1 when it did not, 2 when the run could not be set up
-/// or the options are unusable.
+/// Runs the steps; exit status 0 when every step asked for landed within
+/// 5 cm of its planned point and nothing faulted, 1 otherwise, 2 when the
+/// run could not be set up, the table is refused or the options are
+/// unusable.
 pub fn run(args: &SimulateArgs) -> u8 {
     if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 60.0) {
         eprintln!("exogait simulate: --seconds must be in (0, 60]");
@@ -66,17 +72,55 @@ pub fn run(args: &SimulateArgs) -> u8 {
         eprintln!("exogait simulate: --steps must be in 1..=20");
         return 2;
     }
-    let (gait, label) = match args.gait {
-        SimGait::Walk => (Gait::Walk, "walking"),
-        SimGait::StairUp => (Gait::StairUp, "climbing stairs"),
-        SimGait::StairDown => (Gait::StairDown, "descending stairs"),
+    let device = match exogait_device::DeviceConfig::exogait() {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("exogait simulate: device configuration: {e:?}");
+            return 2;
+        }
+    };
+    let image = match &args.table {
+        Some(path) => match crate::table::load_playable(path, &device) {
+            Ok(i) => Some(i),
+            Err(e) => {
+                eprintln!("exogait simulate: {}", e.message);
+                return 2;
+            }
+        },
+        None => None,
+    };
+    let file_table = image
+        .as_deref()
+        .and_then(|i| gait_core::tables::GaitTable::parse(i).ok());
+    let kind = file_table.map_or(args.gait.kind(), |t| t.kind());
+    let gait = sim::compare::gait_of(kind);
+    let label = match gait {
+        Gait::Walk => "walking",
+        Gait::StairUp => "climbing stairs",
+        Gait::StairDown => "descending stairs",
+    };
+    let source = args
+        .table
+        .as_ref()
+        .map_or_else(|| "the flash table".to_string(), |p| p.display().to_string());
+    let tables = match file_table {
+        Some(t) => sim::compare::tables_of(t),
+        None => sim::scenario::flash_tables(),
     };
     let noise = args.sensor_noise;
-    let run = match sim::scenario::run_gait_with(gait, args.seconds, args.steps, |rig| {
-        if let Some((enc, adc)) = noise {
-            rig.set_sensor_noise(enc, adc, 2026);
-        }
-    }) {
+    let run = match sim::scenario::run_tables_with(
+        &device,
+        tables,
+        gait,
+        sim::scenario::strong_pilot(),
+        args.seconds,
+        args.steps,
+        |rig| {
+            if let Some((enc, adc)) = noise {
+                rig.set_sensor_noise(enc, adc, 2026);
+            }
+        },
+    ) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("exogait simulate: {e}");
@@ -84,7 +128,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
         }
     };
     println!(
-        "exogait closed loop: {label}, {} step(s), the flash table",
+        "exogait closed loop: {label}, {} step(s), {source}",
         args.steps
     );
     println!("{}", run.summary);
@@ -100,11 +144,20 @@ pub fn run(args: &SimulateArgs) -> u8 {
             }
         }
     }
-    let landed_on_plan = run
-        .summary
-        .landing
-        .is_some_and(|l| (l.position_m[0] - run.summary.planned_landing_x_m).abs() < 0.05);
-    if landed_on_plan { 0 } else { 1 }
+    let step = run.summary.planned_landing_x_m;
+    let on_plan = run.summary.landing_points.len() >= args.steps
+        && run
+            .summary
+            .landing_points
+            .iter()
+            .take(args.steps)
+            .enumerate()
+            .all(|(i, (_, x))| (x - step * (i as f64 + 1.0)).abs() < 0.05);
+    if on_plan && run.summary.faults.is_empty() && run.ended_by.is_none() {
+        0
+    } else {
+        1
+    }
 }
 
 /// `ENC,ADC` → counts of noise on the encoders and the ADC (each ≤ 1,000).

@@ -174,6 +174,24 @@ impl ClinicalCase {
     }
 }
 
+impl ClinicalCase {
+    /// The case on another body model: its mass properties, and its joint
+    /// limits as the envelope (the supervisor's construction from them).
+    pub fn with_model(mut self, model: BodyModel<f64>) -> Self {
+        let m32: BodyModel<f32> = model.cast();
+        let sv = gait_control::supervisor::SupervisorConfig::default_for(m32.limits());
+        let r = |a: gait_control::supervisor::AngleRange| (f64::from(a.min_rad), f64::from(a.max_rad));
+        self.limits.envelope_rad = [
+            r(sv.joint_range[0]),
+            r(sv.joint_range[1]),
+            r(sv.ankle_range[0]),
+        ];
+        self.foot = StanceFoot::for_model(&model);
+        self.model = model;
+        self
+    }
+}
+
 /// What a table asks, from gait-core's playback of its Φ samples.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Evaluation {
