@@ -310,7 +310,16 @@ pub fn standing_adc_counts(device: &DeviceConfig) -> [u16; 8] {
     let [lf, rf, lc, rc] = STANDING_FORCES_N;
     let foot = |n: f32| (device.foot_sensor.counts(n) + 0.5) as u16;
     let crutch = |n: f32| (device.crutch_sensor.counts(n) + 0.5) as u16;
-    [foot(lf), foot(rf), crutch(lc), crutch(rc), 2_048, 2_048, 2_048, 2_048]
+    [
+        foot(lf),
+        foot(rf),
+        crutch(lc),
+        crutch(rc),
+        2_048,
+        2_048,
+        2_048,
+        2_048,
+    ]
 }
 
 /// A pilot standing still on both feet, both crutches loaded, e-stop

@@ -38,8 +38,10 @@ fn assert_alternating_landings(rig: &Rig<'_>, steps: usize, spacing: [f64; 2], s
             "landing {n} at {:?}, planned ({x}, {y})",
             l.position_m
         );
+        // The staircase is laid out from the f32 table: its rise agrees
+        // with 0.0935 m to a few 1e-8 m.
         assert!(
-            (l.ground_m - y).abs() < 1e-9,
+            (l.ground_m - y).abs() < 1e-6,
             "landing {n} on the wrong ground"
         );
     }
@@ -143,13 +145,14 @@ fn go_starts_the_swing_only_once_the_pilot_is_ready() {
         (1300..=1500).contains(&ticks),
         "swing began at tick {ticks}"
     );
-    rig.run_until(1000, |_| false).unwrap();
+    // The table shifts the weight in double support first, then lifts.
+    rig.run_until(2000, |_| false).unwrap();
     let lift = rig
         .trace
         .iter()
         .map(|s| s.state.feet_m[1][1])
         .fold(f64::MIN, f64::max);
-    assert!(lift > 0.05, "swing foot rose only {lift} m");
+    assert!(lift > 0.03, "swing foot rose only {lift} m");
     assert_eq!(rig.worst_reaction(), Reaction::None);
 }
 
@@ -248,10 +251,7 @@ fn commands_stay_within_limits_under_sensor_garbage() {
             );
         }
         for t in rig.wiring.motor_torques_nm() {
-            assert!(
-                t.abs() <= f64::from(drive_limit) + 0.1,
-                "bridge torque {t}"
-            );
+            assert!(t.abs() <= f64::from(drive_limit) + 0.1, "bridge torque {t}");
         }
     }
     assert!(rig.worst_reaction() >= Reaction::SafeHold);
@@ -283,7 +283,11 @@ fn a_swing_lands_on_the_planned_point() {
         .iter()
         .map(|s| s.state.feet_m[1][1])
         .fold(f64::MIN, f64::max);
-    assert!(clearance > 0.1, "swing foot cleared only {clearance} m");
+    // The clinical band: 3–8 cm over the floor (the ankle's height here).
+    assert!(
+        (0.03..0.09).contains(&clearance),
+        "swing foot cleared {clearance} m"
+    );
     // The controller saw it too: the sequencer moved on to the weight
     // transfer onto the right leg.
     assert!(
@@ -302,7 +306,11 @@ fn the_main_job_reports_a_step() {
     assert!((landing.position_m[0] - s.planned_landing_x_m).abs() < 0.03);
     assert!((s.planned_landing_x_m - 0.3).abs() < 1e-3);
     assert!(s.swing_start_s.is_some_and(|t| (1.3..1.6).contains(&t)));
-    assert!(s.foot_clearance_m > 0.1);
+    assert!(
+        (0.03..0.09).contains(&s.foot_clearance_m),
+        "{}",
+        s.foot_clearance_m
+    );
     assert!(
         s.tracking_peak_rad < 0.15,
         "tracking peak {}",
@@ -335,14 +343,24 @@ fn walks_four_steps_with_the_legs_alternating_and_no_fault() {
         assert!(l.descent_speed_m_s < 0.3, "{l:?}");
     }
     // Nothing faulted, and the joints tracked the tables closely through
-    // every swing.
+    // every swing: the stance leg within 0.03 rad; the other leg within
+    // 0.08 rad (while its foot carries load in double support its position
+    // loop is softened on purpose, so that the load it carries is the
+    // plan's).
     assert_no_supervisor_action(rig);
     for s in &rig.trace {
-        if matches!(s.report.phase, Phase::Swing { .. }) {
-            for (r, m) in s.report.reference_rad.iter().zip(&s.report.joints_rad) {
+        if let Phase::Swing { stance, .. } = s.report.phase {
+            for (j, (r, m)) in s
+                .report
+                .reference_rad
+                .iter()
+                .zip(&s.report.joints_rad)
+                .enumerate()
+            {
+                let bound = if stance.has_joint(j) { 0.03 } else { 0.08 };
                 assert!(
-                    (r - m).abs() < 0.05,
-                    "tracking {} rad at {} s",
+                    (r - m).abs() < bound,
+                    "joint {j}: tracking {} rad at {} s",
                     r - m,
                     s.state.time_s
                 );
@@ -393,7 +411,7 @@ fn descends_four_stairs_on_the_toe_rocker_with_no_fault() {
         // On the next tread down, within 5 mm of it.
         let ground = -0.0935 * (n as f64 + 2.0);
         assert!(
-            (l.ground_m - ground).abs() < 1e-9,
+            (l.ground_m - ground).abs() < 1e-6,
             "landing {n} on {}",
             l.ground_m
         );
@@ -499,15 +517,16 @@ fn walks_with_noisy_sensors_without_false_faults() {
 
 #[test]
 fn a_pilot_leaning_onto_the_toe_mid_walk_is_an_unplanned_heel_off() {
-    // The walk never plans the stance heel up (its φ1 stays under 11°). A
-    // pilot who leans on past the ankle's 20° stop mid-swing rolls onto the
-    // ball of the foot: 0x0105 within 50 ms of the ankle resting on its
-    // stop, and the device finishes the step instead of starting another.
+    // The walk never plans the stance heel up. A pilot who leans on past
+    // the ankle's 20° stop mid-swing (the swing foot in the air, 1.6 s in)
+    // rolls onto the ball of the foot: 0x0105 within 50 ms of the ankle
+    // resting on its stop, and the device finishes the step instead of
+    // starting another.
     let mut rig = standing_rig(strong_pilot()).unwrap();
     Rig::press(&rig.go, sim::scenario::GO_AT_TICK, sim::scenario::GO_TICKS);
     rig.run_until(
         6_000,
-        |s| matches!(s.report.phase, Phase::Swing { t_s, .. } if t_s > 0.5),
+        |s| matches!(s.report.phase, Phase::Swing { t_s, .. } if t_s > 1.6),
     )
     .unwrap();
     rig.set_pilot_behaviour(sim::closed_loop::PilotBehaviour::Fixed(

@@ -213,7 +213,13 @@ pub fn check_table(cfg: &DeviceConfig, table: &GaitTable<'_>) -> Result<Demand, 
                     .unwrap_or(0.0)
                     .min(no_load);
                 if rate.abs() > max_speed {
-                    return Err(breaks(joint, rate.abs(), Limit::Speed { max_rad_s: max_speed }));
+                    return Err(breaks(
+                        joint,
+                        rate.abs(),
+                        Limit::Speed {
+                            max_rad_s: max_speed,
+                        },
+                    ));
                 }
                 let sign = if t >= 0.0 { 1.0 } else { -1.0 };
                 let available = drive.available_torque_nm(rate, sign);

@@ -88,6 +88,9 @@ pub struct DriveSpec {
 
 const RPM_TO_RAD_S: f32 = core::f32::consts::PI / 30.0;
 
+/// The derated torque limit over the continuous torque.
+pub const DERATED_OVER_CONTINUOUS: f32 = 1.15;
+
 impl DriveSpec {
     /// Joint torque per ampere of motor current, N·m/A: k_t · ratio ·
     /// efficiency.
@@ -146,7 +149,8 @@ impl DriveSpec {
             return peak;
         }
         let emf = self.back_emf_v_per_rad_s() * omega_motor.abs();
-        let current = ((self.amplifier.supply_v - emf) / self.motor.terminal_resistance_ohm).max(0.0);
+        let current =
+            ((self.amplifier.supply_v - emf) / self.motor.terminal_resistance_ohm).max(0.0);
         (current * self.joint_torque_per_amp()).min(peak)
     }
 
@@ -161,12 +165,17 @@ impl DriveSpec {
 
     /// The motor driver's configuration (gait-control) for this drive at a
     /// tick of `dt_s`: limit = peak torque, 100 % duty = the current limit,
-    /// the I²t levels from [`DriveSpec::i2t_budget_a2s`], derated to 1.5×
-    /// the continuous torque (above it, so that sustained overload still
-    /// reaches the fault). The driver's torque constant is the effective
+    /// the I²t levels from [`DriveSpec::i2t_budget_a2s`], derated to
+    /// [`DERATED_OVER_CONTINUOUS`]× the continuous torque (above it, so that
+    /// sustained overload still reaches the fault). The driver's torque constant is the effective
     /// one at the joint side of the gear (k_t · efficiency), so its current
     /// estimate is the motor's.
-    pub fn motor_config(&self, dt_s: f32, slew_nm_per_tick: f32, soft_start_ticks: u32) -> MotorConfig {
+    pub fn motor_config(
+        &self,
+        dt_s: f32,
+        slew_nm_per_tick: f32,
+        soft_start_ticks: u32,
+    ) -> MotorConfig {
         let peak = self.peak_torque_nm();
         MotorConfig {
             torque_limit_nm: peak,
@@ -178,7 +187,7 @@ impl DriveSpec {
             continuous_current_a: self.continuous_current_a(),
             i2t_warning_a2s: self.i2t_warning_share * self.i2t_budget_a2s(),
             i2t_fault_a2s: self.i2t_fault_share * self.i2t_budget_a2s(),
-            derated_limit_nm: (1.5 * self.continuous_torque_nm()).min(peak),
+            derated_limit_nm: (DERATED_OVER_CONTINUOUS * self.continuous_torque_nm()).min(peak),
             slew_nm_per_tick,
             soft_start_ticks,
             dt_s,

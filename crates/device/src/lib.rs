@@ -27,9 +27,7 @@ pub mod sensors;
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;
 use embedded_hal::spi::SpiDevice;
-use gait_control::controller::{
-    self, Controller, ControllerConfig, ENCODERS, Hardware,
-};
+use gait_control::controller::{self, Controller, ControllerConfig, ENCODERS, Hardware};
 use gait_control::drivers::as5048a::{As5048a, Calibration, Direction};
 use gait_control::drivers::buttons::{Button, ButtonConfig};
 use gait_control::drivers::mcp3208::{CalibrationError, Channel, ForceChannels, Mcp3208};
@@ -149,7 +147,8 @@ impl DeviceConfig {
         let table_iii = BodyModel::<f64>::paper_table_iii();
         let body = BodyModel::new(*table_iii.links(), limits).unwrap_or(table_iii);
         let drives = [JOINT_DRIVE; JOINTS];
-        let motors = drives.map(|d| d.motor_config(DT_S, DRIVE_SLEW_NM_PER_TICK, DRIVE_SOFT_START_TICKS));
+        let motors =
+            drives.map(|d| d.motor_config(DT_S, DRIVE_SLEW_NM_PER_TICK, DRIVE_SOFT_START_TICKS));
         let foot = |i: usize| {
             FOOT_LOAD_CELL
                 .calibration()
@@ -392,6 +391,3 @@ where
         buzzer: Indicator::new(io.buzzer),
     })
 }
-
-
-

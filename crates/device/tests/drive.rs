@@ -9,7 +9,11 @@ fn the_joint_drive_peak_continuous_and_torque_speed_line() {
     let d = JOINT_DRIVE;
     // The current limit gives the product's 150 N·m ceiling, below the
     // gear's repeated-peak rating.
-    assert!((d.peak_torque_nm() - JOINT_PEAK_TORQUE_NM).abs() < 1e-3, "{}", d.peak_torque_nm());
+    assert!(
+        (d.peak_torque_nm() - JOINT_PEAK_TORQUE_NM).abs() < 1e-3,
+        "{}",
+        d.peak_torque_nm()
+    );
     assert!(d.peak_torque_nm() <= d.gearbox.repeated_peak_torque_nm);
     assert!(d.current_limit_a <= d.amplifier.peak_current_a);
     // The gear's average-torque rating (the motor alone: 11.5 A × 0.253 ×
@@ -17,7 +21,11 @@ fn the_joint_drive_peak_continuous_and_torque_speed_line() {
     assert!((d.continuous_torque_nm() - 113.0).abs() < 1e-3);
     assert!(d.continuous_current_a() <= d.amplifier.continuous_current_a);
     // 48 V / 0.253 V·s/rad / 80 = 2.37 rad/s.
-    assert!((d.no_load_speed_rad_s() - 2.371).abs() < 0.01, "{}", d.no_load_speed_rad_s());
+    assert!(
+        (d.no_load_speed_rad_s() - 2.371).abs() < 0.01,
+        "{}",
+        d.no_load_speed_rad_s()
+    );
     let corner = d.full_torque_speed_rad_s();
     assert!(corner > 2.0 && corner < d.no_load_speed_rad_s(), "{corner}");
     assert!((d.available_torque_nm(0.0, 1.0) - 150.0).abs() < 1e-3);

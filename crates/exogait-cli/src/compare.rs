@@ -133,7 +133,11 @@ fn run_json(r: &GaitRun) -> RunJson {
     RunJson {
         f_ns: r.steps.iter().map(|s| s.impulse_ns).collect(),
         f_balance_ns: r.steps.iter().map(|s| s.balance_ns).collect(),
-        peak_N: r.steps.iter().map(|s| s.peak_n[0].max(s.peak_n[1])).collect(),
+        peak_N: r
+            .steps
+            .iter()
+            .map(|s| s.peak_n[0].max(s.peak_n[1]))
+            .collect(),
         saturated_s: r.steps.iter().map(|s| s.saturated_s).collect(),
         landing_error_m: r.steps.iter().map(|s| s.landing_error_m).collect(),
         landings: r.landings_m.clone(),
@@ -187,10 +191,7 @@ pub fn compare(kind: GaitKind, steps: usize) -> Result<(CompareJson, GaitRun, Ga
         human_torso_lean_rad: human.torso_lean_rad,
         reduction_pct: ReductionJson {
             f: reduction_pct(ours.mean(|s| s.impulse_ns), theirs.mean(|s| s.impulse_ns)),
-            f_balance: reduction_pct(
-                ours.mean(|s| s.balance_ns),
-                theirs.mean(|s| s.balance_ns),
-            ),
+            f_balance: reduction_pct(ours.mean(|s| s.balance_ns), theirs.mean(|s| s.balance_ns)),
             peak: reduction_pct(ours.peak_n(), theirs.peak_n()),
         },
         device: DeviceJson {
@@ -256,9 +257,17 @@ pub fn table_text(a: &CompareJson) -> String {
     };
     out += &format!(
         "landed: shipped {}/{}, human {}/{}; faults: shipped {}; human {}\n",
-        a.shipped.landing_error_m.iter().filter(|l| l.is_some()).count(),
+        a.shipped
+            .landing_error_m
+            .iter()
+            .filter(|l| l.is_some())
+            .count(),
         a.steps,
-        a.human.landing_error_m.iter().filter(|l| l.is_some()).count(),
+        a.human
+            .landing_error_m
+            .iter()
+            .filter(|l| l.is_some())
+            .count(),
         a.steps,
         faults(&a.shipped),
         faults(&a.human)

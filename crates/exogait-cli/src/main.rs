@@ -168,9 +168,7 @@ fn main() -> ExitCode {
         | Command::Cost { .. }
         | Command::Simulate(_)
         | Command::Compare(_)
-        | Command::Table(_) => {
-            Ok(jsonl::Summary::default())
-        }
+        | Command::Table(_) => Ok(jsonl::Summary::default()),
     };
     match result {
         Ok(summary) if summary.failed == 0 => ExitCode::from(EXIT_OK),

@@ -99,10 +99,10 @@ pub fn run(args: &SimulateArgs) -> u8 {
         Gait::StairUp => "climbing stairs",
         Gait::StairDown => "descending stairs",
     };
-    let source = args
-        .table
-        .as_ref()
-        .map_or_else(|| "the flash table".to_string(), |p| p.display().to_string());
+    let source = args.table.as_ref().map_or_else(
+        || "the flash table".to_string(),
+        |p| p.display().to_string(),
+    );
     let tables = match file_table {
         Some(t) => sim::compare::tables_of(t),
         None => sim::scenario::flash_tables(),

@@ -57,7 +57,8 @@ pub fn image_of_report(text: &str, device: &DeviceConfig) -> Result<Vec<u8>, Tab
             .map_err(|e| TableFailure::input(e.to_string()))?;
         return table_image(kind, &phi).map_err(|e| TableFailure::input(e.to_string()));
     }
-    let r = Report::from_json(text).map_err(|e| TableFailure::input(format!("not a report: {e}")))?;
+    let r =
+        Report::from_json(text).map_err(|e| TableFailure::input(format!("not a report: {e}")))?;
     let problem = r
         .problem
         .problem()
@@ -90,8 +91,10 @@ pub fn load_playable(path: &Path, device: &DeviceConfig) -> Result<Vec<u8>, Tabl
                 path.display()
             ))
         })?;
-        image_of_report(&text, device)
-            .map_err(|e| TableFailure { message: format!("{}: {}", path.display(), e.message), ..e })?
+        image_of_report(&text, device).map_err(|e| TableFailure {
+            message: format!("{}: {}", path.display(), e.message),
+            ..e
+        })?
     };
     admit(&image, device, path)?;
     Ok(image)
@@ -134,7 +137,10 @@ pub fn run(args: &TableArgs) -> u8 {
         }
     };
     if let Err(e) = std::fs::write(&args.out, &image) {
-        eprintln!("exogait table: --out {}: cannot write: {e}", args.out.display());
+        eprintln!(
+            "exogait table: --out {}: cannot write: {e}",
+            args.out.display()
+        );
         return 2;
     }
     let table = GaitTable::parse(&image);

@@ -375,12 +375,32 @@ impl<'t> Controller<'t> {
             .get(plan.stance.other().foot())
             .copied()
             .unwrap_or(f32::NAN);
-        if other_share > 0.0 && measured.is_finite() {
+        if other_share > 0.0 && measured.is_finite() && self.motors_enabled {
             let error = planned.other_foot_n - measured;
-            self.other_foot_integral_n = (self.other_foot_integral_n
-                + OTHER_FOOT_KI_PER_S * error * dt)
+            let integral = (self.other_foot_integral_n + OTHER_FOOT_KI_PER_S * error * dt)
                 .clamp(-OTHER_FOOT_INTEGRAL_N, OTHER_FOOT_INTEGRAL_N);
-            let push_n = other_share * (OTHER_FOOT_KP * error + self.other_foot_integral_n);
+            let push = |integral: f32| {
+                other_share
+                    * (OTHER_FOOT_KP * error + integral)
+                        .clamp(-OTHER_FOOT_PUSH_N, OTHER_FOOT_PUSH_N)
+            };
+            // Anti-windup: the integral moves only while the other leg's
+            // feed-forward stays inside its loops' limits.
+            let within = |push_n: f32| {
+                feedforward
+                    .iter()
+                    .zip(&planned.per_other_foot_newton)
+                    .zip(&self.cfg.gains)
+                    .enumerate()
+                    .all(|(i, ((&f, &per), g))| {
+                        !plan.stance.other().has_joint(i)
+                            || (f + push_n * per).abs() <= g.torque_limit_nm
+                    })
+            };
+            if within(push(integral)) {
+                self.other_foot_integral_n = integral;
+            }
+            let push_n = push(self.other_foot_integral_n);
             for (i, (f, &per)) in feedforward
                 .iter_mut()
                 .zip(&planned.per_other_foot_newton)
@@ -797,7 +817,11 @@ const DOUBLE_SUPPORT_COMPLIANCE: f32 = 0.8;
 const OTHER_FOOT_KP: f32 = 0.5;
 /// Its integral gain, 1/s, and the integral's clamp, N.
 const OTHER_FOOT_KI_PER_S: f32 = 5.0;
-const OTHER_FOOT_INTEGRAL_N: f32 = 300.0;
+const OTHER_FOOT_INTEGRAL_N: f32 = 200.0;
+/// Largest correction of the other foot's load, N (a sensor reading far
+/// from the plan, as right after power-up, must not drive the leg to its
+/// limit).
+const OTHER_FOOT_PUSH_N: f32 = 200.0;
 
 const BAD_ENCODER: EncoderSense = EncoderSense {
     status: EncoderStatus::BusError,

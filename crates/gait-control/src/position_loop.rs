@@ -29,7 +29,11 @@ impl JointGains {
     /// integral's clamp) scaled by `k` in [0, 1]; damping and limits kept.
     #[must_use]
     pub fn with_stiffness(&self, k: f32) -> Self {
-        let k = if k.is_finite() { k.clamp(0.0, 1.0) } else { 1.0 };
+        let k = if k.is_finite() {
+            k.clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
         Self {
             kp_nm_per_rad: self.kp_nm_per_rad * k,
             ki_nm_per_rad_s: self.ki_nm_per_rad_s * k,

@@ -364,10 +364,11 @@ impl<'t> Sequencer<'t> {
         ))
     }
 
-    /// The other foot's share at table time `t_s` of the present swing (1
-    /// without a model: the foot is taken as down).
+    /// The other foot's share at table time `t_s` of the present swing (0
+    /// without a model: the foot is taken as lifted from the start, and the
+    /// landing window counts from the swing's start).
     fn swing_share(&self, t_s: f32) -> f32 {
-        self.planned_swing_toe(t_s).map_or(1.0, |p| {
+        self.planned_swing_toe(t_s).map_or(0.0, |p| {
             gait_core::playback::other_foot_share(p, self.swing_start_m)
         })
     }

@@ -146,7 +146,7 @@ fn swing_waits_for_the_stance_shank_at_the_planned_angle() {
 }
 
 #[test]
-fn swing_waits_for_crutches_and_stance_foot() {
+fn swing_waits_for_crutches_and_the_feet() {
     let img = walk_image();
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
@@ -157,9 +157,10 @@ fn swing_waits_for_crutches_and_stance_foot() {
         rig.step(&sensed(pose, READY_FEET, [100.0, 10.0]));
     }
     assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
-    // Stance foot unloaded (weight on the swing foot): keep waiting.
+    // The feet together carry too little (the device is not standing on
+    // them): keep waiting. Which foot carries how much is the table's plan.
     for _ in 0..100 {
-        rig.step(&sensed(pose, [50.0, 500.0], READY_CRUTCHES));
+        rig.step(&sensed(pose, [50.0, 100.0], READY_CRUTCHES));
     }
     assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
     // NaN forces (a faulted sensor) never count as ready.

@@ -172,9 +172,9 @@ impl<T: Real> ClinicalStep<T> {
             ik: self.ik,
         };
         let case = StepCase::periodic(&periodic, model).map_err(ClinicalError::Periodic)?;
-        let end = case
-            .end_posture
-            .ok_or(ClinicalError::Periodic(PeriodicError::LandingOutsideHumanRange))?;
+        let end = case.end_posture.ok_or(ClinicalError::Periodic(
+            PeriodicError::LandingOutsideHumanRange,
+        ))?;
         Ok(Ends {
             start_m: case.start_m,
             landing_m: case.landing_m,
@@ -259,10 +259,7 @@ impl<T: Real> ClinicalStep<T> {
                 let lean = crate::kinematics::wrap_pi(phi5 - T::pi());
                 let toe = self.foot.toe();
                 let a = self.foot.ankle(lean).position_m;
-                let target = [
-                    toe_start[0] - toe[0] + a[0],
-                    toe_start[1] - toe[1] + a[1],
-                ];
+                let target = [toe_start[0] - toe[0] + a[0], toe_start[1] - toe[1] + a[1]];
                 phi = solve(k, v, target)?;
             }
             Ok(phi)

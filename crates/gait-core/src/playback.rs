@@ -159,12 +159,8 @@ where
             let (a, c) = (get(k - 1)?, get(k + 1)?);
             let mut d1 = [T::zero(); LINKS];
             let mut d2 = [T::zero(); LINKS];
-            for ((((o1, o2), &x0), &x1), &x2) in d1
-                .iter_mut()
-                .zip(d2.iter_mut())
-                .zip(&a)
-                .zip(&phi)
-                .zip(&c)
+            for ((((o1, o2), &x0), &x1), &x2) in
+                d1.iter_mut().zip(d2.iter_mut()).zip(&a).zip(&phi).zip(&c)
             {
                 *o1 = (x2 - x0) / (T::lit(2.0) * h);
                 *o2 = (x2 - T::lit(2.0) * x1 + x0) / (h * h);

@@ -153,7 +153,11 @@ impl ClinicalCase {
                     let r = |a: gait_control::supervisor::AngleRange| {
                         (f64::from(a.min_rad), f64::from(a.max_rad))
                     };
-                    [r(sv.joint_range[0]), r(sv.joint_range[1]), r(sv.ankle_range[0])]
+                    [
+                        r(sv.joint_range[0]),
+                        r(sv.joint_range[1]),
+                        r(sv.ankle_range[0]),
+                    ]
                 },
                 range_margin_rad: 5f64.to_radians(),
                 ankle_spring_nm_per_rad: device.ankle_spring_nm_per_rad,
@@ -180,7 +184,8 @@ impl ClinicalCase {
     pub fn with_model(mut self, model: BodyModel<f64>) -> Self {
         let m32: BodyModel<f32> = model.cast();
         let sv = gait_control::supervisor::SupervisorConfig::default_for(m32.limits());
-        let r = |a: gait_control::supervisor::AngleRange| (f64::from(a.min_rad), f64::from(a.max_rad));
+        let r =
+            |a: gait_control::supervisor::AngleRange| (f64::from(a.min_rad), f64::from(a.max_rad));
         self.limits.envelope_rad = [
             r(sv.joint_range[0]),
             r(sv.joint_range[1]),
@@ -662,7 +667,12 @@ pub fn optimize_clinical(
         let left = cma_budget - state.borrow().evals;
         let mut cma = CMAESOptions::new(mean.to_vec(), sigma)
             .population_size(lambda)
-            .seed(config.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(run))
+            .seed(
+                config
+                    .seed
+                    .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                    .wrapping_add(run),
+            )
             .max_function_evals(left)
             .tol_fun(1e-4)
             .tol_x(1e-6)

@@ -149,4 +149,3 @@ pub fn playable_human_gait(case: &ClinicalCase, dir: &Path) -> Result<HumanGait,
         None => human_gait(case, dir, 0.0),
     }
 }
-

@@ -20,8 +20,7 @@ use gait_core::BodyModel;
 use gait_core::gait::{ControlPoints, GaitError};
 use gait_core::kinematics::Phi;
 use gait_core::problem::{
-    JointMotionLimit, JointRangeLimit, PaperProblem, PeriodicError, PeriodicStep,
-    StepCase,
+    JointMotionLimit, JointRangeLimit, PaperProblem, PeriodicError, PeriodicStep, StepCase,
 };
 use gait_core::tables::{GaitKind, TableError, encode, image_len};
 

@@ -185,16 +185,14 @@ fn pilot_target(
     let start = |fallback: f64| table.map_or(fallback, |t| f64::from(t.first()[0]));
     match *b {
         PilotBehaviour::Fixed(t) => t,
-        PilotBehaviour::FollowsPlan(profile) => follow(
-            phase,
-            profile.at(0.0),
-            transfer_from,
-            transfer_s,
-            |t_s| PilotTarget::Profile {
-                profile,
-                t0_s: now_s - t_s,
-            },
-        ),
+        PilotBehaviour::FollowsPlan(profile) => {
+            follow(phase, profile.at(0.0), transfer_from, transfer_s, |t_s| {
+                PilotTarget::Profile {
+                    profile,
+                    t0_s: now_s - t_s,
+                }
+            })
+        }
         PilotBehaviour::FollowsTable => {
             let to = start(0.0);
             follow(phase, to, transfer_from, transfer_s, |t_s| match table {

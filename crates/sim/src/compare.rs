@@ -140,8 +140,7 @@ pub fn play<'t>(
         if landed_at.is_some_and(|k| rig.trace.len() > k + 1500) {
             break;
         }
-        if held_since.is_none()
-            && rig.worst_reaction() >= gait_control::faults::Reaction::SafeHold
+        if held_since.is_none() && rig.worst_reaction() >= gait_control::faults::Reaction::SafeHold
         {
             held_since = Some(rig.trace.len());
         }

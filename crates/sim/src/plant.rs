@@ -928,7 +928,9 @@ impl Plant {
         // The pilot's target was the old stance shank's: until the harness
         // gives one for the new stance shank, the pilot holds it where it is
         // (a target of the other shank would read as a 0.2 rad error).
-        self.pilot_target = PilotTarget::Hold { phi1_rad: phi_new[0] };
+        self.pilot_target = PilotTarget::Hold {
+            phi1_rad: phi_new[0],
+        };
         self.stance = self.stance.other();
         self.stance_foot_m = new_stance_foot;
         self.last_swap_s = self.time_s;

@@ -61,7 +61,7 @@ pub struct TableGeometry {
 /// riser just ahead of the trailing foot's toe
 /// ([`gait_core::clinical::riser_behind_stance_x`], the rule the table
 /// generator designs for), the stance foot on the first step up or down;
-/// 12 steps.
+/// [`STAIR_STEPS`] steps.
 pub fn table_geometry(table: &GaitTable<'_>, model: &BodyModel<f64>) -> TableGeometry {
     let foot = StanceFoot::for_model(model);
     let last = table.last().map(f64::from);
@@ -74,7 +74,7 @@ pub fn table_geometry(table: &GaitTable<'_>, model: &BodyModel<f64>) -> TableGeo
                 start_x_m: riser,
                 rise_m: rise,
                 tread_m: tread,
-                steps: 12,
+                steps: STAIR_STEPS,
             },
             rise,
         ),
@@ -133,6 +133,10 @@ pub fn table_rig<'t>(
     Rig::new(&setup, tables)
 }
 
+/// Steps of the simulated staircases (twenty steps and more can be
+/// climbed or descended).
+pub const STAIR_STEPS: u32 = 24;
+
 /// Height the swing ankle must rise before a landing counts in the rigs, m
 /// (gaits lift the foot 3–8 cm; the trailing foot hovers 1–2 cm after an
 /// impact).
@@ -182,7 +186,15 @@ pub fn run_gait_with(
     prepare: impl FnOnce(&mut Rig<'static>),
 ) -> Result<StepRun<'static>, RigError> {
     let device = DeviceConfig::exogait().map_err(RigError::Device)?;
-    run_tables_with(&device, flash_tables(), gait, strong_pilot(), max_s, steps, prepare)
+    run_tables_with(
+        &device,
+        flash_tables(),
+        gait,
+        strong_pilot(),
+        max_s,
+        steps,
+        prepare,
+    )
 }
 
 /// `gait` from `tables` on `device` with `pilot`, from standing (see
