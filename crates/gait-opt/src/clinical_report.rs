@@ -132,9 +132,8 @@ impl ClinicalReport {
                 "x must hold {DIM} numbers in [0, 1]"
             )));
         }
-        if !(r.step_time_s.is_finite() && r.step_time_s > 0.5 && r.step_time_s < 5.0)
-            || !r.spacing_m.iter().all(|v| v.is_finite())
-        {
+        let timing = r.step_time_s.is_finite() && r.step_time_s > 0.5 && r.step_time_s < 5.0;
+        if !(timing && r.spacing_m.iter().all(|v| v.is_finite())) {
             return Err(ClinicalReportError::Field(
                 "step time or spacing unusable".into(),
             ));

@@ -226,6 +226,9 @@ pub fn plot_comparison(
     }
 }
 
+/// Picks a value from a tick's (crutch forces, pilot torque).
+type Pick = dyn Fn(&([f64; 2], f64)) -> f64;
+
 fn draw_comparison<DB: DrawingBackend>(
     title: &str,
     shipped: &crate::compare::GaitRun,
@@ -240,16 +243,15 @@ where
     let (top, bottom) = root.split_vertically(560);
     let panels = top.split_evenly((1, 2));
     // Time from each gait's first swing, thinned to every 10th tick.
-    let series =
-        |run: &crate::compare::GaitRun, pick: &dyn Fn(&([f64; 2], f64)) -> f64| -> Series {
-            let t0 = run.steps.first().map_or(0.0, |s| s.start_s);
-            run.series
-                .iter()
-                .step_by(10)
-                .filter(|(t, ..)| *t >= t0)
-                .map(|(t, f, p)| (t - t0, pick(&(*f, *p))))
-                .collect()
-        };
+    let series = |run: &crate::compare::GaitRun, pick: &Pick| -> Series {
+        let t0 = run.steps.first().map_or(0.0, |s| s.start_s);
+        run.series
+            .iter()
+            .step_by(10)
+            .filter(|(t, ..)| *t >= t0)
+            .map(|(t, f, p)| (t - t0, pick(&(*f, *p))))
+            .collect()
+    };
     let total = |x: &([f64; 2], f64)| x.0[0] + x.0[1];
     let pilot = |x: &([f64; 2], f64)| x.1.abs();
     if let Some(area) = panels.first() {
