@@ -103,6 +103,10 @@ fn play(device: &DeviceConfig, kind: GaitKind, image: &[u8], steps: usize) {
 fn main() {
     let device = DeviceConfig::exogait().unwrap();
     let which = std::env::args().nth(1).unwrap_or("walk".into());
+    if std::env::var("SHIPPED").is_ok() {
+        shipped_figures();
+        return;
+    }
     if std::env::var("SAT").is_ok() {
         sat20(match which.as_str() {
             "walk" => GaitKind::Walk,
@@ -374,4 +378,38 @@ pub fn sat20(kind: GaitKind) {
     println!("step lengths {}", lens.join(" "));
     let i2t: Vec<f64> = rig.wiring.motors.iter().map(|m| m.i2t_a2s()).collect();
     println!("i2t {:?}", i2t);
+}
+#[allow(dead_code)]
+pub fn shipped_figures() {
+    let device = DeviceConfig::exogait().unwrap();
+    for kind in [GaitKind::Walk, GaitKind::StairUp, GaitKind::StairDown] {
+        let t = match kind {
+            GaitKind::Walk => gait_core::flash_tables::walk(),
+            GaitKind::StairUp => gait_core::flash_tables::stair_up(),
+            GaitKind::StairDown => gait_core::flash_tables::stair_down(),
+        }
+        .unwrap();
+        let phi: Vec<[f64; 5]> = (0..t.len())
+            .map(|k| t.sample(k).unwrap().map(f64::from))
+            .collect();
+        let case = ClinicalCase::for_gait(kind, &device);
+        let e = evaluate_phi(&case, &phi).unwrap();
+        let d = exogait_device::admission::check_table(&device, &t).unwrap();
+        println!(
+            "{kind:?}: balance {:.0} pilot peak {:.0} ankle {:.0} joints {:?} speeds {:?} accel {:.1} clearance {:.3} sole {:.3} ds {:.2} i2t {:?} drive_use {:.2} admission {:?}",
+            e.balance_ns,
+            e.pilot_peak_nm,
+            e.ankle_peak_nm,
+            e.joint_peak_nm.map(|v| v.round()),
+            e.joint_speed_peak_rad_s
+                .map(|v| (v * 100.0).round() / 100.0),
+            e.joint_accel_peak_rad_s2,
+            e.clearance_m,
+            e.sole_margin_m,
+            e.double_support_s,
+            e.i2t_ratio.map(|v| (v * 100.0).round() / 100.0),
+            e.drive_use,
+            d
+        );
+    }
 }
