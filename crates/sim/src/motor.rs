@@ -217,7 +217,7 @@ impl SimMotor {
         let mut b = self.0.borrow_mut();
         if let Some(d) = b.drive.as_mut() {
             let i = out / f64::from(d.spec.joint_torque_per_amp());
-            let nominal = f64::from(d.spec.motor.nominal_current_a);
+            let nominal = f64::from(d.spec.continuous_current_a());
             d.i2t_a2s = (d.i2t_a2s + (i * i - nominal * nominal) * dt_s).max(0.0);
         }
     }
