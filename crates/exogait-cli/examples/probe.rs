@@ -102,14 +102,21 @@ fn play(device: &DeviceConfig, kind: GaitKind, image: &[u8], steps: usize) {
 
 fn main() {
     let mut device = DeviceConfig::exogait().unwrap();
-    if let Some(peak) = std::env::var("PEAK").ok().and_then(|v| v.parse::<f32>().ok()) {
+    if let Some(peak) = std::env::var("PEAK")
+        .ok()
+        .and_then(|v| v.parse::<f32>().ok())
+    {
         for d in device.drives.iter_mut() {
             d.gearbox.repeated_peak_torque_nm = d.gearbox.repeated_peak_torque_nm.max(peak);
             d.current_limit_a = peak / d.joint_torque_per_amp();
             d.amplifier.peak_current_a = d.amplifier.peak_current_a.max(d.current_limit_a);
         }
-        for (m, d) in device.motors.iter_mut().zip(device.drives) { *m = d.motor_config(0.001, 15.0, 40); }
-        for g in device.controller.gains.iter_mut() { g.torque_limit_nm = peak; }
+        for (m, d) in device.motors.iter_mut().zip(device.drives) {
+            *m = d.motor_config(0.001, 15.0, 40);
+        }
+        for g in device.controller.gains.iter_mut() {
+            g.torque_limit_nm = peak;
+        }
     }
     let which = std::env::args().nth(1).unwrap_or("walk".into());
     if std::env::var("SHIPPED").is_ok() {
