@@ -17,12 +17,7 @@ use sim::compare::play;
 use sim::scenario::strong_pilot;
 
 fn shipped(kind: GaitKind) -> GaitTable<'static> {
-    match kind {
-        GaitKind::Walk => gait_core::flash_tables::walk(),
-        GaitKind::StairUp => gait_core::flash_tables::stair_up(),
-        GaitKind::StairDown => gait_core::flash_tables::stair_down(),
-    }
-    .unwrap()
+    gait_core::flash_tables::of(kind).unwrap()
 }
 
 fn twenty_steps(kind: GaitKind, at_peak_s: f64) {

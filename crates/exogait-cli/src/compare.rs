@@ -161,12 +161,8 @@ fn run_json(r: &GaitRun) -> RunJson {
 /// The comparison of one gait (also the main job's).
 pub fn compare(kind: GaitKind, steps: usize) -> Result<(CompareJson, GaitRun, GaitRun), String> {
     let device = DeviceConfig::exogait().map_err(|e| format!("device: {e:?}"))?;
-    let shipped = match kind {
-        GaitKind::Walk => gait_core::flash_tables::walk(),
-        GaitKind::StairUp => gait_core::flash_tables::stair_up(),
-        GaitKind::StairDown => gait_core::flash_tables::stair_down(),
-    }
-    .map_err(|e| format!("the shipped table is refused: {e}"))?;
+    let shipped = gait_core::flash_tables::of(kind)
+        .map_err(|e| format!("the shipped table is refused: {e}"))?;
     // The human gait at the shipped table's geometry and step time.
     let geometry = sim::scenario::table_geometry(&shipped, &device.body);
     let mut case = ClinicalCase::for_gait(kind, &device);

@@ -10,11 +10,17 @@
 
 use std::process::Command;
 
-fn compare(gait: &str) -> (serde_json::Value, i32) {
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(["compare", "--gait", gait, "--steps", "4", "--json"])
+/// Runs `exogait` with `args` (and a path, when given, appended).
+fn exogait(args: &[&str], path: &[&std::path::Path]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_exogait"))
+        .args(args)
+        .args(path)
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+fn compare(gait: &str) -> (serde_json::Value, i32) {
+    let out = exogait(&["compare", "--gait", gait, "--steps", "4", "--json"], &[]);
     let text = String::from_utf8(out.stdout).unwrap();
     let v: serde_json::Value =
         serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"));
@@ -127,11 +133,10 @@ fn a_gait_the_device_cannot_play_is_refused_before_the_run() {
     let dir = std::env::temp_dir().join(format!("exogait-refuse-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let report = dir.join("paper.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(["optimize", "--case", "walk", "--evals", "2000", "--out"])
-        .arg(&report)
-        .output()
-        .unwrap();
+    let out = exogait(
+        &["optimize", "--case", "walk", "--evals", "2000", "--out"],
+        &[&report],
+    );
     assert!(
         out.status.success(),
         "{}",
@@ -139,54 +144,33 @@ fn a_gait_the_device_cannot_play_is_refused_before_the_run() {
     );
     // The paper-mode optimum swings too fast for the device.
     let table = dir.join("paper.bin");
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(["table"])
-        .arg(&report)
-        .arg("--out")
-        .arg(&table)
-        .output()
-        .unwrap();
+    let out = exogait(&["table", "--out"], &[&table, &report]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("sample ") && err.contains("limit"), "{err}");
     assert!(!table.exists(), "nothing written");
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(["simulate", "--table"])
-        .arg(&report)
-        .output()
-        .unwrap();
+    let out = exogait(&["simulate", "--table"], &[&report]);
     assert_eq!(out.status.code(), Some(2));
     // A clinical report becomes a table the device plays.
     let clinical = dir.join("clinical.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args([
+    let out = exogait(
+        &[
             "optimize", "--case", "walk", "--mode", "clinical", "--evals", "3000", "--out",
-        ])
-        .arg(&clinical)
-        .output()
-        .unwrap();
+        ],
+        &[&clinical],
+    );
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(["table"])
-        .arg(&clinical)
-        .arg("--out")
-        .arg(&table)
-        .output()
-        .unwrap();
+    let out = exogait(&["table", "--out"], &[&table, &clinical]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(["simulate", "--steps", "2", "--table"])
-        .arg(&table)
-        .output()
-        .unwrap();
+    let out = exogait(&["simulate", "--steps", "2", "--table"], &[&table]);
     assert_eq!(
         out.status.code(),
         Some(0),

@@ -8,7 +8,7 @@
 //! before any use).
 #![allow(clippy::unreadable_literal)]
 
-use crate::tables::{GaitTable, TableError};
+use crate::tables::{GaitKind, GaitTable, TableError};
 
 /// Walk: clinical mode (walk: spacing (0.3, 0) m, ts 2.24 s), seed 1, 12000 evaluations; predicted balance impulse 83.2 N·s, pilot peak 84.8 N·m, joint peaks 81/113/58/86 N·m, clearance 0.040 m.
 pub static WALK: [u8; 4520] = [
@@ -894,4 +894,13 @@ pub fn stair_up() -> Result<GaitTable<'static>, TableError> {
 /// The stair-descent table, verified.
 pub fn stair_down() -> Result<GaitTable<'static>, TableError> {
     GaitTable::parse(&STAIR_DOWN)
+}
+
+/// The table of a movement, verified.
+pub fn of(kind: GaitKind) -> Result<GaitTable<'static>, TableError> {
+    match kind {
+        GaitKind::Walk => walk(),
+        GaitKind::StairUp => stair_up(),
+        GaitKind::StairDown => stair_down(),
+    }
 }

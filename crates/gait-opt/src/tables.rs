@@ -245,7 +245,7 @@ pub fn flash_module_source() -> Result<String, TableGenError> {
          //! before any use).\n\
          #![allow(clippy::unreadable_literal)]\n\
          \n\
-         use crate::tables::{{GaitTable, TableError}};\n"
+         use crate::tables::{{GaitKind, GaitTable, TableError}};\n"
     );
     for t in &tables {
         let _ = writeln!(s, "/// {:?}: {}.", t.kind, t.provenance);
@@ -263,7 +263,9 @@ pub fn flash_module_source() -> Result<String, TableGenError> {
          /// The stair-ascent table, verified.\n\
          pub fn stair_up() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&STAIR_UP)\n}}\n\n\
          /// The stair-descent table, verified.\n\
-         pub fn stair_down() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&STAIR_DOWN)\n}}"
+         pub fn stair_down() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&STAIR_DOWN)\n}}\n\n\
+         /// The table of a movement, verified.\n\
+         pub fn of(kind: GaitKind) -> Result<GaitTable<'static>, TableError> {{\n    match kind {{\n        GaitKind::Walk => walk(),\n        GaitKind::StairUp => stair_up(),\n        GaitKind::StairDown => stair_down(),\n    }}\n}}"
     );
     Ok(s)
 }

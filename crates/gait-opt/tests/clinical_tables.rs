@@ -17,12 +17,7 @@ use gait_opt::clinical::{ClinicalCase, evaluate_phi};
 use gait_opt::human::playable_human_gait;
 
 fn shipped(kind: GaitKind) -> GaitTable<'static> {
-    match kind {
-        GaitKind::Walk => gait_core::flash_tables::walk(),
-        GaitKind::StairUp => gait_core::flash_tables::stair_up(),
-        GaitKind::StairDown => gait_core::flash_tables::stair_down(),
-    }
-    .unwrap()
+    gait_core::flash_tables::of(kind).unwrap()
 }
 
 fn phi_of(t: &GaitTable<'_>) -> Vec<[f64; 5]> {

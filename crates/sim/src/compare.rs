@@ -21,7 +21,7 @@ use gait_core::tables::{GaitKind, GaitTable};
 
 use crate::closed_loop::{Rig, RigError};
 use crate::pilot::PilotConfig;
-use crate::scenario::{GO_AT_TICK, GO_TICKS, table_geometry, table_rig};
+use crate::scenario::{GO_AT_TICK, GO_TICKS, run_steps, table_geometry, table_rig};
 
 /// One step's crutch load.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,29 +125,9 @@ pub fn play<'t>(
     let mut rig = table_rig(device, gait, pilot, tables_of(table))?;
     Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
     prepare(&mut rig);
-    let max_ticks = (max_s / f64::from(device.dt_s)) as u64;
-    let mut ended_by = None;
-    let mut landed_at: Option<usize> = None;
-    let mut held_since: Option<usize> = None;
-    for _ in 0..max_ticks {
-        if let Err(e) = rig.tick() {
-            ended_by = Some(e.to_string());
-            break;
-        }
-        if landed_at.is_none() && rig.plant.landings().len() >= steps.max(1) {
-            landed_at = Some(rig.trace.len());
-        }
-        if landed_at.is_some_and(|k| rig.trace.len() > k + 1500) {
-            break;
-        }
-        if held_since.is_none() && rig.worst_reaction() >= gait_control::faults::Reaction::SafeHold
-        {
-            held_since = Some(rig.trace.len());
-        }
-        if held_since.is_some_and(|k| rig.trace.len() > k + 1000) {
-            break;
-        }
-    }
+    let ended_by = run_steps(&mut rig, steps, max_s)
+        .err()
+        .map(|e| e.to_string());
     let mut run = measure(&rig, device, &pilot, geometry.landing_m, ended_by);
     // A swing started after the last step asked for is not one of them.
     run.steps.truncate(steps);

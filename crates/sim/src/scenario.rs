@@ -197,6 +197,31 @@ pub fn run_gait_with(
     )
 }
 
+/// Ticks `rig` until `steps` landings have happened and 1.5 s more, a safe
+/// hold has lasted 1 s, the plant fails (its error), or `max_s` in all.
+pub fn run_steps(rig: &mut Rig<'_>, steps: usize, max_s: f64) -> Result<(), SimError> {
+    let max_ticks = (max_s / rig.plant.config().dt_s) as u64;
+    let mut landed_at: Option<usize> = None;
+    let mut held_since: Option<usize> = None;
+    for _ in 0..max_ticks {
+        rig.tick()?;
+        if landed_at.is_none() && rig.plant.landings().len() >= steps.max(1) {
+            landed_at = Some(rig.trace.len());
+        }
+        if landed_at.is_some_and(|k| rig.trace.len() > k + 1500) {
+            break;
+        }
+        if held_since.is_none() && rig.worst_reaction() >= gait_control::faults::Reaction::SafeHold
+        {
+            held_since = Some(rig.trace.len());
+        }
+        if held_since.is_some_and(|k| rig.trace.len() > k + 1000) {
+            break;
+        }
+    }
+    Ok(())
+}
+
 /// `gait` from `tables` on `device` with `pilot`, from standing (see
 /// [`table_rig`]): GO, then steps until `steps` landings have happened and
 /// 1.5 s more (or a safe hold has lasted 1 s, or `max_s` in all).
@@ -217,29 +242,7 @@ pub fn run_tables_with<'t>(
     let mut rig = table_rig(device, gait, pilot, tables)?;
     Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
     prepare(&mut rig);
-    let max_ticks = (max_s * 1000.0) as u64;
-    let mut landed_at: Option<usize> = None;
-    let mut held_since: Option<usize> = None;
-    let mut result = Ok(());
-    for _ in 0..max_ticks {
-        if let Err(e) = rig.tick() {
-            result = Err(e);
-            break;
-        }
-        if landed_at.is_none() && rig.plant.landings().len() >= steps.max(1) {
-            landed_at = Some(rig.trace.len());
-        }
-        if landed_at.is_some_and(|k| rig.trace.len() > k + 1500) {
-            break;
-        }
-        if held_since.is_none() && rig.worst_reaction() >= gait_control::faults::Reaction::SafeHold
-        {
-            held_since = Some(rig.trace.len());
-        }
-        if held_since.is_some_and(|k| rig.trace.len() > k + 1000) {
-            break;
-        }
-    }
+    let result = run_steps(&mut rig, steps, max_s);
     let faults = rig.faults().iter().map(|c| c.name()).collect();
     let on_board = rig
         .controller
