@@ -74,21 +74,20 @@ fn check_shape(v: &serde_json::Value, gait: &str) {
     }
 }
 
+/// The balance part of the crutch load falls by at least `min_pct`, and the
+/// highest crutch peak does not rise.
+fn check_reductions(v: &serde_json::Value, min_pct: f64) {
+    let r = &v["reduction_pct"];
+    assert!(f(v, &["reduction_pct", "F_balance"]) >= min_pct, "{r}");
+    assert!(f(v, &["reduction_pct", "peak"]) >= 0.0, "{r}");
+}
+
 #[test]
 fn walking_lightens_the_arms_by_more_than_the_papers_quarter() {
     let (v, _) = compare("walk");
     check_shape(&v, "walk");
-    // Target 25 % (the paper's 25.1 %); measured 79 %.
-    assert!(
-        f(&v, &["reduction_pct", "F_balance"]) >= 60.0,
-        "{}",
-        v["reduction_pct"]
-    );
-    assert!(
-        f(&v, &["reduction_pct", "peak"]) >= 0.0,
-        "{}",
-        v["reduction_pct"]
-    );
+    // Target 25 % (the paper's 25.1 %); measured 77.9 %.
+    check_reductions(&v, 60.0);
 }
 
 #[test]
@@ -96,18 +95,9 @@ fn stair_ascent_lightens_the_arms_by_two_thirds() {
     let (v, code) = compare("stair-up");
     check_shape(&v, "stair_up");
     assert_eq!(code, 0, "both gaits land every step without a fault");
-    // Target 75 % (the paper's 74.7 %); measured 67.6 %: not met on this
+    // Target 75 % (the paper's 74.7 %); measured 66.7 %: not met on this
     // device (docs/optimiser.md, "Where the targets stand").
-    assert!(
-        f(&v, &["reduction_pct", "F_balance"]) >= 60.0,
-        "{}",
-        v["reduction_pct"]
-    );
-    assert!(
-        f(&v, &["reduction_pct", "peak"]) >= 0.0,
-        "{}",
-        v["reduction_pct"]
-    );
+    check_reductions(&v, 60.0);
 }
 
 #[test]
@@ -115,17 +105,8 @@ fn stair_descent_lightens_the_arms_by_more_than_half() {
     let (v, code) = compare("stair-down");
     check_shape(&v, "stair_down");
     assert_eq!(code, 0, "both gaits land every step without a fault");
-    // Target: below the human gait, aim 50 %; measured 76 %.
-    assert!(
-        f(&v, &["reduction_pct", "F_balance"]) >= 50.0,
-        "{}",
-        v["reduction_pct"]
-    );
-    assert!(
-        f(&v, &["reduction_pct", "peak"]) >= 0.0,
-        "{}",
-        v["reduction_pct"]
-    );
+    // Target: below the human gait, aim 50 %; measured 76.4 %.
+    check_reductions(&v, 50.0);
 }
 
 #[test]

@@ -43,6 +43,8 @@ use gait_core::model::{GRAVITY_M_S2, LINKS};
 use gait_core::playback::{self, PlaybackError, PlaybackSample};
 use gait_core::tables::GaitKind;
 
+use crate::compass::compass_search;
+
 /// Sample period of the tables, s (the paper's Δt).
 pub const TABLE_PERIOD_S: f64 = 0.01;
 
@@ -691,32 +693,23 @@ pub fn optimize_clinical(
         sigma = 0.05;
     }
     // Compass search around the best point.
-    let Some((mut fbest, mut x)) = state.borrow().best else {
+    let Some((fbest, x)) = state.borrow().best else {
         return Err(ClinicalSearchError::NoFeasiblePoint);
     };
     let mut evals = state.borrow().evals;
-    let mut step = 0.02;
-    while step > 1e-5 && evals + 2 * DIM <= config.max_evals {
-        let mut improved = false;
-        for i in 0..DIM {
-            for sign in [1.0, -1.0] {
-                let mut y = x;
-                y[i] = (y[i] + sign * step).clamp(0.0, 1.0);
-                let (f, _) = score(case, &y);
-                evals += 1;
-                if f < fbest {
-                    fbest = f;
-                    x = y;
-                    improved = true;
-                    break;
-                }
-            }
-        }
-        if !improved {
-            step *= 0.5;
-        }
-        progress(evals, fbest);
-    }
+    let budget = config.max_evals.saturating_sub(evals);
+    let (x, _, _) = compass_search(
+        &mut evals,
+        x,
+        fbest,
+        1e-5,
+        budget,
+        |evals, y| {
+            *evals += 1;
+            score(case, y).0
+        },
+        |evals, f| progress(*evals, f),
+    );
     let step_found = decode(case, &x).map_err(|_| ClinicalSearchError::NoFeasiblePoint)?;
     let phi = step_phi(case, &step_found).map_err(|_| ClinicalSearchError::NoFeasiblePoint)?;
     let evaluation = evaluate_phi(case, &phi).map_err(|_| ClinicalSearchError::NoFeasiblePoint)?;

@@ -16,6 +16,7 @@
 pub mod baseline;
 pub mod clinical;
 pub mod clinical_report;
+mod compass;
 pub mod encoding;
 pub mod human;
 pub mod phi_cost;

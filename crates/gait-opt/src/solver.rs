@@ -31,6 +31,7 @@ use cmaes::{CMAESOptions, DVector};
 use gait_core::gait::{ControlPoints, GaitError};
 use gait_core::problem::{Cost, Infeasible, PaperCase, PaperProblem};
 
+use crate::compass::compass_search;
 use crate::encoding::{DIM, Encoding};
 
 /// What [`optimize`] is asked to do.
@@ -464,42 +465,27 @@ impl SplitMix64 {
     }
 }
 
-/// Compass (pattern) search around the best point: try ± step along each
-/// coordinate, move on improvement, halve the step after a sweep without
-/// one. Derivative-free, so the kinks and jumps of J are harmless.
+/// Compass search ([`compass_search`]) around the best point, ranked as
+/// the search ranks; the best point is kept by true J.
 fn polish(t: &mut Tracker, max_evals: usize, progress: &mut dyn FnMut(&Progress), run: usize) {
-    let Some((mut fbest, mut x)) = t.best else {
+    let Some((fbest, x)) = t.best else {
         return;
     };
-    let mut step = 0.02;
-    while step > 1e-6 && t.evals + 2 * DIM <= max_evals {
-        let mut improved = false;
-        for i in 0..DIM {
-            for sign in [1.0, -1.0] {
-                if t.evals >= max_evals {
-                    break;
-                }
-                let mut y = x;
-                if let Some(v) = y.get_mut(i) {
-                    *v = (*v + sign * step).clamp(0.0, 1.0);
-                }
-                let f = t.eval(&y);
-                if f < fbest {
-                    fbest = f;
-                    x = y;
-                    improved = true;
-                    break;
-                }
-            }
-        }
-        if !improved {
-            step *= 0.5;
-        }
-        progress(&Progress {
-            phase: Phase::Polish,
-            run,
-            evaluations: t.evals,
-            best_j: t.best_j(),
-        });
-    }
+    let budget = max_evals.saturating_sub(t.evals);
+    compass_search(
+        t,
+        x,
+        fbest,
+        1e-6,
+        budget,
+        |t, y| t.eval(y),
+        |t, _| {
+            progress(&Progress {
+                phase: Phase::Polish,
+                run,
+                evaluations: t.evals,
+                best_j: t.best_j(),
+            });
+        },
+    );
 }
