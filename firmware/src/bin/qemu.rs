@@ -225,7 +225,7 @@ fn control_tick_bench(ctr: &mut InstrCounter) -> usize {
             return 1;
         }
     };
-    let mut hw = match board_config::hardware(qemu_rig::standing(&device)) {
+    let mut hw = match board_config::hardware(&device, qemu_rig::standing(&device)) {
         Ok(h) => h,
         Err(e) => {
             hprintln!("FAIL control: hardware refused: {:?}", e);

@@ -224,7 +224,7 @@ fn main() -> ! {
         fault_led: gpiob.pb8.into_push_pull_output().erase(),
         buzzer: gpiob.pb9.into_push_pull_output().erase(),
     };
-    let mut hw = match board_config::hardware(io) {
+    let mut hw = match board_config::device().and_then(|d| board_config::hardware(&d, io)) {
         Ok(hw) => hw,
         Err(e) => {
             defmt::error!("board configuration refused: {}", e);
