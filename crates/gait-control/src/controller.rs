@@ -1,12 +1,13 @@
-//! The 1 kHz control tick, top to bottom:
+//! The 1 kHz control tick, in five stages, each a method of its own:
 //!
-//! 1. **sense** — read every encoder, force sensor, button and the e-stop;
-//!    decode, calibrate, check (a failed read becomes a status, never a
-//!    panic, and the last good angle is kept for control);
+//! 1. **sense** ([`sense`]) — read every encoder, force sensor, button and
+//!    the e-stop; decode, calibrate, check (a failed read becomes a status,
+//!    never a panic, and the last good angle is kept for control);
 //! 2. **plan** — the operator scheme turns button events into requests; the
-//!    sequencer advances the gait and yields the reference;
-//! 3. **act** — per joint, PID plus the model's inverse-dynamics feed-forward
-//!    along the reference (gait-core, f32);
+//!    sequencer advances the gait and hands over the whole
+//!    [`Reference`] (one table interpolation);
+//! 3. **act** ([`act`]) — per joint, PID plus the model's inverse-dynamics
+//!    feed-forward along the reference (gait-core, f32);
 //! 4. **guard** — the supervisor checks every fact and decides a reaction
 //!    before anything is written;
 //! 5. **write** — motor commands (only after the guard), indicators, the
@@ -15,29 +16,30 @@
 //! Bounded: fixed numbers of reads, one table interpolation (three lookups
 //! for the rates), one inverse-dynamics evaluation, no allocation, no wait.
 
+mod act;
+mod sense;
+
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;
 use embedded_hal::spi::SpiDevice;
-use gait_core::foot::{self, StanceFoot};
-use gait_core::kinematics::joint_torques;
-use gait_core::model::GRAVITY_M_S2;
-use gait_core::{BodyModel, LINKS};
+use gait_core::BodyModel;
 
 use crate::crutch_load::CrutchLoad;
-use crate::drivers::as5048a::{self, As5048a};
+use crate::drivers::as5048a::As5048a;
 use crate::drivers::buttons::Button;
-use crate::drivers::mcp3208::{self, ForceCalibration, ForceChannels, ForceFault, Mcp3208};
+use crate::drivers::mcp3208::{ForceCalibration, ForceChannels, Mcp3208};
 use crate::drivers::motor::{self, Motor};
 use crate::drivers::status::Indicator;
 use crate::faults::{FaultSet, Reaction};
-use crate::operator::{ControllerStatus, Input, Operator, OperatorConfig, Request};
-use crate::position_loop::{JointGains, JointLoop, Setpoint};
-use crate::posture::{JOINTS, Side, joint_torques_from_theta_torques, phi_from_joints};
-use crate::sequencer::{GaitTables, Phase, Sensed, SeqEvent, Sequencer, SequencerConfig};
-use crate::supervisor::{
-    EncoderSense, EncoderStatus, ForceSense, ForceStatus, MotorSense, Supervisor, SupervisorInput,
-    Verdict,
-};
+use crate::operator::{self, ControllerStatus, Input, Operator, OperatorConfig, Request};
+use crate::position_loop::{JointGains, JointLoop};
+use crate::posture::JOINTS;
+use crate::reference::Reference;
+use crate::sequencer::{GaitTables, Phase, SeqEvent, Sequencer, SequencerConfig};
+use crate::supervisor::{MotorSense, Supervisor, SupervisorInput, Verdict};
+
+use act::Actuation;
+use sense::{BAD_ENCODER, Senses};
 
 /// Encoders: the four joints (joint order), then left and right ankle.
 pub const ENCODERS: usize = JOINTS + 2;
@@ -138,20 +140,12 @@ pub struct Controller<'t> {
     crutch: CrutchLoad,
     last_raw: [u16; ENCODERS],
     last_angle: [f32; ENCODERS],
-    /// What the gait plans for each ankle this tick (left, right), rad:
-    /// the shank's lean as a stance shank, NaN where nothing is planned
-    /// ([`Controller::plan_ankles`]). With the heel up (toe rocker) the
-    /// ankle encoder reads its stop, not the lean: the feed-forward's
-    /// static posture then uses the plan ([`Controller::stance_phi1`]), and
-    /// the supervisor flags a heel-off the plan does not have (0x0105).
-    ankle_plan: [f32; 2],
     rate: [f32; JOINTS],
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
     primed: bool,
-    /// A clinician reset waiting for the supervisor to see cleared motor
-    /// flags: (safe posture when asked, ticks still to wait).
-    pending_reset: Option<(bool, u8)>,
+    /// A clinician reset waiting for the supervisor.
+    pending_reset: Option<PendingReset>,
     /// Integral of the other foot's load error in double support, N.
     other_foot_integral_n: f32,
     tick: u32,
@@ -192,7 +186,6 @@ impl<'t> Controller<'t> {
             crutch: CrutchLoad::new(),
             last_raw: [0; ENCODERS],
             last_angle: [0.0; ENCODERS],
-            ankle_plan: [f32::NAN; 2],
             rate: [0.0; JOINTS],
             motor_sense: [idle; JOINTS],
             motors_enabled: false,
@@ -249,256 +242,188 @@ impl<'t> Controller<'t> {
         IN: InputPin,
         OUT: OutputPin,
     {
-        let dt = self.cfg.dt_s;
         self.tick = self.tick.wrapping_add(1);
+        let senses = self.sense(hw);
+        let plan = self.plan(hw, &senses);
+        let actuation = self.act(&senses, &plan.reference);
+        let verdict = self.guard(&senses, &plan.reference, &actuation, deadline_missed);
+        self.write(hw, &senses, &plan, &actuation, &verdict)
+    }
 
-        // 1. sense
-        let encoders = self.read_encoders(hw);
-        let forces = self.read_forces(hw);
-        let mode = hw.mode.tick();
-        let go = hw.go.tick();
-        let (e_stop_pressed, e_stop_read_error) = match hw.e_stop.is_high() {
-            Ok(high) => (high == self.cfg.e_stop_active_high, false),
-            Err(_) => (true, true),
-        };
-        let joints = self.joint_angles();
-        let forces_n = forces.map(|f| f.newtons);
-        let sensed = Sensed {
-            joints_rad: joints,
-            feet_n: [forces_n[0], forces_n[1]],
-            crutches_n: [forces_n[2], forces_n[3]],
-            // This tick's readings (NaN unless the encoder answered well):
-            // a held last-good value must not count as "ready".
-            ankles_rad: [JOINTS, JOINTS + 1]
-                .map(|i| encoders.get(i).map_or(f32::NAN, |e| e.angle_rad)),
-        };
+    /// Stage 2: the operator's requests, then the sequencer's reference.
+    fn plan<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
+        &mut self,
+        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+        s: &Senses,
+    ) -> Planned
+    where
+        PWM: SetDutyCycle<Error = PwmE>,
+        DIR: OutputPin<Error = PinE>,
+        EN: OutputPin<Error = PinE>,
+    {
         if !self.primed {
             // First tick: hold the posture the device is in.
-            self.seq = Sequencer::new(self.cfg.sequencer, *self.seq.tables(), joints)
+            self.seq = Sequencer::new(self.cfg.sequencer, *self.seq.tables(), s.joints)
                 .with_model(self.cfg.model);
             self.primed = true;
         }
-
-        // 2. plan
         let status = ControllerStatus {
             walking: self.seq.walking(),
             step_in_progress: self.seq.step_in_progress(),
-            safe_posture: self.safe_posture(&sensed),
+            safe_posture: self.safe_posture(&s.sensed),
             faulted: !self.supervisor.latched().is_empty(),
         };
-        let op = self.operator.tick(&Input { mode, go, status });
-        match op.request {
+        let operator = self.operator.tick(&Input {
+            mode: s.mode,
+            go: s.go,
+            status,
+        });
+        match operator.request {
             Some(Request::Start(gait)) => {
-                self.seq.request_start(gait, &sensed);
+                self.seq.request_start(gait, &s.sensed);
             }
             Some(Request::StopAfterStep) => self.seq.request_stop(),
             Some(Request::ResetFaults) => {
-                // Motor drivers latch their own faults: clear them first and
-                // let one supervisor check see the cleared flags, then ask.
+                // Motor drivers latch their own faults: clear them first.
                 for m in hw.motors.iter_mut() {
                     let _ = m.reset_fault();
                 }
-                // The cleared flags reach the supervisor's check at the end
-                // of the next tick; its reset decision uses the last check.
-                self.pending_reset = Some((status.safe_posture, 2));
+                self.pending_reset = Some(PendingReset::new(status.safe_posture));
             }
-            None => match self.pending_reset {
-                Some((safe, 0)) => {
-                    self.pending_reset = None;
-                    if safe && status.safe_posture && self.supervisor.request_reset(true).is_ok() {
-                        self.seq.reset_after_faults();
-                        self.loops.iter_mut().for_each(JointLoop::reset);
-                    }
-                }
-                Some((safe, n)) => self.pending_reset = Some((safe, n - 1)),
-                None => {}
-            },
+            None => self.complete_reset(status.safe_posture),
         }
-        let crutch = &mut self.crutch;
-        let plan = self.seq.update(&sensed, dt, &mut |ev| match ev {
-            SeqEvent::SwingStarted(..) => {
-                crutch.begin_step();
-            }
-            SeqEvent::Stopped => {
-                crutch.end_step();
-            }
-            _ => {}
-        });
-        self.crutch.sample(forces_n[2], forces_n[3], dt);
-
-        // 3. act
-        self.ankle_plan = self.plan_ankles(plan.stance, plan.swing);
-        let stance_ankle = self.stance_phi1(
-            self.last_angle
-                .get(JOINTS + plan.stance.ankle())
-                .copied()
-                .unwrap_or(0.0),
-            plan.stance,
-        );
-        // What the other foot may carry: the share the plan gives it (the
-        // whole body between steps; along a swing what the table plans for
-        // its swing foot, so a table can shift the weight in double support
-        // before it lifts the foot). Not from the foot's sensor during a
-        // swing: a swing foot brushing the ground then switched the model's
-        // load on and off, and the feed-forward bounced the foot. In a safe
-        // hold, what the sensor reads (NaN: nothing).
-        let weight = self.cfg.model.total_mass_kg() * GRAVITY_M_S2 as f32;
-        let other_load = match plan.other_foot_share {
-            Some(share) => weight * share.clamp(0.0, 1.0),
-            None => {
-                let other_foot = forces_n
-                    .get(plan.stance.other().foot())
-                    .copied()
-                    .unwrap_or(f32::NAN);
-                if other_foot.is_finite() {
-                    other_foot.max(0.0).min(weight)
-                } else {
-                    0.0
-                }
-            }
-        };
-        let planned = self.feedforward(
-            &plan.angle_rad,
-            plan.swing,
-            plan.stance,
-            stance_ankle,
-            other_load,
-        );
-        let mut feedforward = planned.torques_nm;
-        // The other foot's load in double support: measured against the
-        // plan, the difference pushed by the other leg (proportional and
-        // integral), so that the share the plan gives it is what it carries.
-        // Without it the share is a free internal force of the closed chain
-        // that the legs' position loops and the pilot settle between them.
-        let other_share = plan.other_foot_share.unwrap_or(0.0).clamp(0.0, 1.0);
-        let measured = forces_n
-            .get(plan.stance.other().foot())
-            .copied()
-            .unwrap_or(f32::NAN);
-        if other_share > 0.0 && measured.is_finite() && self.motors_enabled {
-            let error = planned.other_foot_n - measured;
-            let integral = (self.other_foot_integral_n + OTHER_FOOT_KI_PER_S * error * dt)
-                .clamp(-OTHER_FOOT_INTEGRAL_N, OTHER_FOOT_INTEGRAL_N);
-            let push = |integral: f32| {
-                other_share
-                    * (OTHER_FOOT_KP * error + integral)
-                        .clamp(-OTHER_FOOT_PUSH_N, OTHER_FOOT_PUSH_N)
-            };
-            // Anti-windup: the integral moves only while the other leg's
-            // feed-forward stays inside its loops' limits.
-            let within = |push_n: f32| {
-                feedforward
-                    .iter()
-                    .zip(&planned.per_other_foot_newton)
-                    .zip(&self.cfg.gains)
-                    .enumerate()
-                    .all(|(i, ((&f, &per), g))| {
-                        !plan.stance.other().has_joint(i)
-                            || (f + push_n * per).abs() <= g.torque_limit_nm
-                    })
-            };
-            if within(push(integral)) {
-                self.other_foot_integral_n = integral;
-            }
-            let push_n = push(self.other_foot_integral_n);
-            for (i, (f, &per)) in feedforward
-                .iter_mut()
-                .zip(&planned.per_other_foot_newton)
-                .enumerate()
-            {
-                if plan.stance.other().has_joint(i) {
-                    *f += push_n * per;
-                }
-            }
-        } else {
-            self.other_foot_integral_n = 0.0;
-        }
-        let mut command = [0.0f32; JOINTS];
-        let mut saturated = [false; JOINTS];
-        // In double support the chain is closed: the stance leg and the
-        // pilot set the posture, and the other leg's torques set how much
-        // of the body its foot carries. Stiff position loops on both legs
-        // would fight each other through the ground and decide that share
-        // by their tracking errors; the other leg's loop is softened by the
-        // share of the body its foot is planned to carry (stiff again as the
-        // plan unloads it before a lift-off), so its feed-forward, which
-        // plans that load, is what it applies.
-        let carried = if other_share > 0.0 && weight > 0.0 {
-            (planned.other_foot_n / weight).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        for i in 0..JOINTS {
-            let (Some(lp), Some(g)) = (self.loops.get_mut(i), self.cfg.gains.get(i)) else {
-                continue;
-            };
-            let softened;
-            let g = if plan.stance.other().has_joint(i) && carried > 0.0 {
-                softened = g.with_stiffness(1.0 - DOUBLE_SUPPORT_COMPLIANCE * carried);
-                &softened
-            } else {
-                g
-            };
-            let sp = Setpoint {
-                angle_rad: plan.angle_rad.get(i).copied().unwrap_or(f32::NAN),
-                rate_rad_s: plan.rate_rad_s.get(i).copied().unwrap_or(0.0),
-                feedforward_nm: feedforward.get(i).copied().unwrap_or(0.0),
-            };
-            let out = lp.update(
-                g,
-                &sp,
-                joints.get(i).copied().unwrap_or(f32::NAN),
-                self.rate.get(i).copied().unwrap_or(0.0),
-                dt,
+        let mut step = StepEdges::default();
+        let reference =
+            self.seq.update(
+                &s.sensed,
+                operator.selected,
+                self.cfg.dt_s,
+                &mut |ev| match ev {
+                    SeqEvent::SwingStarted(..) => step.began = true,
+                    SeqEvent::Stopped => step.ended = true,
+                    _ => {}
+                },
             );
-            if let Some(c) = command.get_mut(i) {
-                *c = out.command_nm;
-            }
-            if let Some(s) = saturated.get_mut(i) {
-                *s = out.saturated;
-            }
+        Planned {
+            reference,
+            operator,
+            step,
         }
+    }
 
-        // 4. guard
+    /// The clinician's reset, once the supervisor has seen the motor
+    /// drivers' cleared flags: granted only in a safe posture, both when
+    /// asked and now.
+    fn complete_reset(&mut self, safe_now: bool) {
+        let Some(pending) = self.pending_reset else {
+            return;
+        };
+        if pending.ticks_left > 0 {
+            self.pending_reset = Some(PendingReset {
+                ticks_left: pending.ticks_left - 1,
+                ..pending
+            });
+            return;
+        }
+        self.pending_reset = None;
+        if pending.safe_when_asked && safe_now && self.supervisor.request_reset(true).is_ok() {
+            self.seq.reset_after_faults();
+            self.loops.iter_mut().for_each(JointLoop::reset);
+        }
+    }
+
+    /// Stage 4: the supervisor's verdict on everything sensed and
+    /// commanded, and the sequencer's reaction to it.
+    fn guard(
+        &mut self,
+        s: &Senses,
+        r: &Reference,
+        a: &Actuation,
+        deadline_missed: bool,
+    ) -> Verdict {
         let mut motors = self.motor_sense;
-        for ((m, &c), &g) in motors.iter_mut().zip(&command).zip(&self.cfg.gains) {
+        for ((m, &c), &g) in motors.iter_mut().zip(&a.command_nm).zip(&self.cfg.gains) {
             m.commanded_nm = c;
             m.limit_nm = g.torque_limit_nm;
         }
-        let ankle_plan_rad = self.ankle_plan;
         let input = SupervisorInput {
             tick: self.tick,
-            joints: [0, 1, 2, 3].map(|i| encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
-            joint_reference_rad: plan.angle_rad,
-            ankles: [4, 5].map(|i| encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
-            forces,
+            joints: [0, 1, 2, 3].map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
+            joint_reference_rad: r.angle_rad,
+            ankles: [4, 5].map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
+            forces: s.forces,
             motors,
-            e_stop_pressed,
-            e_stop_read_error,
+            e_stop_pressed: s.e_stop_pressed,
+            e_stop_read_error: s.e_stop_read_error,
             deadline_missed,
             step_in_progress: self.seq.step_in_progress(),
-            button_input_fault: mode.input_fault || go.input_fault,
-            ankle_plan_rad,
+            button_input_fault: s.mode.input_fault || s.go.input_fault,
+            ankle_plan_rad: r.ankle_plan_rad,
         };
-        let verdict: Verdict = self.supervisor.check(&input);
+        let verdict = self.supervisor.check(&input);
         match verdict.reaction {
             Reaction::None => {}
             Reaction::FinishStepThenHold => self.seq.block_new_steps(),
-            Reaction::SafeHold => self.seq.enter_safe_hold(&joints),
+            Reaction::SafeHold => self.seq.enter_safe_hold(&s.joints),
             Reaction::DisableMotors => {
-                self.seq.follow_measured(&joints);
+                self.seq.follow_measured(&s.joints);
                 self.loops.iter_mut().for_each(JointLoop::reset);
             }
         }
-        if matches!(self.seq.phase(), Phase::Standing | Phase::SafeHold { .. })
-            && self.crutch.current().is_some()
-            && verdict.reaction >= Reaction::SafeHold
-        {
-            self.crutch.end_step();
-        }
+        verdict
+    }
 
-        // 5. write
-        let enable = verdict.reaction < Reaction::DisableMotors;
+    /// Stage 5: motors (enabled only as the verdict allows), indicators,
+    /// the crutch-load metric; the tick's report.
+    fn write<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
+        &mut self,
+        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+        s: &Senses,
+        plan: &Planned,
+        a: &Actuation,
+        verdict: &Verdict,
+    ) -> TickReport
+    where
+        PWM: SetDutyCycle<Error = PwmE>,
+        DIR: OutputPin<Error = PinE>,
+        EN: OutputPin<Error = PinE>,
+        OUT: OutputPin,
+    {
+        let written = self.write_motors(hw, &a.command_nm, verdict.reaction);
+        let op = &plan.operator;
+        let fb = op.feedback;
+        let _ = hw.gait_led.update(fb.gait_led, op.tick);
+        let _ = hw.fault_led.update(fb.fault_led, op.tick);
+        let _ = hw.buzzer.update(fb.buzzer, op.tick);
+        self.log_crutch_load(s, plan.step, verdict.reaction);
+        TickReport {
+            tick: self.tick,
+            joints_rad: s.joints,
+            reference_rad: plan.reference.angle_rad,
+            feedforward_nm: a.feedforward_nm,
+            command_nm: written,
+            forces_n: s.forces_n,
+            phase: self.seq.phase(),
+            reaction: verdict.reaction,
+            faults: verdict.latched,
+            motors_enabled: self.motors_enabled,
+        }
+    }
+
+    /// Enables or disables the motors as `reaction` allows and writes the
+    /// commands; returns what the drivers applied (0 when disabled).
+    fn write_motors<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
+        &mut self,
+        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+        command: &[f32; JOINTS],
+        reaction: Reaction,
+    ) -> [f32; JOINTS]
+    where
+        PWM: SetDutyCycle<Error = PwmE>,
+        DIR: OutputPin<Error = PinE>,
+        EN: OutputPin<Error = PinE>,
+    {
+        let enable = reaction < Reaction::DisableMotors;
         if enable && !self.motors_enabled {
             let mut all_ok = true;
             for m in hw.motors.iter_mut() {
@@ -533,184 +458,30 @@ impl<'t> Controller<'t> {
                 }
             }
         }
-        let fb = op.feedback;
-        let _ = hw.gait_led.update(fb.gait_led, op.tick);
-        let _ = hw.fault_led.update(fb.fault_led, op.tick);
-        let _ = hw.buzzer.update(fb.buzzer, op.tick);
-
-        TickReport {
-            tick: self.tick,
-            joints_rad: joints,
-            reference_rad: plan.angle_rad,
-            feedforward_nm: feedforward,
-            command_nm: written,
-            forces_n,
-            phase: self.seq.phase(),
-            reaction: verdict.reaction,
-            faults: verdict.latched,
-            motors_enabled: self.motors_enabled,
-        }
+        written
     }
 
-    fn read_encoders<ENC, ADC, PWM, DIR, EN, IN, OUT>(
-        &mut self,
-        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
-    ) -> [EncoderSense; ENCODERS]
-    where
-        ENC: SpiDevice<u8>,
-    {
-        let mut out = [BAD_ENCODER; ENCODERS];
-        let dt = self.cfg.dt_s;
-        // First-order low-pass on the joint rates: α = dt / (RC + dt).
-        let rc = 1.0 / (2.0 * core::f32::consts::PI * self.cfg.rate_filter_hz);
-        let alpha = dt / (rc + dt);
-        for (i, (enc, o)) in hw.encoders.iter_mut().zip(out.iter_mut()).enumerate() {
-            let status = match enc.read_angle() {
-                Ok(r) => {
-                    if let (Some(last), Some(raw)) =
-                        (self.last_angle.get_mut(i), self.last_raw.get_mut(i))
-                    {
-                        if let Some(rate) = self.rate.get_mut(i) {
-                            let raw_rate = if self.primed {
-                                (r.angle_rad - *last) / dt
-                            } else {
-                                0.0
-                            };
-                            *rate += alpha * (raw_rate - *rate);
-                        }
-                        *last = r.angle_rad;
-                        *raw = r.raw_counts;
-                    }
-                    EncoderStatus::Ok
-                }
-                Err(as5048a::Error::Bus(_)) => EncoderStatus::BusError,
-                Err(as5048a::Error::Parity) => EncoderStatus::Parity,
-                Err(as5048a::Error::ErrorFlag(_)) => EncoderStatus::ErrorFlag,
-            };
-            *o = EncoderSense {
-                status,
-                raw_counts: self.last_raw.get(i).copied().unwrap_or(0),
-                angle_rad: if status == EncoderStatus::Ok {
-                    self.last_angle.get(i).copied().unwrap_or(f32::NAN)
-                } else {
-                    f32::NAN
-                },
-            };
+    /// The crutch-load metric: a step's log opens with its swing and closes
+    /// when the gait stops or a fatal reaction ends it.
+    fn log_crutch_load(&mut self, s: &Senses, step: StepEdges, reaction: Reaction) {
+        if step.began {
+            self.crutch.begin_step();
         }
-        out
-    }
-
-    fn read_forces<ENC, ADC, PWM, DIR, EN, IN, OUT>(
-        &mut self,
-        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
-    ) -> [ForceSense; FORCES]
-    where
-        ADC: SpiDevice<u8>,
-    {
-        let ch = hw.force_channels;
-        let channels = [ch.left_foot, ch.right_foot, ch.left_crutch, ch.right_crutch];
-        let mut out = [ForceSense {
-            status: ForceStatus::BusError,
-            newtons: f32::NAN,
-        }; FORCES];
-        for ((o, channel), cal) in out
-            .iter_mut()
-            .zip(channels)
-            .zip(&self.cfg.force_calibration)
+        if step.ended {
+            self.crutch.end_step();
+        }
+        self.crutch
+            .sample(s.forces_n[2], s.forces_n[3], self.cfg.dt_s);
+        if matches!(self.seq.phase(), Phase::Standing | Phase::SafeHold { .. })
+            && self.crutch.current().is_some()
+            && reaction >= Reaction::SafeHold
         {
-            *o = match hw.adc.read_force(channel, cal) {
-                Ok(n) => ForceSense {
-                    status: ForceStatus::Ok,
-                    newtons: n,
-                },
-                Err(mcp3208::Error::Bus(_)) => ForceSense {
-                    status: ForceStatus::BusError,
-                    newtons: f32::NAN,
-                },
-                Err(mcp3208::Error::Sensor(f)) => ForceSense {
-                    status: match f {
-                        ForceFault::OpenCircuit { .. } => ForceStatus::Open,
-                        ForceFault::ShortCircuit { .. } => ForceStatus::Shorted,
-                        ForceFault::OutOfRange { .. } => ForceStatus::OutOfRange,
-                    },
-                    newtons: f32::NAN,
-                },
-            };
+            self.crutch.end_step();
         }
-        out
-    }
-
-    /// The stance shank's angle φ1 for a static posture: the ankle
-    /// encoder's reading, or, when it reads the dorsiflexion stop (within
-    /// 0.5°: the heel may be up and φ1 beyond what the encoder can see), the
-    /// larger of it and the last planned φ1.
-    fn stance_phi1(&self, ankle_reading: f32, stance: Side) -> f32 {
-        let stop = StanceFoot::for_model(&self.cfg.model).heel_off_rad;
-        let planned = self
-            .ankle_plan
-            .get(stance.ankle())
-            .copied()
-            .unwrap_or(f32::NAN);
-        crate::posture::stance_phi1_estimate(ankle_reading, stop, planned)
-    }
-
-    /// What the gait plans for each ankle now (left, right), as a stance
-    /// shank's lean (φ1; past the stop the heel is planned to be up):
-    /// - in a swing, the stance ankle follows the table (its last sample
-    ///   once it has ended); the swing foot is in the air (NaN);
-    /// - standing, waiting or transferring, both feet are down in the
-    ///   gait's start posture: the stance ankle at the table's first φ1,
-    ///   the other at its last (the trailing leg's lean; periodic tables).
-    ///   Standing, the gait is the clinician's selection;
-    /// - in a safe hold, what it was when the hold began.
-    fn plan_ankles(
-        &self,
-        stance: Side,
-        swing: Option<(crate::operator::Gait, Side, f32)>,
-    ) -> [f32; 2] {
-        let tables = self.seq.tables();
-        let mut out = [f32::NAN; 2];
-        let mut set = |side: Side, v: f32| {
-            if let Some(p) = out.get_mut(side.ankle()) {
-                *p = v;
-            }
-        };
-        let both = |tb: &gait_core::tables::GaitTable<'_>, set: &mut dyn FnMut(Side, f32)| {
-            let [first, ..] = tb.first();
-            let [last, ..] = tb.last();
-            set(stance, first);
-            set(stance.other(), last);
-        };
-        match self.seq.phase() {
-            Phase::SafeHold { .. } => return self.ankle_plan,
-            Phase::Swing { .. } => {
-                let playing = swing.and_then(|(g, s, t)| tables.get(g).map(|tb| (tb, s, t)));
-                if let Some((tb, s, t)) = playing {
-                    let [phi1, ..] = tb.at_time(t.min(tb.duration_s()));
-                    set(s, phi1);
-                }
-            }
-            Phase::Standing => {
-                if let Some(tb) = tables.get(self.operator.selected()) {
-                    both(tb, &mut set);
-                }
-            }
-            Phase::WaitingReady { .. } | Phase::Transfer { .. } => {
-                if let Some(tb) = tables.get(self.seq.gait()) {
-                    both(tb, &mut set);
-                }
-            }
-        }
-        out
-    }
-
-    /// Last good joint angles (joint order).
-    fn joint_angles(&self) -> [f32; JOINTS] {
-        [0, 1, 2, 3].map(|i| self.last_angle.get(i).copied().unwrap_or(f32::NAN))
     }
 
     /// Standing still with both crutches loaded: a reset cannot surprise.
-    fn safe_posture(&self, sensed: &Sensed) -> bool {
+    fn safe_posture(&self, sensed: &crate::sequencer::Sensed) -> bool {
         let still = self
             .rate
             .iter()
@@ -722,109 +493,41 @@ impl<'t> Controller<'t> {
             .all(|&f| f >= self.cfg.sequencer.crutch_ready_n);
         still && standing && crutches
     }
+}
 
-    /// The model's joint torques along the reference: during a swing from
-    /// the table's Φ and its rates (central differences over one table
-    /// period; at rest once the table has ended and the reference is held);
-    /// otherwise static torques of the reference posture. In both, the
-    /// other foot takes up to `other_load_n` of the load where that lowers
-    /// the effort ([`share_load`]).
-    fn feedforward(
-        &self,
-        reference: &[f32; JOINTS],
-        swing: Option<(crate::operator::Gait, Side, f32)>,
-        stance: Side,
-        stance_ankle: f32,
-        other_load_n: f32,
-    ) -> FeedForward {
-        let model = &self.cfg.model;
-        // Past the table's end (waiting for the landing) the reference holds
-        // the last posture: statics, not the table's final rates.
-        let playing = swing.and_then(|(g, s, t)| {
-            self.seq
-                .tables()
-                .get(g)
-                .filter(|tb| t <= tb.duration_s())
-                .map(|tb| (tb, s, t))
-        });
-        let (phi, dphi, ddphi, side) = match playing {
-            Some((tb, s, t)) => {
-                let h = tb.period_s();
-                // Derivatives from samples inside the table: past either
-                // end, at_time clamps, and a central difference across
-                // the clamp reads the last rate as a stop within one
-                // period (φ1 still moving at 0.14 rad/s at the landing
-                // became a 1,200 N·m ankle and 600 N·m knee demand).
-                let tc = t.max(h).min(tb.duration_s() - h);
-                let (a, c) = (tb.at_time(tc - h), tb.at_time(tc + h));
-                let mid = tb.at_time(tc);
-                let b = tb.at_time(t);
-                let mut d1 = [0.0f32; LINKS];
-                let mut d2 = [0.0f32; LINKS];
-                for (((o1, o2), (&x0, &x1)), &x2) in d1
-                    .iter_mut()
-                    .zip(d2.iter_mut())
-                    .zip(a.iter().zip(&mid))
-                    .zip(&c)
-                {
-                    *o1 = (x2 - x0) / (2.0 * h);
-                    *o2 = (x2 - 2.0 * x1 + x0) / (h * h);
-                }
-                (b, d1, d2, s)
-            }
-            None => (
-                phi_from_joints(reference, stance_ankle, stance),
-                [0.0; LINKS],
-                [0.0; LINKS],
-                stance,
-            ),
-        };
-        // The stance heel lifts past the ankle's stop (stair descent): the
-        // chain then turns about the toe (gait_core::foot).
-        let foot = StanceFoot::for_model(model);
-        let single = joint_torques(&foot::inverse_dynamics(model, &foot, &phi, &dphi, &ddphi));
-        let shared = foot::share_load(model, &foot, &phi, &single, other_load_n);
-        let ff = joint_torques_from_theta_torques(&shared.torques, side);
-        let (_, per_newton_up) = foot::second_foot_torques(model, &foot, &phi);
-        let per_newton = joint_torques_from_theta_torques(&per_newton_up.map(|v| -v), side);
-        let clean = |v: f32| if v.is_finite() { v } else { 0.0 };
-        FeedForward {
-            torques_nm: ff.map(clean),
-            other_foot_n: clean(shared.reaction_n[1]),
-            per_other_foot_newton: per_newton.map(clean),
+/// What *plan* decided.
+struct Planned {
+    /// The sequencer's reference.
+    reference: Reference,
+    /// The operator scheme's output (indicators, the selection).
+    operator: operator::Output,
+    /// Whether a step's swing began or the gait stopped (for the metric).
+    step: StepEdges,
+}
+
+/// A step's edges this tick, for the crutch-load metric.
+#[derive(Clone, Copy, Debug, Default)]
+struct StepEdges {
+    began: bool,
+    ended: bool,
+}
+
+/// A clinician reset waiting for the supervisor to see the motor drivers'
+/// cleared flags: they reach its check at the end of the next tick, and
+/// its reset decision uses the last check.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PendingReset {
+    /// The posture was safe when the reset was asked for.
+    safe_when_asked: bool,
+    /// Ticks still to wait.
+    ticks_left: u8,
+}
+
+impl PendingReset {
+    fn new(safe_when_asked: bool) -> Self {
+        Self {
+            safe_when_asked,
+            ticks_left: 2,
         }
     }
 }
-
-/// The model's torques along the reference and the load it plans for the
-/// other foot.
-struct FeedForward {
-    /// Joint torques, joint order, N·m.
-    torques_nm: [f32; JOINTS],
-    /// Vertical force the other foot is planned to carry, N.
-    other_foot_n: f32,
-    /// Joint torques (joint order) that one more newton pushed down by the
-    /// other foot takes, N·m/N.
-    per_other_foot_newton: [f32; JOINTS],
-}
-
-/// How much of its position feedback the other leg gives up while its foot
-/// is planned to carry the whole body (0: none, 1: all of it).
-const DOUBLE_SUPPORT_COMPLIANCE: f32 = 0.8;
-
-/// Proportional gain of the other foot's load loop (share of the error
-/// pushed at once).
-const OTHER_FOOT_KP: f32 = 0.5;
-/// Its integral gain, 1/s, and the integral's clamp, N.
-const OTHER_FOOT_KI_PER_S: f32 = 5.0;
-const OTHER_FOOT_INTEGRAL_N: f32 = 200.0;
-/// Largest correction of the other foot's load, N (a sensor reading far
-/// from the plan, as right after power-up, must not drive the leg to its
-/// limit).
-const OTHER_FOOT_PUSH_N: f32 = 200.0;
-
-const BAD_ENCODER: EncoderSense = EncoderSense {
-    status: EncoderStatus::BusError,
-    raw_counts: 0,
-    angle_rad: f32::NAN,
-};

@@ -14,5 +14,6 @@ pub mod faults;
 pub mod operator;
 pub mod position_loop;
 pub mod posture;
+pub mod reference;
 pub mod sequencer;
 pub mod supervisor;

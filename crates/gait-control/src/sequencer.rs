@@ -15,13 +15,17 @@
 //! Work per tick is constant: one table interpolation, no search, no loop
 //! whose length depends on data.
 
-use gait_core::ik::{IkSolver, IkTarget};
-use gait_core::kinematics::{Phi, forward_kinematics, swap_legs};
+mod transfer;
+
+use gait_core::BodyModel;
+use gait_core::kinematics::Phi;
 use gait_core::tables::GaitTable;
-use gait_core::{BodyModel, LINKS};
 
 use crate::operator::Gait;
 use crate::posture::{JOINTS, Side, joints_from_phi};
+pub use crate::reference::Reference;
+use crate::reference::{ankles_in_start_posture, ankles_in_swing, table_motion};
+use transfer::TransferPlan;
 
 /// Thresholds and timings of gait execution.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -173,26 +177,6 @@ pub struct Sensed {
     pub ankles_rad: [f32; 2],
 }
 
-/// What the joints should do this tick.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Plan {
-    /// Reference angles, joint order, rad.
-    pub angle_rad: [f32; JOINTS],
-    /// Reference rates, rad/s.
-    pub rate_rad_s: [f32; JOINTS],
-    /// During a swing: the table, the stance leg and the time, so the
-    /// controller can evaluate the model's feed-forward along the reference.
-    pub swing: Option<(Gait, Side, f32)>,
-    /// The stance leg now.
-    pub stance: Side,
-    /// Share (0 … 1) of the body's weight the other foot may carry: all of
-    /// it between steps (both feet planned down), during a swing what the
-    /// table plans for its swing foot
-    /// ([`gait_core::playback::other_foot_share`]); `None` in a safe hold,
-    /// where only the foot's sensor can tell.
-    pub other_foot_share: Option<f32>,
-}
-
 /// Gait execution state.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sequencer<'t> {
@@ -218,21 +202,8 @@ pub struct Sequencer<'t> {
     /// When the table's swing foot was planned fully lifted in the present
     /// swing, s (landing is looked for only after that).
     lifted_at_s: Option<f32>,
-}
-
-/// A weight transfer in double support: both feet stay where they are, the
-/// stance shank, torso and knee choice move from the landing posture to the
-/// next step's start posture, and the IK keeps the trailing foot planted.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct TransferPlan {
-    /// (x5, y5, φ1, φ3, r2) at the landing and at the next start.
-    from: [f32; 5],
-    to: [f32; 5],
-    /// Joint-angle offset at the landing between the reference and the IK's
-    /// reconstruction of it (it decays to zero over the transfer, so the
-    /// reference is continuous even where the landing posture lies outside
-    /// the IK's human range).
-    offset: [f32; JOINTS],
+    /// The ankle plan of the last reference (kept through a safe hold).
+    ankle_plan: [f32; 2],
 }
 
 impl<'t> Sequencer<'t> {
@@ -255,6 +226,7 @@ impl<'t> Sequencer<'t> {
             transfer: None,
             swing_start_m: [0.0; 2],
             lifted_at_s: None,
+            ankle_plan: [f32::NAN; 2],
         }
     }
 
@@ -269,106 +241,20 @@ impl<'t> Sequencer<'t> {
         self
     }
 
-    /// The double-support plan from the reference Φ at landing (old stance
-    /// frame) to the next table's first posture (new stance frame).
-    fn plan_transfer(
-        &self,
-        landing_phi: &Phi<f32>,
-        start: &Phi<f32>,
-        new_stance: Side,
-    ) -> Option<TransferPlan> {
+    /// The swing foot's toe at the table's Φ `phi` (stance foot's flat
+    /// frame), m; `None` without a model or table.
+    fn planned_swing_toe(&self, phi: Option<&Phi<f32>>) -> Option<[f32; 2]> {
         let model = self.model.as_ref()?;
-        let ik = self.transfer_ik(model);
-        // The same posture seen from the new stance foot (links swap roles).
-        let mirrored = swap_legs(landing_phi);
-        let params = |phi: &Phi<f32>| -> Option<[f32; 5]> {
-            let [x5, y5] = forward_kinematics(model, phi).get(LINKS - 1).copied()?;
-            let (lo, hi) = ik.phi2_range(x5, y5, phi[0]).ok()?;
-            let r2 = if hi - lo > 1e-4 {
-                ((phi[1] - lo) / (hi - lo)).clamp(0.0, 1.0)
-            } else {
-                0.5
-            };
-            Some([x5, y5, phi[0], phi[2], r2])
-        };
-        let from = params(&mirrored)?;
-        let to = params(start)?;
-        let at_landing = self.transfer_joints(&ik, &from, new_stance)?;
-        let reference = joints_from_phi(&mirrored, new_stance);
-        let mut offset = [0.0; JOINTS];
-        for ((o, r), a) in offset.iter_mut().zip(&reference).zip(&at_landing) {
-            *o = r - a;
-        }
-        Some(TransferPlan { from, to, offset })
-    }
-
-    fn transfer_joints(
-        &self,
-        ik: &IkSolver<f32>,
-        p: &[f32; 5],
-        stance: Side,
-    ) -> Option<[f32; JOINTS]> {
-        let sol = ik
-            .solve(&IkTarget {
-                x5: p[0],
-                y5: p[1],
-                phi1: p[2],
-                phi3: p[3],
-                r2: p[4],
-            })
-            .ok()?;
-        Some(joints_from_phi(&sol.phi, stance))
-    }
-
-    /// The transfer reference at `fraction` (smoothstepped), or the joint
-    /// blend when there is no plan or the IK fails.
-    /// The IK the gait's tables were made with: the descent's knee range
-    /// is `KneeRange::Human` with a 90° cap (`PeriodicStep::stair_down`),
-    /// the others the paper's.
-    fn transfer_ik(&self, model: &BodyModel<f32>) -> IkSolver<f32> {
-        let options = match self.gait {
-            Gait::StairDown => gait_core::problem::PeriodicStep::<f32>::stair_down().ik,
-            Gait::Walk | Gait::StairUp => gait_core::ik::IkOptions::paper(),
-        };
-        IkSolver::new(model).with_options(options)
-    }
-
-    fn transfer_reference(&self, fraction: f32, stance: Side) -> [f32; JOINTS] {
-        let planned = self.transfer.and_then(|plan| {
-            let model = self.model.as_ref()?;
-            let ik = self.transfer_ik(model);
-            let s = smoothstep(fraction);
-            let mut p = plan.from;
-            for (v, &b) in p.iter_mut().zip(&plan.to) {
-                *v += s * (b - *v);
-            }
-            let mut joints = self.transfer_joints(&ik, &p, stance)?;
-            for (j, &o) in joints.iter_mut().zip(&plan.offset) {
-                *j += (1.0 - s) * o;
-            }
-            Some(joints)
-        });
-        planned.unwrap_or_else(|| self.blended(fraction))
-    }
-
-    /// The swing foot's toe, planned at table time `t_s` (stance foot's
-    /// flat frame), m; `None` without a model or table.
-    fn planned_swing_toe(&self, t_s: f32) -> Option<[f32; 2]> {
-        let model = self.model.as_ref()?;
-        let table = self.tables.get(self.gait)?;
+        let phi = phi?;
         let foot = gait_core::foot::StanceFoot::for_model(model);
-        Some(gait_core::playback::swing_toe(
-            model,
-            &foot,
-            &table.at_time(t_s),
-        ))
+        Some(gait_core::playback::swing_toe(model, &foot, phi))
     }
 
-    /// The other foot's share at table time `t_s` of the present swing (0
-    /// without a model: the foot is taken as lifted from the start, and the
-    /// landing window counts from the swing's start).
-    fn swing_share(&self, t_s: f32) -> f32 {
-        self.planned_swing_toe(t_s).map_or(0.0, |p| {
+    /// The other foot's share at the table's Φ `phi` in the present swing
+    /// (0 without a model: the foot is taken as lifted from the start, and
+    /// the landing window counts from the swing's start).
+    fn swing_share(&self, phi: Option<&Phi<f32>>) -> f32 {
+        self.planned_swing_toe(phi).map_or(0.0, |p| {
             gait_core::playback::other_foot_share(p, self.swing_start_m)
         })
     }
@@ -499,15 +385,19 @@ impl<'t> Sequencer<'t> {
         out
     }
 
-    /// One tick: advances the phase and returns the reference.
+    /// One tick: advances the phase and returns the whole reference (one
+    /// table interpolation). `selected`: the gait the clinician has
+    /// selected, whose start posture standing plans the ankles for.
     pub fn update(
         &mut self,
         sensed: &Sensed,
+        selected: Gait,
         dt_s: f32,
         events: &mut impl FnMut(SeqEvent),
-    ) -> Plan {
+    ) -> Reference {
         let cfg = self.cfg;
-        let mut swing = None;
+        // The table's Φ at the swing's time while it plays (stance, t, Φ).
+        let mut swing: Option<(Side, f32, Option<Phi<f32>>)> = None;
         let mut other_share = Some(1.0);
         let next_reference = match self.phase {
             Phase::Standing => self.blend_to,
@@ -518,10 +408,11 @@ impl<'t> Sequencer<'t> {
                     self.blend_to
                 } else if self.ready(sensed, stance) {
                     self.phase = Phase::Swing { stance, t_s: 0.0 };
-                    self.swing_start_m = self.planned_swing_toe(0.0).unwrap_or([0.0; 2]);
+                    let start = self.tables.get(self.gait).map(|tb| tb.at_time(0.0));
+                    self.swing_start_m = self.planned_swing_toe(start.as_ref()).unwrap_or([0.0; 2]);
                     self.lifted_at_s = None;
                     events(SeqEvent::SwingStarted(self.gait, stance));
-                    self.table_reference(stance, 0.0)
+                    start.map_or(self.reference, |p| joints_from_phi(&p, stance))
                 } else {
                     self.blend_to
                 }
@@ -534,7 +425,8 @@ impl<'t> Sequencer<'t> {
                     .get(stance.other().foot())
                     .copied()
                     .unwrap_or(f32::NAN);
-                let share = self.swing_share(t);
+                let phi_t = self.tables.get(self.gait).map(|tb| tb.at_time(t));
+                let share = self.swing_share(phi_t.as_ref());
                 if self.lifted_at_s.is_none() && share <= 0.0 {
                     self.lifted_at_s = Some(t);
                 }
@@ -545,7 +437,7 @@ impl<'t> Sequencer<'t> {
                     t >= lift + cfg.landing_window_fraction * (duration - lift)
                 }) && swing_foot >= cfg.landing_contact_n;
                 other_share = Some(share);
-                let reference = self.table_reference(stance, t);
+                let reference = phi_t.map_or(self.reference, |p| joints_from_phi(&p, stance));
                 if landed {
                     events(SeqEvent::Landed);
                     if self.stop_requested {
@@ -577,7 +469,7 @@ impl<'t> Sequencer<'t> {
                     events(SeqEvent::Stopped);
                 } else {
                     self.phase = Phase::Swing { stance, t_s: t };
-                    swing = Some((self.gait, stance, t));
+                    swing = Some((stance, t, phi_t));
                 }
                 reference
             }
@@ -623,11 +515,31 @@ impl<'t> Sequencer<'t> {
             }
         }
         self.reference = next_reference;
-        Plan {
+        let table = self.tables.get(self.gait);
+        let motion = swing.and_then(|(_, t, phi)| table_motion(table?, t, phi?));
+        self.ankle_plan = match self.phase {
+            Phase::SafeHold { .. } => self.ankle_plan,
+            // The first tick of a swing plans nothing yet (as before the
+            // table is read).
+            Phase::Swing { .. } => swing.map_or([f32::NAN; 2], |(s, t, phi)| {
+                let phi1 = match (table, phi) {
+                    (Some(tb), Some(p)) if t <= tb.duration_s() => p[0],
+                    (Some(tb), _) => tb.at_time(tb.duration_s())[0],
+                    (None, _) => f32::NAN,
+                };
+                ankles_in_swing(s, phi1)
+            }),
+            Phase::Standing => ankles_in_start_posture(self.tables.get(selected), self.stance),
+            Phase::WaitingReady { .. } | Phase::Transfer { .. } => {
+                ankles_in_start_posture(table, self.stance)
+            }
+        };
+        Reference {
             angle_rad: next_reference,
             rate_rad_s: rate,
-            swing,
             stance: self.stance,
+            motion,
+            ankle_plan_rad: self.ankle_plan,
             other_foot_share: if matches!(self.phase, Phase::SafeHold { .. }) {
                 None
             } else {
@@ -648,13 +560,6 @@ impl<'t> Sequencer<'t> {
             _ => false,
         };
         crutches && foot && ankle
-    }
-
-    fn table_reference(&self, stance: Side, t_s: f32) -> [f32; JOINTS] {
-        match self.tables.get(self.gait) {
-            Some(tb) => joints_from_phi(&tb.at_time(t_s), stance),
-            None => self.reference,
-        }
     }
 }
 

@@ -74,7 +74,9 @@ impl<'t> Rig<'t> {
 
     fn step(&mut self, s: &Sensed) -> [f32; JOINTS] {
         let ev = &mut self.events;
-        self.seq.update(s, DT, &mut |e| ev.push(e)).angle_rad
+        self.seq
+            .update(s, Gait::Walk, DT, &mut |e| ev.push(e))
+            .angle_rad
     }
 
     fn start_pose(&self, stance: Side) -> [f32; JOINTS] {

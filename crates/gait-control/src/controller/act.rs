@@ -1,0 +1,234 @@
+//! *act*: per joint, PID plus the model's inverse-dynamics feed-forward
+//! along the reference (gait-core, f32), with the other foot's load closed
+//! on its sensor in double support.
+
+use gait_core::foot::{self, StanceFoot};
+use gait_core::kinematics::joint_torques;
+use gait_core::model::GRAVITY_M_S2;
+
+use crate::position_loop::Setpoint;
+use crate::posture::{JOINTS, joint_torques_from_theta_torques, phi_from_joints};
+use crate::reference::Reference;
+
+use super::Controller;
+use super::sense::Senses;
+
+/// What *act* decided: the commands before the guard, and the feed-forward
+/// in them.
+pub(super) struct Actuation {
+    /// Motor commands, joint order, N·m.
+    pub command_nm: [f32; JOINTS],
+    /// The feed-forward part, N·m.
+    pub feedforward_nm: [f32; JOINTS],
+}
+
+/// The model's torques along the reference and the load it plans for the
+/// other foot.
+struct FeedForward {
+    /// Joint torques, joint order, N·m.
+    torques_nm: [f32; JOINTS],
+    /// Vertical force the other foot is planned to carry, N.
+    other_foot_n: f32,
+    /// Joint torques (joint order) that one more newton pushed down by the
+    /// other foot takes, N·m/N.
+    per_other_foot_newton: [f32; JOINTS],
+}
+
+/// How much of its position feedback the other leg gives up while its foot
+/// is planned to carry the whole body (0: none, 1: all of it).
+const DOUBLE_SUPPORT_COMPLIANCE: f32 = 0.8;
+
+/// Proportional gain of the other foot's load loop (share of the error
+/// pushed at once).
+const OTHER_FOOT_KP: f32 = 0.5;
+/// Its integral gain, 1/s, and the integral's clamp, N.
+const OTHER_FOOT_KI_PER_S: f32 = 5.0;
+const OTHER_FOOT_INTEGRAL_N: f32 = 200.0;
+/// Largest correction of the other foot's load, N (a sensor reading far
+/// from the plan, as right after power-up, must not drive the leg to its
+/// limit).
+const OTHER_FOOT_PUSH_N: f32 = 200.0;
+
+impl Controller<'_> {
+    /// Stage 3.
+    pub(super) fn act(&mut self, s: &Senses, r: &Reference) -> Actuation {
+        let weight = self.cfg.model.total_mass_kg() * GRAVITY_M_S2 as f32;
+        let planned = self.feedforward(s, r, weight);
+        let mut feedforward = planned.torques_nm;
+        let other_share = r.other_foot_share.unwrap_or(0.0).clamp(0.0, 1.0);
+        self.push_other_foot(s, r, &planned, other_share, &mut feedforward);
+        // In double support the chain is closed: the stance leg and the
+        // pilot set the posture, and the other leg's torques set how much
+        // of the body its foot carries. Stiff position loops on both legs
+        // would fight each other through the ground and decide that share
+        // by their tracking errors; the other leg's loop is softened by the
+        // share of the body its foot is planned to carry (stiff again as the
+        // plan unloads it before a lift-off), so its feed-forward, which
+        // plans that load, is what it applies.
+        let carried = if other_share > 0.0 && weight > 0.0 {
+            (planned.other_foot_n / weight).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let dt = self.cfg.dt_s;
+        let mut command = [0.0f32; JOINTS];
+        for (i, c) in command.iter_mut().enumerate() {
+            let (Some(lp), Some(g)) = (self.loops.get_mut(i), self.cfg.gains.get(i)) else {
+                continue;
+            };
+            let softened;
+            let g = if r.stance.other().has_joint(i) && carried > 0.0 {
+                softened = g.with_stiffness(1.0 - DOUBLE_SUPPORT_COMPLIANCE * carried);
+                &softened
+            } else {
+                g
+            };
+            let sp = Setpoint {
+                angle_rad: r.angle_rad.get(i).copied().unwrap_or(f32::NAN),
+                rate_rad_s: r.rate_rad_s.get(i).copied().unwrap_or(0.0),
+                feedforward_nm: feedforward.get(i).copied().unwrap_or(0.0),
+            };
+            let out = lp.update(
+                g,
+                &sp,
+                s.joints.get(i).copied().unwrap_or(f32::NAN),
+                self.rate.get(i).copied().unwrap_or(0.0),
+                dt,
+            );
+            *c = out.command_nm;
+        }
+        Actuation {
+            command_nm: command,
+            feedforward_nm: feedforward,
+        }
+    }
+
+    /// The other foot's load in double support: measured against the plan,
+    /// the difference pushed by the other leg (proportional and integral),
+    /// so that the share the plan gives it is what it carries. Without it
+    /// the share is a free internal force of the closed chain that the
+    /// legs' position loops and the pilot settle between them.
+    fn push_other_foot(
+        &mut self,
+        s: &Senses,
+        r: &Reference,
+        planned: &FeedForward,
+        other_share: f32,
+        feedforward: &mut [f32; JOINTS],
+    ) {
+        let measured = s
+            .forces_n
+            .get(r.stance.other().foot())
+            .copied()
+            .unwrap_or(f32::NAN);
+        if !(other_share > 0.0 && measured.is_finite() && self.motors_enabled) {
+            self.other_foot_integral_n = 0.0;
+            return;
+        }
+        let error = planned.other_foot_n - measured;
+        let integral = (self.other_foot_integral_n + OTHER_FOOT_KI_PER_S * error * self.cfg.dt_s)
+            .clamp(-OTHER_FOOT_INTEGRAL_N, OTHER_FOOT_INTEGRAL_N);
+        let push = |integral: f32| {
+            other_share
+                * (OTHER_FOOT_KP * error + integral).clamp(-OTHER_FOOT_PUSH_N, OTHER_FOOT_PUSH_N)
+        };
+        // Anti-windup: the integral moves only while the other leg's
+        // feed-forward stays inside its loops' limits.
+        let within = |push_n: f32| {
+            feedforward
+                .iter()
+                .zip(&planned.per_other_foot_newton)
+                .zip(&self.cfg.gains)
+                .enumerate()
+                .all(|(i, ((&f, &per), g))| {
+                    !r.stance.other().has_joint(i) || (f + push_n * per).abs() <= g.torque_limit_nm
+                })
+        };
+        if within(push(integral)) {
+            self.other_foot_integral_n = integral;
+        }
+        let push_n = push(self.other_foot_integral_n);
+        for (i, (f, &per)) in feedforward
+            .iter_mut()
+            .zip(&planned.per_other_foot_newton)
+            .enumerate()
+        {
+            if r.stance.other().has_joint(i) {
+                *f += push_n * per;
+            }
+        }
+    }
+
+    /// The model's joint torques along the reference: while a table plays,
+    /// from its Φ, Φ̇ and Φ̈; otherwise static torques of the reference
+    /// posture. In both, the other foot takes up to the load it may carry
+    /// where that lowers the effort (`foot::share_load`): the share the
+    /// plan gives it (the whole body between steps; along a swing what the
+    /// table plans for its swing foot, so a table can shift the weight in
+    /// double support before it lifts the foot). Not from the foot's sensor
+    /// during a swing: a swing foot brushing the ground then switched the
+    /// model's load on and off, and the feed-forward bounced the foot. In a
+    /// safe hold, what the sensor reads (NaN: nothing).
+    fn feedforward(&self, s: &Senses, r: &Reference, weight: f32) -> FeedForward {
+        let model = &self.cfg.model;
+        let other_load_n = match r.other_foot_share {
+            Some(share) => weight * share.clamp(0.0, 1.0),
+            None => {
+                let other_foot = s
+                    .forces_n
+                    .get(r.stance.other().foot())
+                    .copied()
+                    .unwrap_or(f32::NAN);
+                if other_foot.is_finite() {
+                    other_foot.max(0.0).min(weight)
+                } else {
+                    0.0
+                }
+            }
+        };
+        let (phi, dphi, ddphi) = match r.motion {
+            Some(m) => (m.phi, m.dphi, m.ddphi),
+            None => {
+                let reading = self
+                    .last_angle
+                    .get(JOINTS + r.stance.ankle())
+                    .copied()
+                    .unwrap_or(0.0);
+                let stance_ankle = self.stance_phi1(reading, r);
+                (
+                    phi_from_joints(&r.angle_rad, stance_ankle, r.stance),
+                    [0.0; gait_core::LINKS],
+                    [0.0; gait_core::LINKS],
+                )
+            }
+        };
+        // The stance heel lifts past the ankle's stop (stair descent): the
+        // chain then turns about the toe (gait_core::foot).
+        let foot = StanceFoot::for_model(model);
+        let single = joint_torques(&foot::inverse_dynamics(model, &foot, &phi, &dphi, &ddphi));
+        let shared = foot::share_load(model, &foot, &phi, &single, other_load_n);
+        let ff = joint_torques_from_theta_torques(&shared.torques, r.stance);
+        let (_, per_newton_up) = foot::second_foot_torques(model, &foot, &phi);
+        let per_newton = joint_torques_from_theta_torques(&per_newton_up.map(|v| -v), r.stance);
+        let clean = |v: f32| if v.is_finite() { v } else { 0.0 };
+        FeedForward {
+            torques_nm: ff.map(clean),
+            other_foot_n: clean(shared.reaction_n[1]),
+            per_other_foot_newton: per_newton.map(clean),
+        }
+    }
+
+    /// The stance shank's angle φ1 for a static posture: the ankle
+    /// encoder's reading, or, when it reads the dorsiflexion stop (within
+    /// 0.5°: the heel may be up and φ1 beyond what the encoder can see), the
+    /// larger of it and the planned φ1.
+    fn stance_phi1(&self, ankle_reading: f32, r: &Reference) -> f32 {
+        let stop = StanceFoot::for_model(&self.cfg.model).heel_off_rad;
+        let planned = r
+            .ankle_plan_rad
+            .get(r.stance.ankle())
+            .copied()
+            .unwrap_or(f32::NAN);
+        crate::posture::stance_phi1_estimate(ankle_reading, stop, planned)
+    }
+}

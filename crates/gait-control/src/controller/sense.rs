@@ -1,0 +1,179 @@
+//! *sense*: read every encoder, force sensor, button and the e-stop;
+//! decode, calibrate, check. A failed read becomes a status, never a
+//! panic, and the last good angle is kept for control.
+
+use embedded_hal::digital::InputPin;
+use embedded_hal::spi::SpiDevice;
+
+use crate::drivers::as5048a;
+use crate::drivers::buttons::Sample;
+use crate::drivers::mcp3208::{self, ForceFault};
+use crate::posture::JOINTS;
+use crate::sequencer::Sensed;
+use crate::supervisor::{EncoderSense, EncoderStatus, ForceSense, ForceStatus};
+
+use super::{Controller, ENCODERS, FORCES, Hardware};
+
+/// What *sense* read this tick.
+pub(super) struct Senses {
+    /// Each encoder's frame as the supervisor checks it.
+    pub encoders: [EncoderSense; ENCODERS],
+    /// Each force sensor's sample as the supervisor checks it.
+    pub forces: [ForceSense; FORCES],
+    /// Debounced MODE and GO.
+    pub mode: Sample,
+    pub go: Sample,
+    /// E-stop pressed (also when it could not be read), and whether the
+    /// read failed.
+    pub e_stop_pressed: bool,
+    pub e_stop_read_error: bool,
+    /// Last good joint angles (joint order), rad.
+    pub joints: [f32; JOINTS],
+    /// Calibrated forces (NaN if faulted), N.
+    pub forces_n: [f32; FORCES],
+    /// What the sequencer needs of it.
+    pub sensed: Sensed,
+}
+
+pub(super) const BAD_ENCODER: EncoderSense = EncoderSense {
+    status: EncoderStatus::BusError,
+    raw_counts: 0,
+    angle_rad: f32::NAN,
+};
+
+impl Controller<'_> {
+    /// Stage 1.
+    pub(super) fn sense<ENC, ADC, PWM, DIR, EN, IN, OUT>(
+        &mut self,
+        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+    ) -> Senses
+    where
+        ENC: SpiDevice<u8>,
+        ADC: SpiDevice<u8>,
+        IN: InputPin,
+    {
+        let encoders = self.read_encoders(hw);
+        let forces = self.read_forces(hw);
+        let mode = hw.mode.tick();
+        let go = hw.go.tick();
+        let (e_stop_pressed, e_stop_read_error) = match hw.e_stop.is_high() {
+            Ok(high) => (high == self.cfg.e_stop_active_high, false),
+            Err(_) => (true, true),
+        };
+        let joints = self.joint_angles();
+        let forces_n = forces.map(|f| f.newtons);
+        let sensed = Sensed {
+            joints_rad: joints,
+            feet_n: [forces_n[0], forces_n[1]],
+            crutches_n: [forces_n[2], forces_n[3]],
+            // This tick's readings (NaN unless the encoder answered well):
+            // a held last-good value must not count as "ready".
+            ankles_rad: [JOINTS, JOINTS + 1]
+                .map(|i| encoders.get(i).map_or(f32::NAN, |e| e.angle_rad)),
+        };
+        Senses {
+            encoders,
+            forces,
+            mode,
+            go,
+            e_stop_pressed,
+            e_stop_read_error,
+            joints,
+            forces_n,
+            sensed,
+        }
+    }
+
+    fn read_encoders<ENC, ADC, PWM, DIR, EN, IN, OUT>(
+        &mut self,
+        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+    ) -> [EncoderSense; ENCODERS]
+    where
+        ENC: SpiDevice<u8>,
+    {
+        let mut out = [BAD_ENCODER; ENCODERS];
+        let dt = self.cfg.dt_s;
+        // First-order low-pass on the joint rates: α = dt / (RC + dt).
+        let rc = 1.0 / (2.0 * core::f32::consts::PI * self.cfg.rate_filter_hz);
+        let alpha = dt / (rc + dt);
+        for (i, (enc, o)) in hw.encoders.iter_mut().zip(out.iter_mut()).enumerate() {
+            let status = match enc.read_angle() {
+                Ok(r) => {
+                    if let (Some(last), Some(raw)) =
+                        (self.last_angle.get_mut(i), self.last_raw.get_mut(i))
+                    {
+                        if let Some(rate) = self.rate.get_mut(i) {
+                            let raw_rate = if self.primed {
+                                (r.angle_rad - *last) / dt
+                            } else {
+                                0.0
+                            };
+                            *rate += alpha * (raw_rate - *rate);
+                        }
+                        *last = r.angle_rad;
+                        *raw = r.raw_counts;
+                    }
+                    EncoderStatus::Ok
+                }
+                Err(as5048a::Error::Bus(_)) => EncoderStatus::BusError,
+                Err(as5048a::Error::Parity) => EncoderStatus::Parity,
+                Err(as5048a::Error::ErrorFlag(_)) => EncoderStatus::ErrorFlag,
+            };
+            *o = EncoderSense {
+                status,
+                raw_counts: self.last_raw.get(i).copied().unwrap_or(0),
+                angle_rad: if status == EncoderStatus::Ok {
+                    self.last_angle.get(i).copied().unwrap_or(f32::NAN)
+                } else {
+                    f32::NAN
+                },
+            };
+        }
+        out
+    }
+
+    fn read_forces<ENC, ADC, PWM, DIR, EN, IN, OUT>(
+        &mut self,
+        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+    ) -> [ForceSense; FORCES]
+    where
+        ADC: SpiDevice<u8>,
+    {
+        let ch = hw.force_channels;
+        let channels = [ch.left_foot, ch.right_foot, ch.left_crutch, ch.right_crutch];
+        let mut out = [ForceSense {
+            status: ForceStatus::BusError,
+            newtons: f32::NAN,
+        }; FORCES];
+        for ((o, channel), cal) in out
+            .iter_mut()
+            .zip(channels)
+            .zip(&self.cfg.force_calibration)
+        {
+            *o = match hw.adc.read_force(channel, cal) {
+                Ok(n) => ForceSense {
+                    status: ForceStatus::Ok,
+                    newtons: n,
+                },
+                Err(mcp3208::Error::Bus(_)) => ForceSense {
+                    status: ForceStatus::BusError,
+                    newtons: f32::NAN,
+                },
+                Err(mcp3208::Error::Sensor(f)) => ForceSense {
+                    status: match f {
+                        ForceFault::OpenCircuit { .. } => ForceStatus::Open,
+                        ForceFault::ShortCircuit { .. } => ForceStatus::Shorted,
+                        ForceFault::OutOfRange { .. } => ForceStatus::OutOfRange,
+                    },
+                    newtons: f32::NAN,
+                },
+            };
+        }
+        out
+    }
+
+    /// Last good joint angles (joint order).
+    fn joint_angles(&self) -> [f32; JOINTS] {
+        [0, 1, 2, 3].map(|i| self.last_angle.get(i).copied().unwrap_or(f32::NAN))
+    }
+}

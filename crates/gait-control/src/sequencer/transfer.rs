@@ -1,0 +1,114 @@
+//! The weight transfer between two steps, planned in double support: both
+//! feet stay where they are while the stance shank, the torso and the knee
+//! choice move from the landing posture to the next step's start posture,
+//! and the IK keeps the trailing foot planted (blending joint angles
+//! instead would make the legs fight each other through the ground).
+
+use gait_core::BodyModel;
+use gait_core::LINKS;
+use gait_core::ik::{IkSolver, IkTarget};
+use gait_core::kinematics::{Phi, forward_kinematics, swap_legs};
+
+use crate::operator::Gait;
+use crate::posture::{JOINTS, Side, joints_from_phi};
+
+use super::{Sequencer, smoothstep};
+
+/// A weight transfer in double support: both feet stay where they are, the
+/// stance shank, torso and knee choice move from the landing posture to the
+/// next step's start posture, and the IK keeps the trailing foot planted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct TransferPlan {
+    /// (x5, y5, φ1, φ3, r2) at the landing and at the next start.
+    from: [f32; 5],
+    to: [f32; 5],
+    /// Joint-angle offset at the landing between the reference and the IK's
+    /// reconstruction of it (it decays to zero over the transfer, so the
+    /// reference is continuous even where the landing posture lies outside
+    /// the IK's human range).
+    offset: [f32; JOINTS],
+}
+
+impl Sequencer<'_> {
+    /// The double-support plan from the reference Φ at landing (old stance
+    /// frame) to the next table's first posture (new stance frame).
+    pub(super) fn plan_transfer(
+        &self,
+        landing_phi: &Phi<f32>,
+        start: &Phi<f32>,
+        new_stance: Side,
+    ) -> Option<TransferPlan> {
+        let model = self.model.as_ref()?;
+        let ik = self.transfer_ik(model);
+        // The same posture seen from the new stance foot (links swap roles).
+        let mirrored = swap_legs(landing_phi);
+        let params = |phi: &Phi<f32>| -> Option<[f32; 5]> {
+            let [x5, y5] = forward_kinematics(model, phi).get(LINKS - 1).copied()?;
+            let (lo, hi) = ik.phi2_range(x5, y5, phi[0]).ok()?;
+            let r2 = if hi - lo > 1e-4 {
+                ((phi[1] - lo) / (hi - lo)).clamp(0.0, 1.0)
+            } else {
+                0.5
+            };
+            Some([x5, y5, phi[0], phi[2], r2])
+        };
+        let from = params(&mirrored)?;
+        let to = params(start)?;
+        let at_landing = self.transfer_joints(&ik, &from, new_stance)?;
+        let reference = joints_from_phi(&mirrored, new_stance);
+        let mut offset = [0.0; JOINTS];
+        for ((o, r), a) in offset.iter_mut().zip(&reference).zip(&at_landing) {
+            *o = r - a;
+        }
+        Some(TransferPlan { from, to, offset })
+    }
+
+    fn transfer_joints(
+        &self,
+        ik: &IkSolver<f32>,
+        p: &[f32; 5],
+        stance: Side,
+    ) -> Option<[f32; JOINTS]> {
+        let sol = ik
+            .solve(&IkTarget {
+                x5: p[0],
+                y5: p[1],
+                phi1: p[2],
+                phi3: p[3],
+                r2: p[4],
+            })
+            .ok()?;
+        Some(joints_from_phi(&sol.phi, stance))
+    }
+
+    /// The IK the gait's tables were made with: the descent's knee range
+    /// is `KneeRange::Human` with a 90° cap (`PeriodicStep::stair_down`),
+    /// the others the paper's.
+    fn transfer_ik(&self, model: &BodyModel<f32>) -> IkSolver<f32> {
+        let options = match self.gait {
+            Gait::StairDown => gait_core::problem::PeriodicStep::<f32>::stair_down().ik,
+            Gait::Walk | Gait::StairUp => gait_core::ik::IkOptions::paper(),
+        };
+        IkSolver::new(model).with_options(options)
+    }
+
+    /// The transfer reference at `fraction` (smoothstepped), or the joint
+    /// blend when there is no plan or the IK fails.
+    pub(super) fn transfer_reference(&self, fraction: f32, stance: Side) -> [f32; JOINTS] {
+        let planned = self.transfer.and_then(|plan| {
+            let model = self.model.as_ref()?;
+            let ik = self.transfer_ik(model);
+            let s = smoothstep(fraction);
+            let mut p = plan.from;
+            for (v, &b) in p.iter_mut().zip(&plan.to) {
+                *v += s * (b - *v);
+            }
+            let mut joints = self.transfer_joints(&ik, &p, stance)?;
+            for (j, &o) in joints.iter_mut().zip(&plan.offset) {
+                *j += (1.0 - s) * o;
+            }
+            Some(joints)
+        });
+        planned.unwrap_or_else(|| self.blended(fraction))
+    }
+}
