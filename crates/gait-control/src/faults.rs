@@ -2,9 +2,10 @@
 //!
 //! One [`FaultCode`] per row of the fault table in `docs/safety.md`, each
 //! declared once (one row of `fault_table!` below: code, name, reaction,
-//! detection bound, reset rule). The numeric codes are stable (they appear
-//! in logs and service reports): the high byte is the group, the low byte
-//! the fault within the group.
+//! detection bound, reset rule; `tests/fault_table.rs` checks that the
+//! doc agrees). The numeric codes are stable (they appear in logs and
+//! service reports): the high byte is the group, the low byte the fault
+//! within the group.
 //!
 //! | group | what |
 //! |---|---|
@@ -122,7 +123,8 @@ macro_rules! fault_table {
 // The fault table, each fault once. Rows are in bit order of `FaultSet`
 // (`FaultSet::bits` goes into logs): append new faults at the end, never
 // reorder (0x0105 came after 0x0602, so it is last). `docs/safety.md`'s
-// table lists the same rows in code order.
+// table lists the same rows in code order; `tests/fault_table.rs` checks
+// that the two agree.
 //
 // Reactions: the passive ankles, sensors needed only to start a swing, and
 // the buttons are not needed to hold, so the step finishes first; the
