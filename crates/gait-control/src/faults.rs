@@ -1,8 +1,11 @@
 //! Fault codes, their reactions, and a fixed-size set of them.
 //!
-//! One [`FaultCode`] per row of the fault table in `docs/safety.md`. The
-//! numeric codes are stable (they appear in logs and service reports): the
-//! high byte is the group, the low byte the fault within the group.
+//! One [`FaultCode`] per row of the fault table in `docs/safety.md`, each
+//! declared once (one row of `fault_table!` below: code, name, reaction,
+//! detection bound, reset rule; `tests/fault_table.rs` checks that the
+//! doc agrees). The numeric codes are stable (they appear in logs and
+//! service reports): the high byte is the group, the low byte the fault
+//! within the group.
 //!
 //! | group | what |
 //! |---|---|
@@ -32,101 +35,284 @@ pub enum Reaction {
     DisableMotors,
 }
 
-/// One fault of the fault table. `#[repr(u16)]`: the discriminant is the
-/// stable numeric code ([`FaultCode::code`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[repr(u16)]
-pub enum FaultCode {
+/// Declares the fault table once: one row per fault, in bit order of
+/// [`FaultSet`] (row *i* is bit *i*, `FaultCode::ALL[i]`). From the rows it
+/// generates [`FaultCode`] (variants, docs, codes), [`FaultCode::COUNT`],
+/// [`FaultCode::ALL`], [`FaultCode::index`], [`FaultCode::reaction`],
+/// [`FaultCode::name`], [`FaultCode::detection_bound`] and
+/// [`FaultCode::reset_rule`].
+macro_rules! fault_table {
+    ($(
+        $(#[$meta:meta])*
+        $variant:ident = $code:literal {
+            name: $name:literal,
+            reaction: $reaction:path,
+            detection_bound: $bound:literal,
+            reset_allowed_when: $reset:literal $(,)?
+        }
+    ),+ $(,)?) => {
+        /// One fault of the fault table. `#[repr(u16)]`: the discriminant is
+        /// the stable numeric code ([`FaultCode::code`]). Variants are in bit
+        /// order of [`FaultSet`], not in code order.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        #[repr(u16)]
+        pub enum FaultCode {
+            $(
+                $(#[$meta])*
+                $variant = $code,
+            )+
+        }
+
+        impl FaultCode {
+            /// Number of fault codes.
+            pub const COUNT: usize = [$(Self::$variant),+].len();
+
+            /// Every fault code, in bit order of [`FaultSet`].
+            pub const ALL: [Self; Self::COUNT] = [$(Self::$variant),+];
+
+            /// Position in [`FaultCode::ALL`], i.e. the bit in a [`FaultSet`].
+            #[must_use]
+            pub const fn index(self) -> u8 {
+                // The rows again, numbered 0, 1, 2, … in the order written.
+                enum Row {
+                    $($variant),+
+                }
+                match self {
+                    $(Self::$variant => Row::$variant as u8),+
+                }
+            }
+
+            /// The reaction this fault demands while it is latched.
+            #[must_use]
+            pub const fn reaction(self) -> Reaction {
+                match self {
+                    $(Self::$variant => $reaction),+
+                }
+            }
+
+            /// Short name for logs and the service tool.
+            #[must_use]
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $(Self::$variant => $name),+
+                }
+            }
+
+            /// How soon the fault is detected once its condition appears
+            /// (the "detection bound" column of `docs/safety.md`).
+            #[must_use]
+            pub const fn detection_bound(self) -> &'static str {
+                match self {
+                    $(Self::$variant => $bound),+
+                }
+            }
+
+            /// When a clinician reset may clear the latched fault (the
+            /// "reset allowed when" column of `docs/safety.md`).
+            #[must_use]
+            pub const fn reset_rule(self) -> &'static str {
+                match self {
+                    $(Self::$variant => $reset),+
+                }
+            }
+        }
+    };
+}
+
+// The fault table, each fault once. Rows are in bit order of `FaultSet`
+// (`FaultSet::bits` goes into logs): append new faults at the end, never
+// reorder (0x0105 came after 0x0602, so it is last). `docs/safety.md`'s
+// table lists the same rows in code order; `tests/fault_table.rs` checks
+// that the two agree.
+//
+// Reactions: the passive ankles, sensors needed only to start a swing, and
+// the buttons are not needed to hold, so the step finishes first; the
+// e-stop and the motor output stage disable the motors; the rest hold.
+fault_table! {
     /// An actuated joint's angle is outside the supervisor's envelope
     /// (Table I limits with margins).
-    JointPositionLimit = 0x0101,
+    JointPositionLimit = 0x0101 {
+        name: "joint position limit",
+        reaction: Reaction::SafeHold,
+        detection_bound: "same tick (1)",
+        reset_allowed_when: "the angle is back inside",
+    },
     /// An actuated joint's filtered velocity exceeds its limit.
-    JointVelocityLimit = 0x0102,
+    JointVelocityLimit = 0x0102 {
+        name: "joint velocity limit",
+        reaction: Reaction::SafeHold,
+        detection_bound: "after a step to speed v: ⌈ln(1 − L/v) / ln 0.8⌉ ticks for limit L, \
+            ±1 for quantisation (7 ticks at 8 rad/s on a hip)",
+        reset_allowed_when: "the filtered velocity is under the limit",
+    },
     /// |angle − reference| above the limit for too long.
-    TrackingError = 0x0103,
+    TrackingError = 0x0103 {
+        name: "tracking error",
+        reaction: Reaction::SafeHold,
+        detection_bound: "100 ticks",
+        reset_allowed_when: "the error is back under the limit",
+    },
     /// A passive ankle's angle is outside its envelope.
-    AnklePositionLimit = 0x0104,
-    /// The stance ankle rests on its dorsiflexion stop (the heel lifts:
-    /// the toe rocker) while the plan keeps it well below: the pilot leans
-    /// further forward than the gait was planned for.
-    UnplannedHeelOff = 0x0105,
+    AnklePositionLimit = 0x0104 {
+        name: "ankle position limit",
+        reaction: Reaction::FinishStepThenHold,
+        detection_bound: "same tick (1)",
+        reset_allowed_when: "the angle is back inside",
+    },
     /// Joint encoder: too many bad frames, the last a bus error.
-    EncoderBusError = 0x0201,
+    EncoderBusError = 0x0201 {
+        name: "encoder bus error",
+        reaction: Reaction::SafeHold,
+        detection_bound: "3 ticks when persistent; at the 3rd bad frame within 100 ms",
+        reset_allowed_when: "< 3 bad frames in the last 100 ticks",
+    },
     /// Joint encoder: too many bad frames, the last a parity error.
-    EncoderParity = 0x0202,
+    EncoderParity = 0x0202 {
+        name: "encoder parity error",
+        reaction: Reaction::SafeHold,
+        detection_bound: "as 0x0201",
+        reset_allowed_when: "as 0x0201",
+    },
     /// Joint encoder: too many bad frames, the last with the error flag.
-    EncoderErrorFlag = 0x0203,
+    EncoderErrorFlag = 0x0203 {
+        name: "encoder error flag",
+        reaction: Reaction::SafeHold,
+        detection_bound: "as 0x0201",
+        reset_allowed_when: "as 0x0201",
+    },
     /// Joint encoder: raw counts unchanged while the joint is driven.
-    EncoderFrozen = 0x0204,
+    EncoderFrozen = 0x0204 {
+        name: "encoder frozen",
+        reaction: Reaction::SafeHold,
+        detection_bound: "100 ticks",
+        reset_allowed_when: "the counts change, or the joint is not driven",
+    },
     /// Joint encoder: too many bad frames, the last an impossible jump.
-    EncoderJump = 0x0205,
+    EncoderJump = 0x0205 {
+        name: "encoder impossible jump",
+        reaction: Reaction::SafeHold,
+        detection_bound: "3 ticks when persistent; a single jumping frame is dropped and tolerated",
+        reset_allowed_when: "as 0x0201",
+    },
     /// Joint encoder: a frame reported good carries an impossible value
     /// (raw counts beyond 14 bits, angle not finite or outside (−π, π]).
-    EncoderInvalidValue = 0x0206,
+    EncoderInvalidValue = 0x0206 {
+        name: "encoder invalid value",
+        reaction: Reaction::SafeHold,
+        detection_bound: "same tick (1)",
+        reset_allowed_when: "the frame is valid and < 3 bad frames in 100 ticks",
+    },
     /// Ankle encoder: any of the encoder faults above on a passive ankle.
-    AnkleEncoder = 0x0207,
+    AnkleEncoder = 0x0207 {
+        name: "ankle encoder fault",
+        reaction: Reaction::FinishStepThenHold,
+        detection_bound: "3 ticks (window rule); 1 tick (invalid value)",
+        reset_allowed_when: "as for the joint encoders",
+    },
     /// Force sensor: too many bad samples, the last a bus error.
-    ForceBusError = 0x0301,
+    ForceBusError = 0x0301 {
+        name: "force sensor bus error",
+        reaction: Reaction::FinishStepThenHold,
+        detection_bound: "3 ticks when persistent",
+        reset_allowed_when: "< 3 bad samples in the last 100 ticks",
+    },
     /// Force sensor: too many bad samples, the last an open circuit.
-    ForceOpen = 0x0302,
+    ForceOpen = 0x0302 {
+        name: "force sensor open",
+        reaction: Reaction::FinishStepThenHold,
+        detection_bound: "as 0x0301",
+        reset_allowed_when: "as 0x0301",
+    },
     /// Force sensor: too many bad samples, the last a short circuit.
-    ForceShorted = 0x0303,
+    ForceShorted = 0x0303 {
+        name: "force sensor shorted",
+        reaction: Reaction::FinishStepThenHold,
+        detection_bound: "as 0x0301",
+        reset_allowed_when: "as 0x0301",
+    },
     /// Force sensor: too many bad samples, the last out of the rated range
     /// (immediately if the value is not finite).
-    ForceOutOfRange = 0x0304,
+    ForceOutOfRange = 0x0304 {
+        name: "force sensor out of range",
+        reaction: Reaction::FinishStepThenHold,
+        detection_bound: "3 ticks; 1 tick if not finite",
+        reset_allowed_when: "as 0x0301, and the value is finite",
+    },
     /// Motor command at or above its torque limit for too long.
-    MotorSaturated = 0x0401,
+    MotorSaturated = 0x0401 {
+        name: "motor command saturated",
+        reaction: Reaction::SafeHold,
+        detection_bound: "200 ticks",
+        reset_allowed_when: "the command is under the limit",
+    },
     /// The motor driver's I²t model latched a thermal fault.
-    MotorThermal = 0x0402,
+    MotorThermal = 0x0402 {
+        name: "motor thermal fault",
+        reaction: Reaction::SafeHold,
+        detection_bound: "same tick (1)",
+        reset_allowed_when: "the driver's flag is clear \
+            (`Motor::reset_fault` accepted: cooled below warning)",
+    },
     /// A motor output stage write failed (PWM or pin).
-    MotorOutputStage = 0x0403,
+    MotorOutputStage = 0x0403 {
+        name: "motor output stage fault",
+        reaction: Reaction::DisableMotors,
+        detection_bound: "same tick (1)",
+        reset_allowed_when: "the driver's flag is clear",
+    },
     /// The emergency-stop input is pressed.
-    EStopPressed = 0x0501,
+    EStopPressed = 0x0501 {
+        name: "emergency stop pressed",
+        reaction: Reaction::DisableMotors,
+        detection_bound: "same tick (1)",
+        reset_allowed_when: "released",
+    },
     /// The emergency-stop input could not be read (treated as pressed).
-    EStopInputFault = 0x0502,
+    EStopInputFault = 0x0502 {
+        name: "emergency stop input fault",
+        reaction: Reaction::DisableMotors,
+        detection_bound: "same tick (1)",
+        reset_allowed_when: "readable again",
+    },
     /// A MODE/GO button input is faulty.
-    ButtonInputFault = 0x0503,
+    ButtonInputFault = 0x0503 {
+        name: "button input fault",
+        reaction: Reaction::FinishStepThenHold,
+        detection_bound: "same tick (1)",
+        reset_allowed_when: "the fault is gone",
+    },
     /// Too many missed tick deadlines within the window.
-    DeadlineMissed = 0x0601,
+    DeadlineMissed = 0x0601 {
+        name: "tick deadline missed",
+        reaction: Reaction::SafeHold,
+        detection_bound: "at the 3rd miss within 1 s",
+        reset_allowed_when: "< 3 misses in the last 1000 ticks",
+    },
     /// A value the controller computed is not usable: a reference angle,
     /// a motor command, applied torque or limit is not finite, or a limit
     /// is not positive.
-    ControlValueInvalid = 0x0602,
+    ControlValueInvalid = 0x0602 {
+        name: "control value invalid",
+        reaction: Reaction::SafeHold,
+        detection_bound: "same tick (1)",
+        reset_allowed_when: "every such value is valid",
+    },
+    /// The stance ankle rests on its dorsiflexion stop (the heel lifts:
+    /// the toe rocker) while the plan keeps it well below: the pilot leans
+    /// further forward than the gait was planned for.
+    UnplannedHeelOff = 0x0105 {
+        name: "unplanned heel-off",
+        reaction: Reaction::FinishStepThenHold,
+        detection_bound: "50 ticks",
+        reset_allowed_when: "the ankle is off the stop or the plan reaches it",
+    },
 }
 
+// A `FaultSet` has one bit per code in a `u32`.
+const _: () = assert!(FaultCode::COUNT <= u32::BITS as usize);
+
 impl FaultCode {
-    /// Number of fault codes.
-    pub const COUNT: usize = 24;
-
-    /// Every fault code, in bit order of [`FaultSet`].
-    pub const ALL: [Self; Self::COUNT] = [
-        Self::JointPositionLimit,
-        Self::JointVelocityLimit,
-        Self::TrackingError,
-        Self::AnklePositionLimit,
-        Self::EncoderBusError,
-        Self::EncoderParity,
-        Self::EncoderErrorFlag,
-        Self::EncoderFrozen,
-        Self::EncoderJump,
-        Self::EncoderInvalidValue,
-        Self::AnkleEncoder,
-        Self::ForceBusError,
-        Self::ForceOpen,
-        Self::ForceShorted,
-        Self::ForceOutOfRange,
-        Self::MotorSaturated,
-        Self::MotorThermal,
-        Self::MotorOutputStage,
-        Self::EStopPressed,
-        Self::EStopInputFault,
-        Self::ButtonInputFault,
-        Self::DeadlineMissed,
-        Self::ControlValueInvalid,
-        Self::UnplannedHeelOff,
-    ];
-
     /// The stable numeric code.
     #[must_use]
     pub const fn code(self) -> u16 {
@@ -137,101 +323,6 @@ impl FaultCode {
     #[must_use]
     pub fn from_code(code: u16) -> Option<Self> {
         Self::ALL.iter().copied().find(|f| f.code() == code)
-    }
-
-    /// Position in [`FaultCode::ALL`], i.e. the bit in a [`FaultSet`].
-    #[must_use]
-    pub const fn index(self) -> u8 {
-        match self {
-            Self::JointPositionLimit => 0,
-            Self::JointVelocityLimit => 1,
-            Self::TrackingError => 2,
-            Self::AnklePositionLimit => 3,
-            Self::EncoderBusError => 4,
-            Self::EncoderParity => 5,
-            Self::EncoderErrorFlag => 6,
-            Self::EncoderFrozen => 7,
-            Self::EncoderJump => 8,
-            Self::EncoderInvalidValue => 9,
-            Self::AnkleEncoder => 10,
-            Self::ForceBusError => 11,
-            Self::ForceOpen => 12,
-            Self::ForceShorted => 13,
-            Self::ForceOutOfRange => 14,
-            Self::MotorSaturated => 15,
-            Self::MotorThermal => 16,
-            Self::MotorOutputStage => 17,
-            Self::EStopPressed => 18,
-            Self::EStopInputFault => 19,
-            Self::ButtonInputFault => 20,
-            Self::DeadlineMissed => 21,
-            Self::ControlValueInvalid => 22,
-            Self::UnplannedHeelOff => 23,
-        }
-    }
-
-    /// The reaction this fault demands while it is latched.
-    #[must_use]
-    pub const fn reaction(self) -> Reaction {
-        match self {
-            // Passive ankles, sensors needed only to start a swing, and
-            // the buttons: not needed to hold, so finish the step first.
-            Self::AnklePositionLimit
-            | Self::UnplannedHeelOff
-            | Self::AnkleEncoder
-            | Self::ForceBusError
-            | Self::ForceOpen
-            | Self::ForceShorted
-            | Self::ForceOutOfRange
-            | Self::ButtonInputFault => Reaction::FinishStepThenHold,
-            Self::JointPositionLimit
-            | Self::JointVelocityLimit
-            | Self::TrackingError
-            | Self::EncoderBusError
-            | Self::EncoderParity
-            | Self::EncoderErrorFlag
-            | Self::EncoderFrozen
-            | Self::EncoderJump
-            | Self::EncoderInvalidValue
-            | Self::MotorSaturated
-            | Self::MotorThermal
-            | Self::DeadlineMissed
-            | Self::ControlValueInvalid => Reaction::SafeHold,
-            Self::MotorOutputStage | Self::EStopPressed | Self::EStopInputFault => {
-                Reaction::DisableMotors
-            }
-        }
-    }
-
-    /// Short name for logs and the service tool.
-    #[must_use]
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::JointPositionLimit => "joint position limit",
-            Self::JointVelocityLimit => "joint velocity limit",
-            Self::TrackingError => "tracking error",
-            Self::AnklePositionLimit => "ankle position limit",
-            Self::UnplannedHeelOff => "unplanned heel-off",
-            Self::EncoderBusError => "encoder bus error",
-            Self::EncoderParity => "encoder parity error",
-            Self::EncoderErrorFlag => "encoder error flag",
-            Self::EncoderFrozen => "encoder frozen",
-            Self::EncoderJump => "encoder impossible jump",
-            Self::EncoderInvalidValue => "encoder invalid value",
-            Self::AnkleEncoder => "ankle encoder fault",
-            Self::ForceBusError => "force sensor bus error",
-            Self::ForceOpen => "force sensor open",
-            Self::ForceShorted => "force sensor shorted",
-            Self::ForceOutOfRange => "force sensor out of range",
-            Self::MotorSaturated => "motor command saturated",
-            Self::MotorThermal => "motor thermal fault",
-            Self::MotorOutputStage => "motor output stage fault",
-            Self::EStopPressed => "emergency stop pressed",
-            Self::EStopInputFault => "emergency stop input fault",
-            Self::ButtonInputFault => "button input fault",
-            Self::DeadlineMissed => "tick deadline missed",
-            Self::ControlValueInvalid => "control value invalid",
-        }
     }
 
     const fn bit(self) -> u32 {

@@ -1,0 +1,153 @@
+//! The fault table in `docs/safety.md` and the one in `faults.rs` agree,
+//! row for row: the same codes (each once), and for each code the same
+//! name, reaction, detection bound and reset rule.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    missing_docs
+)]
+
+use gait_control::faults::{FaultCode, Reaction};
+
+const SAFETY_MD: &str = include_str!("../../../docs/safety.md");
+
+const HEADER: &str =
+    "| code | name | condition | detection bound | reaction | reset allowed when |";
+
+/// One row of the doc's table, its cells with `\|` unescaped.
+#[derive(Debug)]
+struct DocRow {
+    line: usize,
+    code: u16,
+    name: String,
+    detection_bound: String,
+    reaction: String,
+    reset_allowed_when: String,
+}
+
+/// Splits a Markdown table row on the pipes that are not escaped.
+fn cells(line: &str) -> Vec<String> {
+    let inner = line
+        .trim()
+        .strip_prefix('|')
+        .and_then(|l| l.strip_suffix('|'))
+        .unwrap_or_else(|| panic!("not a table row: {line}"));
+    let mut out = vec![String::new()];
+    let mut chars = inner.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\\' if chars.peek() == Some(&'|') => {
+                out.last_mut().unwrap().push('|');
+                chars.next();
+            }
+            '|' => out.push(String::new()),
+            c => out.last_mut().unwrap().push(c),
+        }
+    }
+    out.iter().map(|c| c.trim().to_owned()).collect()
+}
+
+/// The rows of the table under `## Fault table`.
+fn doc_rows() -> Vec<DocRow> {
+    let mut lines = SAFETY_MD
+        .lines()
+        .enumerate()
+        .skip_while(|(_, l)| l.trim() != "## Fault table")
+        .skip_while(|(_, l)| !l.starts_with('|'));
+    let (_, header) = lines.next().expect("no table under `## Fault table`");
+    assert_eq!(header.trim(), HEADER, "the fault table's columns changed");
+    let (_, rule) = lines.next().expect("no header rule");
+    assert!(rule.starts_with("|---"), "{rule}");
+    lines
+        .take_while(|(_, l)| l.starts_with('|'))
+        .map(|(i, l)| {
+            let c = cells(l);
+            assert_eq!(c.len(), 6, "line {}: {} cells, want 6: {l}", i + 1, c.len());
+            let hex = c[0]
+                .strip_prefix("0x")
+                .unwrap_or_else(|| panic!("line {}: code {:?} is not 0x…", i + 1, c[0]));
+            DocRow {
+                line: i + 1,
+                code: u16::from_str_radix(hex, 16)
+                    .unwrap_or_else(|e| panic!("line {}: code {:?}: {e}", i + 1, c[0])),
+                name: c[1].clone(),
+                detection_bound: c[3].clone(),
+                reaction: c[4].clone(),
+                reset_allowed_when: c[5].clone(),
+            }
+        })
+        .collect()
+}
+
+/// How the doc writes a fault's reaction.
+fn doc_label(r: Reaction) -> &'static str {
+    match r {
+        Reaction::None => "NONE",
+        Reaction::FinishStepThenHold => "FINISH STEP, THEN HOLD",
+        Reaction::SafeHold => "SAFE HOLD",
+        Reaction::DisableMotors => "MOTORS DISABLED",
+    }
+}
+
+#[test]
+fn the_doc_lists_every_code_once_in_code_order() {
+    let rows = doc_rows();
+    for w in rows.windows(2) {
+        assert!(
+            w[0].code < w[1].code,
+            "line {}: 0x{:04x} after 0x{:04x} (the doc's table is in code order, each code once)",
+            w[1].line,
+            w[1].code,
+            w[0].code
+        );
+    }
+    let hex = |codes: &mut dyn Iterator<Item = u16>| {
+        let mut v: Vec<u16> = codes.collect();
+        v.sort_unstable();
+        v.iter().map(|c| format!("0x{c:04x}")).collect::<Vec<_>>()
+    };
+    let doc = hex(&mut rows.iter().map(|r| r.code));
+    let code = hex(&mut FaultCode::ALL.iter().map(|c| c.code()));
+    assert_eq!(doc, code, "docs/safety.md's codes vs FaultCode::ALL");
+    assert_eq!(rows.len(), FaultCode::COUNT);
+}
+
+#[test]
+fn each_doc_row_matches_its_code_row() {
+    let rows = doc_rows();
+    assert!(!rows.is_empty());
+    for row in &rows {
+        let at = format!("docs/safety.md line {} (0x{:04x})", row.line, row.code);
+        let c = FaultCode::from_code(row.code).unwrap_or_else(|| panic!("{at}: no such FaultCode"));
+        assert_eq!(row.name, c.name(), "{at}: name");
+        assert_eq!(row.reaction, doc_label(c.reaction()), "{at}: reaction");
+        assert_eq!(
+            row.detection_bound,
+            c.detection_bound(),
+            "{at}: detection bound"
+        );
+        assert_eq!(
+            row.reset_allowed_when,
+            c.reset_rule(),
+            "{at}: reset allowed when"
+        );
+    }
+}
+
+#[test]
+fn no_fault_reacts_with_none() {
+    // `Reaction::None` means "nothing latched"; a fault must do something.
+    for c in FaultCode::ALL {
+        assert_ne!(c.reaction(), Reaction::None, "{c:?}");
+    }
+}
+
+#[test]
+fn the_cell_splitter_keeps_escaped_pipes() {
+    assert_eq!(
+        cells(r"| a | \|x\| > 1 | b |"),
+        vec!["a".to_owned(), "|x| > 1".to_owned(), "b".to_owned()]
+    );
+}
