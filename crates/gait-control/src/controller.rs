@@ -41,10 +41,7 @@ use crate::supervisor::{MotorSense, Supervisor, SupervisorInput, Verdict};
 use act::Actuation;
 use sense::{BAD_ENCODER, Senses};
 
-/// Encoders: the four joints (joint order), then left and right ankle.
-pub const ENCODERS: usize = JOINTS + 2;
-/// Force sensors: left foot, right foot, left crutch, right crutch.
-pub const FORCES: usize = 4;
+pub use crate::layout::{ENCODERS, FORCES};
 /// Points of each force sensor's calibration table.
 pub const FORCE_CAL_POINTS: usize = 4;
 

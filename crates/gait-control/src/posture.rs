@@ -10,54 +10,7 @@
 use gait_core::LINKS;
 use gait_core::kinematics::{Phi, anatomical_angles, theta_from_phi};
 
-/// Actuated joints.
-pub const JOINTS: usize = 4;
-
-/// Which leg carries the body during a step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Side {
-    /// Left leg.
-    Left,
-    /// Right leg.
-    Right,
-}
-
-impl Side {
-    /// The other leg.
-    pub fn other(self) -> Self {
-        match self {
-            Self::Left => Self::Right,
-            Self::Right => Self::Left,
-        }
-    }
-
-    /// Index of this side's hip in the joint order (knee is +1); ankle index.
-    fn hip(self) -> usize {
-        match self {
-            Self::Left => 0,
-            Self::Right => 2,
-        }
-    }
-
-    /// Whether joint `j` (joint order) is on this leg.
-    pub fn has_joint(self, j: usize) -> bool {
-        j == self.hip() || j == self.hip() + 1
-    }
-
-    /// Index of this side's ankle.
-    pub fn ankle(self) -> usize {
-        match self {
-            Self::Left => 0,
-            Self::Right => 1,
-        }
-    }
-
-    /// Index of this side's foot force sensor (0 left foot, 1 right foot).
-    pub fn foot(self) -> usize {
-        self.ankle()
-    }
-}
+pub use crate::layout::{JOINTS, Side};
 
 /// Puts stance/swing values (hip, knee each) into the joint order.
 fn place(

@@ -24,14 +24,7 @@ use heapless::HistoryBuf;
 use crate::drivers::as5048a::{DATA_MASK, wrapped_delta};
 use crate::faults::{FaultCode, FaultSet, Reaction};
 
-/// Actuated joints: 0 left hip, 1 left knee, 2 right hip, 3 right knee
-/// (anatomical flexion positive, rad).
-pub const JOINTS: usize = 4;
-/// Semi-passive ankles: 0 left, 1 right (dorsiflexion positive, rad).
-pub const ANKLES: usize = 2;
-/// Force sensors: 0 left foot, 1 right foot, 2 left crutch, 3 right
-/// crutch (N).
-pub const FORCE_SENSORS: usize = 4;
+pub use crate::layout::{ANKLES, FORCES, JOINTS};
 /// Records kept in the post-mortem log (the newest ones).
 pub const LOG_LEN: usize = 32;
 /// Channel of a [`FaultRecord`] for faults that belong to no channel.
@@ -132,7 +125,7 @@ pub struct SupervisorInput {
     /// Ankle encoders.
     pub ankles: [EncoderSense; ANKLES],
     /// Foot and crutch force sensors.
-    pub forces: [ForceSense; FORCE_SENSORS],
+    pub forces: [ForceSense; FORCES],
     /// Motor outputs, one per actuated joint.
     pub motors: [MotorSense; JOINTS],
     /// The emergency-stop input reads pressed.
@@ -650,7 +643,7 @@ pub struct Supervisor {
     ankles: [EncoderTrack; ANKLES],
     /// Consecutive ticks each ankle has rested on its stop unplanned.
     heel_off_ticks: [u32; ANKLES],
-    forces: [ForceTrack; FORCE_SENSORS],
+    forces: [ForceTrack; FORCES],
     previous_reference_rad: Option<[f32; JOINTS]>,
     /// `calls` at the latest deadline misses (ring).
     misses: [Option<u32>; MAX_DEADLINE_MISSES as usize],
@@ -680,7 +673,7 @@ impl Supervisor {
             joints: [JointTrack::default(); JOINTS],
             ankles: [EncoderTrack::default(); ANKLES],
             heel_off_ticks: [0; ANKLES],
-            forces: [ForceTrack::default(); FORCE_SENSORS],
+            forces: [ForceTrack::default(); FORCES],
             previous_reference_rad: None,
             misses: [None; MAX_DEADLINE_MISSES as usize],
             miss_next: 0,
@@ -1000,7 +993,7 @@ impl Supervisor {
 
     fn check_forces(&mut self, input: &SupervisorInput, t: &mut Tick) {
         let cfg = self.cfg;
-        for i in 0..FORCE_SENSORS {
+        for i in 0..FORCES {
             let ch = i as u8;
             let (Some(sense), Some(track)) = (input.forces.get(i), self.forces.get_mut(i)) else {
                 continue;

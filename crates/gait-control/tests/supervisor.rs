@@ -13,9 +13,9 @@
 use gait_control::drivers::as5048a::{COUNTS_PER_REV, Calibration, Direction};
 use gait_control::faults::{FaultCode, FaultSet, Reaction};
 use gait_control::supervisor::{
-    ANKLES, ConfigError, EncoderSense, EncoderStatus, FORCE_SENSORS, ForceSense, ForceStatus,
-    JOINTS, LOG_LEN, MotorSense, NO_CHANNEL, ResetRefused, Supervisor, SupervisorConfig,
-    SupervisorInput, Verdict,
+    ANKLES, ConfigError, EncoderSense, EncoderStatus, FORCES, ForceSense, ForceStatus, JOINTS,
+    LOG_LEN, MotorSense, NO_CHANNEL, ResetRefused, Supervisor, SupervisorConfig, SupervisorInput,
+    Verdict,
 };
 use proptest::prelude::*;
 
@@ -969,5 +969,5 @@ fn the_log_records_each_channel_once_while_latched() {
 fn sizes_are_small() {
     // The supervisor lives in a static on the board: keep it small.
     assert!(core::mem::size_of::<Supervisor>() < 2048);
-    assert_eq!(FORCE_SENSORS, 4);
+    assert_eq!(FORCES, 4);
 }

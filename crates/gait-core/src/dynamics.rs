@@ -363,10 +363,11 @@ pub fn energy<T: Real>(model: &BodyModel<T>, phi: &Phi<T>, dphi: &Phi<T>) -> T {
     k + p
 }
 
-/// One classical Runge–Kutta (RK4) step of the chain under constant
-/// generalised forces `t_phi` over `h` seconds; returns the new (Φ, Φ̇).
-///
-/// Used by the simulator's plant and by the energy-conservation checks.
+/// One classical Runge–Kutta (RK4) step of the chain (flat stance foot)
+/// under constant generalised forces `t_phi` over `h` seconds; returns the
+/// new (Φ, Φ̇). Used by the energy-conservation checks; the simulator's
+/// plant steps with [`rk4_integrate`] itself, its forces changing with the
+/// state.
 pub fn rk4_step<T: Real>(
     model: &BodyModel<T>,
     phi: &Phi<T>,
@@ -385,15 +386,29 @@ pub(crate) fn rk4_with<T: Real>(
     h: T,
     accel: impl Fn(&Phi<T>, &Phi<T>) -> Result<Phi<T>, DynamicsError>,
 ) -> Result<(Phi<T>, Phi<T>), DynamicsError> {
+    rk4_integrate(phi, dphi, T::zero(), h, |q, w, _| accel(q, w))
+}
+
+/// The chain's integrator: one classical RK4 step of Φ̈ = `accel`(Φ, Φ̇, t)
+/// from time `t0` over `h` seconds; returns the new (Φ, Φ̇). The forces
+/// behind `accel` may change with the state and the time (the simulator's
+/// plant evaluates its pilot, ankle spring and contacts at every stage).
+pub fn rk4_integrate<T: Real, E>(
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    t0: T,
+    h: T,
+    mut accel: impl FnMut(&Phi<T>, &Phi<T>, T) -> Result<Phi<T>, E>,
+) -> Result<(Phi<T>, Phi<T>), E> {
     let half = h * T::lit(0.5);
-    let k1w = accel(phi, dphi)?;
+    let k1w = accel(phi, dphi, t0)?;
     let k1q = *dphi;
     let k2q = axpy(dphi, &k1w, half);
-    let k2w = accel(&axpy(phi, &k1q, half), &k2q)?;
+    let k2w = accel(&axpy(phi, &k1q, half), &k2q, t0 + half)?;
     let k3q = axpy(dphi, &k2w, half);
-    let k3w = accel(&axpy(phi, &k2q, half), &k3q)?;
+    let k3w = accel(&axpy(phi, &k2q, half), &k3q, t0 + half)?;
     let k4q = axpy(dphi, &k3w, h);
-    let k4w = accel(&axpy(phi, &k3q, h), &k4q)?;
+    let k4w = accel(&axpy(phi, &k3q, h), &k4q, t0 + h)?;
     let sixth = h / T::lit(6.0);
     let two = T::lit(2.0);
     let mut q = *phi;

@@ -6,7 +6,7 @@
 //! Links 1–3 form a chain ankle → knee → hip → torso top; links 4 and 5 hang
 //! from the hip `p2` (not from the torso's end `p3`).
 
-use crate::model::{BodyModel, LINKS};
+use crate::model::{BodyModel, LINK_PATH, LINKS};
 use crate::scalar::Real;
 
 /// A point in the sagittal plane, m.
@@ -114,6 +114,37 @@ pub fn link_com<T: Real>(model: &BodyModel<T>, phi: &Phi<T>) -> [Point<T>; LINKS
     out
 }
 
+/// The acceleration of each link's centre of mass relative to the stance
+/// ankle, m/s² (x, y): the link's own term (d_i) plus each link on its path
+/// ([`LINK_PATH`], l_j), each c (cos φ φ̈ − sin φ φ̇², −sin φ φ̈ − cos φ φ̇²).
+pub fn link_com_accelerations<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> [Point<T>; LINKS] {
+    let links = model.links();
+    let acc = |j: usize, c: T| -> Point<T> {
+        let (Some(&q), Some(&w), Some(&a)) = (phi.get(j), dphi.get(j), ddphi.get(j)) else {
+            return [T::zero(); 2];
+        };
+        let (s, co) = q.sin_cos_fast();
+        let w2 = w * w;
+        [c * (co * a - s * w2), c * (-s * a - co * w2)]
+    };
+    let mut out = [[T::zero(); 2]; LINKS];
+    for (i, ((o, link), path)) in out.iter_mut().zip(links.iter()).zip(LINK_PATH).enumerate() {
+        *o = acc(i, link.com_m);
+        for &j in path {
+            let l = links.get(j).map_or(T::zero(), |l| l.length_m);
+            let a = acc(j, l);
+            o[0] += a[0];
+            o[1] += a[1];
+        }
+    }
+    out
+}
+
 /// Anatomical joint angles (rad), positive in the direction named:
 /// `[stance ankle dorsiflexion, stance knee flexion, stance hip flexion,
 ///   swing hip flexion, swing knee flexion]`.
@@ -164,6 +195,37 @@ pub fn wrap_pi<T: Real>(x: T) -> T {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn com_accelerations_are_the_second_differences_of_the_com_positions() {
+        let m = BodyModel::<f64>::paper_table_iii();
+        let (q, w, a) = (
+            [0.21, -0.18, 0.07, 2.71, 3.52],
+            [0.4, -0.9, 0.2, -2.1, 3.3],
+            [1.5, -2.0, 0.7, 6.0, -9.0],
+        );
+        // Φ(t) = q + w t + a t²/2, so the second difference of each link's
+        // centre of mass at t = 0 is its acceleration.
+        let at =
+            |t: f64| -> Phi<f64> { core::array::from_fn(|i| q[i] + w[i] * t + 0.5 * a[i] * t * t) };
+        let h = 1e-4;
+        let (before, now, after) = (
+            link_com(&m, &at(-h)),
+            link_com(&m, &at(0.0)),
+            link_com(&m, &at(h)),
+        );
+        let acc = link_com_accelerations(&m, &q, &w, &a);
+        for i in 0..LINKS {
+            for k in 0..2 {
+                let fd = (after[i][k] - 2.0 * now[i][k] + before[i][k]) / (h * h);
+                assert!(
+                    (fd - acc[i][k]).abs() < 1e-4 * (1.0 + fd.abs()),
+                    "link {i}, axis {k}: {fd} vs {}",
+                    acc[i][k]
+                );
+            }
+        }
+    }
 
     #[test]
     fn theta_phi_round_trip_and_matrix_form() {

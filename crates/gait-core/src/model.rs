@@ -9,6 +9,11 @@ use crate::scalar::Real;
 /// Number of links in the sagittal chain.
 pub const LINKS: usize = 5;
 
+/// The chain's layout: for each link, the links on the path from the stance
+/// ankle to its proximal joint (the torso and the swing thigh both hang
+/// from the hip, the end of link 2; the swing shank from the swing knee).
+pub const LINK_PATH: [&[usize]; LINKS] = [&[], &[0], &[0, 1], &[0, 1], &[0, 1, 3]];
+
 /// Standard gravity, m/s².
 pub const GRAVITY_M_S2: f64 = 9.81;
 

@@ -25,11 +25,7 @@
 //! not checked; [`crate::plant::Landing`] reports its vertical speed.
 
 use gait_core::kinematics::Phi;
-use gait_core::model::{BodyModel, LINKS};
-
-/// For each link, the links on the path from the stance ankle to its
-/// proximal joint (links 4 and 5 hang from the hip, the end of link 2).
-const PATH: [&[usize]; LINKS] = [&[], &[0], &[0, 1], &[0, 1], &[0, 1, 3]];
+use gait_core::model::{BodyModel, LINK_PATH as PATH, LINKS};
 
 /// World position and velocity of one link's centre of mass, its angular
 /// velocity (anticlockwise) and its mass properties.

@@ -38,7 +38,8 @@
 use gait_core::dynamics::{self, DynamicsError};
 use gait_core::foot::{self, StanceFoot};
 use gait_core::kinematics::{
-    Phi, anatomical_angles, forward_kinematics, joint_torques, link_com, theta_from_phi,
+    Phi, anatomical_angles, forward_kinematics, joint_torques, link_com, link_com_accelerations,
+    theta_from_phi,
 };
 use gait_core::model::{BodyModel, GRAVITY_M_S2, LINKS};
 
@@ -47,44 +48,7 @@ use crate::terrain::Terrain;
 
 use std::f64::consts::PI;
 
-/// A leg.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Side {
-    /// Left leg.
-    Left,
-    /// Right leg.
-    Right,
-}
-
-impl Side {
-    /// Index in per-side arrays: left 0, right 1.
-    pub fn index(self) -> usize {
-        match self {
-            Self::Left => 0,
-            Self::Right => 1,
-        }
-    }
-
-    /// The other leg.
-    pub fn other(self) -> Self {
-        match self {
-            Self::Left => Self::Right,
-            Self::Right => Self::Left,
-        }
-    }
-}
-
-/// Index of each motor in the anatomical torque and angle arrays.
-pub mod joint {
-    /// Left hip.
-    pub const LEFT_HIP: usize = 0;
-    /// Left knee.
-    pub const LEFT_KNEE: usize = 1;
-    /// Right hip.
-    pub const RIGHT_HIP: usize = 2;
-    /// Right knee.
-    pub const RIGHT_KNEE: usize = 3;
-}
+pub use gait_control::layout::{Side, joint};
 
 /// Plant parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -530,23 +494,11 @@ impl Plant {
     /// torques are held.
     fn rk4(&mut self, h: f64) -> Result<(), SimError> {
         let t0 = self.time_s;
-        let (q0, w0) = (self.phi, self.dphi);
-        let add = |a: &Phi<f64>, b: &Phi<f64>, s: f64| -> Phi<f64> {
-            core::array::from_fn(|i| a[i] + s * b[i])
-        };
-        let k1w = self.accel(&q0, &w0, t0)?;
-        let k1q = w0;
-        let k2q = add(&w0, &k1w, 0.5 * h);
-        let k2w = self.accel(&add(&q0, &k1q, 0.5 * h), &k2q, t0 + 0.5 * h)?;
-        let k3q = add(&w0, &k2w, 0.5 * h);
-        let k3w = self.accel(&add(&q0, &k2q, 0.5 * h), &k3q, t0 + 0.5 * h)?;
-        let k4q = add(&w0, &k3w, h);
-        let k4w = self.accel(&add(&q0, &k3q, h), &k4q, t0 + h)?;
-        let combine = |x: &Phi<f64>, a: &Phi<f64>, b: &Phi<f64>, c: &Phi<f64>, d: &Phi<f64>| {
-            core::array::from_fn(|i| x[i] + h / 6.0 * (a[i] + 2.0 * b[i] + 2.0 * c[i] + d[i]))
-        };
-        self.phi = combine(&q0, &k1q, &k2q, &k3q, &k4q);
-        self.dphi = combine(&w0, &k1w, &k2w, &k3w, &k4w);
+        let q0 = self.phi;
+        let (q, w) =
+            dynamics::rk4_integrate(&self.phi, &self.dphi, t0, h, |q, w, t| self.accel(q, w, t))?;
+        self.phi = q;
+        self.dphi = w;
         self.time_s = t0 + h;
         // The heel lifted or landed in this substep: a plastic contact
         // switch ([`foot::contact_switch_velocities`]), applied at its end.
@@ -1034,28 +986,17 @@ impl Plant {
         }
     }
 
-    /// Vertical acceleration of the centre of mass, m/s²: for each link
-    /// y = Σ_j c_j cos φ_j over the links on its path from the stance ankle
-    /// (c_j = l_j, or d_i for the link itself), so
-    /// ÿ = Σ_j c_j (−sin φ_j φ̈_j − cos φ_j φ̇_j²).
+    /// Vertical acceleration of the centre of mass, m/s²: the stance
+    /// ankle's own (on its circle about the toe) plus the links' relative
+    /// to it ([`gait_core::kinematics::link_com_accelerations`]).
     fn com_accel_y(&self) -> f64 {
         let model = &self.cfg.model;
-        let links = model.links();
-        // Path of links from the ankle to each link's proximal joint.
-        const PATH: [&[usize]; LINKS] = [&[], &[0], &[0, 1], &[0, 1], &[0, 1, 3]];
-        let acc = |j: usize, c: f64| {
-            c * (-self.phi[j].sin() * self.ddphi[j] - self.phi[j].cos() * self.dphi[j].powi(2))
-        };
-        // The stance ankle's own acceleration on its circle about the toe.
         let a = self.ankle_at(self.phi[0]);
         let base = a.d1[1] * self.ddphi[0] + a.d2[1] * self.dphi[0].powi(2);
+        let relative = link_com_accelerations(model, &self.phi, &self.dphi, &self.ddphi);
         let mut total = model.total_mass_kg() * base;
-        for (i, (link, path)) in links.iter().zip(PATH).enumerate() {
-            let mut a = acc(i, link.com_m);
-            for &j in path {
-                a += acc(j, links[j].length_m);
-            }
-            total += link.mass_kg * a;
+        for (link, [_, y]) in model.links().iter().zip(relative) {
+            total += link.mass_kg * y;
         }
         total / model.total_mass_kg()
     }
