@@ -38,20 +38,8 @@ pub const MAX_DEADLINE_MISSES: u8 = 8;
 /// (the driver's range is (−π, π]; a little slack for rounding).
 const MAX_ENCODER_ANGLE_RAD: f32 = core::f32::consts::PI + 1e-3;
 
-/// Outcome of one encoder read, as the driver reported it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum EncoderStatus {
-    /// A frame with good parity and no error flag.
-    #[default]
-    Ok,
-    /// The SPI transaction failed.
-    BusError,
-    /// The reply failed its parity check.
-    Parity,
-    /// The chip raised its error flag.
-    ErrorFlag,
-}
+/// Outcome of one encoder read: the driver's own error kind.
+pub use crate::drivers::as5048a::ReadStatus as EncoderStatus;
 
 /// One encoder sample. When `status` is not `Ok` the other fields are
 /// ignored (the controller may fill them with anything, NaN included).
@@ -66,22 +54,8 @@ pub struct EncoderSense {
     pub angle_rad: f32,
 }
 
-/// Outcome of one force conversion, as the driver reported it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ForceStatus {
-    /// A reading within the rated range.
-    #[default]
-    Ok,
-    /// The SPI transaction failed.
-    BusError,
-    /// Counts below the open-circuit threshold.
-    Open,
-    /// Counts above the short-circuit threshold.
-    Shorted,
-    /// The calibrated force is outside the rated range.
-    OutOfRange,
-}
+/// Outcome of one force conversion: the driver's own error kind.
+pub use crate::drivers::mcp3208::ReadStatus as ForceStatus;
 
 /// One force sample. `newtons` is ignored unless `status` is `Ok`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -5,9 +5,7 @@
 use embedded_hal::digital::InputPin;
 use embedded_hal::spi::SpiDevice;
 
-use crate::drivers::as5048a;
 use crate::drivers::buttons::Sample;
-use crate::drivers::mcp3208::{self, ForceFault};
 use crate::posture::JOINTS;
 use crate::sequencer::Sensed;
 use crate::supervisor::{EncoderSense, EncoderStatus, ForceSense, ForceStatus};
@@ -97,28 +95,24 @@ impl Controller<'_> {
         let rc = 1.0 / (2.0 * core::f32::consts::PI * self.cfg.rate_filter_hz);
         let alpha = dt / (rc + dt);
         for (i, (enc, o)) in hw.encoders.iter_mut().zip(out.iter_mut()).enumerate() {
-            let status = match enc.read_angle() {
-                Ok(r) => {
-                    if let (Some(last), Some(raw)) =
-                        (self.last_angle.get_mut(i), self.last_raw.get_mut(i))
-                    {
-                        if let Some(rate) = self.rate.get_mut(i) {
-                            let raw_rate = if self.primed {
-                                (r.angle_rad - *last) / dt
-                            } else {
-                                0.0
-                            };
-                            *rate += alpha * (raw_rate - *rate);
-                        }
-                        *last = r.angle_rad;
-                        *raw = r.raw_counts;
+            let result = enc.read_angle();
+            if let Ok(r) = &result {
+                if let (Some(last), Some(raw)) =
+                    (self.last_angle.get_mut(i), self.last_raw.get_mut(i))
+                {
+                    if let Some(rate) = self.rate.get_mut(i) {
+                        let raw_rate = if self.primed {
+                            (r.angle_rad - *last) / dt
+                        } else {
+                            0.0
+                        };
+                        *rate += alpha * (raw_rate - *rate);
                     }
-                    EncoderStatus::Ok
+                    *last = r.angle_rad;
+                    *raw = r.raw_counts;
                 }
-                Err(as5048a::Error::Bus(_)) => EncoderStatus::BusError,
-                Err(as5048a::Error::Parity) => EncoderStatus::Parity,
-                Err(as5048a::Error::ErrorFlag(_)) => EncoderStatus::ErrorFlag,
-            };
+            }
+            let status = EncoderStatus::of(&result);
             *o = EncoderSense {
                 status,
                 raw_counts: self.last_raw.get(i).copied().unwrap_or(0),
@@ -150,23 +144,10 @@ impl Controller<'_> {
             .zip(channels)
             .zip(&self.cfg.force_calibration)
         {
-            *o = match hw.adc.read_force(channel, cal) {
-                Ok(n) => ForceSense {
-                    status: ForceStatus::Ok,
-                    newtons: n,
-                },
-                Err(mcp3208::Error::Bus(_)) => ForceSense {
-                    status: ForceStatus::BusError,
-                    newtons: f32::NAN,
-                },
-                Err(mcp3208::Error::Sensor(f)) => ForceSense {
-                    status: match f {
-                        ForceFault::OpenCircuit { .. } => ForceStatus::Open,
-                        ForceFault::ShortCircuit { .. } => ForceStatus::Shorted,
-                        ForceFault::OutOfRange { .. } => ForceStatus::OutOfRange,
-                    },
-                    newtons: f32::NAN,
-                },
+            let result = hw.adc.read_force(channel, cal);
+            *o = ForceSense {
+                status: ForceStatus::of(&result),
+                newtons: result.unwrap_or(f32::NAN),
             };
         }
         out

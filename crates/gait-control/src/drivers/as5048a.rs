@@ -231,6 +231,33 @@ pub struct Reading {
     pub angle_rad: f32,
 }
 
+/// The outcome of one read, without the bus's own error type: the kind of
+/// a driver error, which the supervisor counts as it is
+/// ([`crate::supervisor::EncoderStatus`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ReadStatus {
+    /// A frame with good parity and no error flag.
+    #[default]
+    Ok,
+    /// The SPI transaction failed.
+    BusError,
+    /// The reply failed its parity check.
+    Parity,
+    /// The chip raised its error flag.
+    ErrorFlag,
+}
+
+impl ReadStatus {
+    /// The status of a read's result.
+    pub fn of<T, E>(result: &Result<T, Error<E>>) -> Self {
+        match result {
+            Ok(_) => Self::Ok,
+            Err(e) => e.kind(),
+        }
+    }
+}
+
 /// Driver errors.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -243,6 +270,17 @@ pub enum Error<E> {
     /// Error Flag register, whose contents are given (`None` if that answer
     /// itself failed its parity check).
     ErrorFlag(Option<ErrorRegister>),
+}
+
+impl<E> Error<E> {
+    /// What kind of failure this is ([`ReadStatus`], never `Ok`).
+    pub fn kind(&self) -> ReadStatus {
+        match self {
+            Self::Bus(_) => ReadStatus::BusError,
+            Self::Parity => ReadStatus::Parity,
+            Self::ErrorFlag(_) => ReadStatus::ErrorFlag,
+        }
+    }
 }
 
 /// An AS5048A on its own chip select.

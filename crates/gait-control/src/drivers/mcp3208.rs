@@ -180,6 +180,35 @@ impl<const N: usize> ForceCalibration<N> {
     }
 }
 
+/// The outcome of one force conversion, without the bus's own error type:
+/// the kind of a driver error, which the supervisor counts as it is
+/// ([`crate::supervisor::ForceStatus`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ReadStatus {
+    /// A reading within the rated range.
+    #[default]
+    Ok,
+    /// The SPI transaction failed.
+    BusError,
+    /// Counts below the open-circuit threshold.
+    Open,
+    /// Counts above the short-circuit threshold.
+    Shorted,
+    /// The calibrated force is outside the rated range.
+    OutOfRange,
+}
+
+impl ReadStatus {
+    /// The status of a conversion's result.
+    pub fn of<T, E>(result: &Result<T, Error<E>>) -> Self {
+        match result {
+            Ok(_) => Self::Ok,
+            Err(e) => e.kind(),
+        }
+    }
+}
+
 /// Driver errors.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -188,6 +217,18 @@ pub enum Error<E> {
     Bus(E),
     /// The sensor reading is not valid.
     Sensor(ForceFault),
+}
+
+impl<E> Error<E> {
+    /// What kind of failure this is ([`ReadStatus`], never `Ok`).
+    pub fn kind(&self) -> ReadStatus {
+        match self {
+            Self::Bus(_) => ReadStatus::BusError,
+            Self::Sensor(ForceFault::OpenCircuit { .. }) => ReadStatus::Open,
+            Self::Sensor(ForceFault::ShortCircuit { .. }) => ReadStatus::Shorted,
+            Self::Sensor(ForceFault::OutOfRange { .. }) => ReadStatus::OutOfRange,
+        }
+    }
 }
 
 /// An MCP3208 on its own chip select.
