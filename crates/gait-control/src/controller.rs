@@ -248,6 +248,7 @@ impl<'t> Controller<'t> {
     }
 
     /// Stage 2: the operator's requests, then the sequencer's reference.
+    #[inline(always)]
     fn plan<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
@@ -331,6 +332,7 @@ impl<'t> Controller<'t> {
 
     /// Stage 4: the supervisor's verdict on everything sensed and
     /// commanded, and the sequencer's reaction to it.
+    #[inline(always)]
     fn guard(
         &mut self,
         s: &Senses,
@@ -372,6 +374,7 @@ impl<'t> Controller<'t> {
 
     /// Stage 5: motors (enabled only as the verdict allows), indicators,
     /// the crutch-load metric; the tick's report.
+    #[inline(always)]
     fn write<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
@@ -409,6 +412,7 @@ impl<'t> Controller<'t> {
 
     /// Enables or disables the motors as `reaction` allows and writes the
     /// commands; returns what the drivers applied (0 when disabled).
+    #[inline(always)]
     fn write_motors<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
@@ -460,6 +464,7 @@ impl<'t> Controller<'t> {
 
     /// The crutch-load metric: a step's log opens with its swing and closes
     /// when the gait stops or a fatal reaction ends it.
+    #[inline(always)]
     fn log_crutch_load(&mut self, s: &Senses, step: StepEdges, reaction: Reaction) {
         if step.began {
             self.crutch.begin_step();

@@ -12,7 +12,6 @@
 //! step on the board (no heap) and inside the optimiser's inner loop.
 
 use crate::bezier::Bezier;
-use crate::dynamics::inverse_dynamics;
 use crate::foot::StanceFoot;
 use crate::ik::{IkError, IkOptions, IkSolution, IkSolver, IkTarget};
 use crate::kinematics::{Phi, joint_torques};
@@ -465,10 +464,7 @@ fn dynamic_sample<T: Real>(
     dphi: Phi<T>,
     ddphi: Phi<T>,
 ) -> DynamicSample<T> {
-    let t_phi = match foot {
-        Some(f) => crate::foot::inverse_dynamics(model, f, &phi, &dphi, &ddphi),
-        None => inverse_dynamics(model, &phi, &dphi, &ddphi),
-    };
+    let t_phi = crate::mechanics::inverse_dynamics(model, foot, &phi, &dphi, &ddphi);
     let torque = joint_torques(&t_phi);
     DynamicSample {
         gait,

@@ -169,7 +169,13 @@ where
         };
         let p5 = swing_ankle(model, foot, &phi);
         let share = other_foot_share(swing_toe(model, foot, &phi), start);
-        let single = joint_torques(&foot::inverse_dynamics(model, foot, &phi, &dphi, &ddphi));
+        let single = joint_torques(&crate::mechanics::inverse_dynamics(
+            model,
+            Some(foot),
+            &phi,
+            &dphi,
+            &ddphi,
+        ));
         let shared = foot::share_load(model, foot, &phi, &single, share * weight);
         let pilot = pilot_torque(foot, phi[0], &shared.torques, spring_nm_per_rad);
         visit(&PlaybackSample {

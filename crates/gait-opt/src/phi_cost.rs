@@ -9,9 +9,9 @@
 //! c_k = 0 within 2 mm of p5(0) or p5(N). Cross-checked against
 //! `PaperProblem::cost` on optimised steps (tests).
 
-use gait_core::dynamics::inverse_dynamics;
 use gait_core::gait::{CONTACT_THRESHOLD_M, contact_weight};
 use gait_core::kinematics::{Phi, forward_kinematics, joint_torques};
+use gait_core::mechanics::inverse_dynamics;
 use gait_core::problem::{Cost, PaperProblem};
 
 /// Why a Φ sequence cannot be evaluated.
@@ -84,12 +84,13 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
                     *d = (a - b) * inv_dt;
                 }
                 accels = Some(ddphi);
-                torque = Some(joint_torques(&match &foot {
-                    Some(f) => {
-                        gait_core::foot::inverse_dynamics(&problem.model, f, p, &dphi, &ddphi)
-                    }
-                    None => inverse_dynamics(&problem.model, p, &dphi, &ddphi),
-                }));
+                torque = Some(joint_torques(&inverse_dynamics(
+                    &problem.model,
+                    foot.as_ref(),
+                    p,
+                    &dphi,
+                    &ddphi,
+                )));
             }
             rates = Some(dphi);
             prev_dphi = Some(dphi);

@@ -41,6 +41,7 @@ use gait_core::kinematics::{
     Phi, anatomical_angles, forward_kinematics, joint_torques, link_com, link_com_accelerations,
     theta_from_phi,
 };
+use gait_core::mechanics;
 use gait_core::model::{BodyModel, GRAVITY_M_S2, LINKS};
 
 use crate::pilot::{PilotConfig, PilotTarget};
@@ -536,10 +537,13 @@ impl Plant {
         dphi: &Phi<f64>,
         t_phi: &[f64; LINKS],
     ) -> Result<Phi<f64>, SimError> {
-        Ok(match &self.cfg.foot {
-            Some(f) => foot::forward_dynamics(&self.cfg.model, f, phi, dphi, t_phi)?,
-            None => dynamics::forward_dynamics(&self.cfg.model, phi, dphi, t_phi)?,
-        })
+        Ok(mechanics::forward_dynamics(
+            &self.cfg.model,
+            self.cfg.foot.as_ref(),
+            phi,
+            dphi,
+            t_phi,
+        )?)
     }
 
     /// The stance ankle's offset from the flat foot's ankle, its
@@ -688,10 +692,13 @@ impl Plant {
         // ground under the other foot takes (its generalised forces Jᵀ F).
         let static_nm = if self.cfg.pilot.gravity_compensation != 0.0 {
             let zero = [0.0; LINKS];
-            let mut required = match &self.cfg.foot {
-                Some(f) => foot::inverse_dynamics(&self.cfg.model, f, phi, &zero, &zero),
-                None => dynamics::inverse_dynamics(&self.cfg.model, phi, &zero, &zero),
-            };
+            let mut required = mechanics::inverse_dynamics(
+                &self.cfg.model,
+                self.cfg.foot.as_ref(),
+                phi,
+                &zero,
+                &zero,
+            );
             let l = self.cfg.model.lengths();
             for i in [0, 1, 3, 4] {
                 required[i] -= l[i] * (phi[i].cos() * contact_n[0] - phi[i].sin() * contact_n[1]);
@@ -959,10 +966,7 @@ impl Plant {
         let spring_pe = 0.5
             * self.cfg.ankle_stiffness_nm_per_rad
             * (spring_angle - self.cfg.ankle_rest_rad).powi(2);
-        let chain = match &self.cfg.foot {
-            Some(f) => foot::energy(model, f, &self.phi, &self.dphi),
-            None => dynamics::energy(model, &self.phi, &self.dphi),
-        };
+        let chain = mechanics::energy(model, self.cfg.foot.as_ref(), &self.phi, &self.dphi);
         let energy_j = chain + total_m * GRAVITY_M_S2 * self.stance_foot_m[1] + spring_pe;
         TrueState {
             time_s: self.time_s,

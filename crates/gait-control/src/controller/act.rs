@@ -4,6 +4,7 @@
 
 use gait_core::foot::{self, StanceFoot};
 use gait_core::kinematics::joint_torques;
+use gait_core::mechanics;
 use gait_core::model::GRAVITY_M_S2;
 
 use crate::position_loop::Setpoint;
@@ -51,6 +52,7 @@ const OTHER_FOOT_PUSH_N: f32 = 200.0;
 
 impl Controller<'_> {
     /// Stage 3.
+    #[inline(always)]
     pub(super) fn act(&mut self, s: &Senses, r: &Reference) -> Actuation {
         let weight = self.cfg.model.total_mass_kg() * GRAVITY_M_S2 as f32;
         let planned = self.feedforward(s, r, weight);
@@ -108,6 +110,7 @@ impl Controller<'_> {
     /// so that the share the plan gives it is what it carries. Without it
     /// the share is a free internal force of the closed chain that the
     /// legs' position loops and the pilot settle between them.
+    #[inline(always)]
     fn push_other_foot(
         &mut self,
         s: &Senses,
@@ -169,6 +172,7 @@ impl Controller<'_> {
     /// during a swing: a swing foot brushing the ground then switched the
     /// model's load on and off, and the feed-forward bounced the foot. In a
     /// safe hold, what the sensor reads (NaN: nothing).
+    #[inline(always)]
     fn feedforward(&self, s: &Senses, r: &Reference, weight: f32) -> FeedForward {
         let model = &self.cfg.model;
         let other_load_n = match r.other_foot_share {
@@ -205,7 +209,13 @@ impl Controller<'_> {
         // The stance heel lifts past the ankle's stop (stair descent): the
         // chain then turns about the toe (gait_core::foot).
         let foot = StanceFoot::for_model(model);
-        let single = joint_torques(&foot::inverse_dynamics(model, &foot, &phi, &dphi, &ddphi));
+        let single = joint_torques(&mechanics::inverse_dynamics(
+            model,
+            Some(&foot),
+            &phi,
+            &dphi,
+            &ddphi,
+        ));
         let shared = foot::share_load(model, &foot, &phi, &single, other_load_n);
         let ff = joint_torques_from_theta_torques(&shared.torques, r.stance);
         let (_, per_newton_up) = foot::second_foot_torques(model, &foot, &phi);

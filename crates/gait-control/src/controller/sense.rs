@@ -41,6 +41,7 @@ pub(super) const BAD_ENCODER: EncoderSense = EncoderSense {
 
 impl Controller<'_> {
     /// Stage 1.
+    #[inline(always)]
     pub(super) fn sense<ENC, ADC, PWM, DIR, EN, IN, OUT>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,

@@ -1,0 +1,91 @@
+//! The chain's dynamics, one API with the stance foot as an input: `None`
+//! is the paper's foot (the ankle pinned to the ground, [`crate::dynamics`]);
+//! a [`StanceFoot`] is the device's, whose heel lifts past the ankle's stop
+//! so that the chain rolls on the toe ([`crate::foot`]; equal to the
+//! paper's while the foot is flat). The optimiser, the playback model and
+//! the controller's feed-forward, and the simulator's plant call these, so
+//! none of them chooses between the two families itself. The integrator
+//! is [`crate::dynamics::rk4_integrate`].
+
+use crate::dynamics::{self, DynamicsError, TPhi};
+use crate::foot::{self, StanceFoot};
+use crate::kinematics::Phi;
+use crate::model::BodyModel;
+use crate::scalar::Real;
+
+/// Generalised forces T_Φ that produce Φ̈ at (Φ, Φ̇) on `foot`.
+pub fn inverse_dynamics<T: Real>(
+    model: &BodyModel<T>,
+    foot: Option<&StanceFoot<T>>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> TPhi<T> {
+    match foot {
+        Some(f) => foot::inverse_dynamics(model, f, phi, dphi, ddphi),
+        None => dynamics::inverse_dynamics(model, phi, dphi, ddphi),
+    }
+}
+
+/// Φ̈ under the generalised forces `t_phi` at (Φ, Φ̇) on `foot`.
+pub fn forward_dynamics<T: Real>(
+    model: &BodyModel<T>,
+    foot: Option<&StanceFoot<T>>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    t_phi: &TPhi<T>,
+) -> Result<Phi<T>, DynamicsError> {
+    match foot {
+        Some(f) => foot::forward_dynamics(model, f, phi, dphi, t_phi),
+        None => dynamics::forward_dynamics(model, phi, dphi, t_phi),
+    }
+}
+
+/// Kinetic plus gravitational energy on `foot`, J.
+pub fn energy<T: Real>(
+    model: &BodyModel<T>,
+    foot: Option<&StanceFoot<T>>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+) -> T {
+    match foot {
+        Some(f) => foot::energy(model, f, phi, dphi),
+        None => dynamics::energy(model, phi, dphi),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A foot whose heel never lifts is the paper's pinned ankle, and the
+    /// forward dynamics undo the inverse on either.
+    #[test]
+    fn the_foot_is_an_input_and_forward_undoes_inverse() {
+        let m = BodyModel::<f64>::paper_table_iii();
+        let (q, w, a) = (
+            [0.21, -0.18, 0.07, 2.71, 3.52],
+            [0.4, -0.9, 0.2, -2.1, 3.3],
+            [1.5, -2.0, 0.7, 6.0, -9.0],
+        );
+        let never = StanceFoot::device(10.0);
+        let on_toe = StanceFoot::device(0.1);
+        let pinned = inverse_dynamics(&m, None, &q, &w, &a);
+        assert_eq!(inverse_dynamics(&m, Some(&never), &q, &w, &a), pinned);
+        let rolling = inverse_dynamics(&m, Some(&on_toe), &q, &w, &a);
+        assert!(
+            rolling
+                .iter()
+                .zip(&pinned)
+                .any(|(r, p)| (r - p).abs() > 1e-3)
+        );
+        for foot in [None, Some(&on_toe)] {
+            let t = inverse_dynamics(&m, foot, &q, &w, &a);
+            let back = forward_dynamics(&m, foot, &q, &w, &t).unwrap();
+            for (b, x) in back.iter().zip(&a) {
+                assert!((b - x).abs() < 1e-9, "{back:?}");
+            }
+        }
+        assert_eq!(energy(&m, Some(&never), &q, &w), energy(&m, None, &q, &w));
+    }
+}
