@@ -1,12 +1,17 @@
-//! `exogait simulate`: one closed-loop walking step of the real controller
+//! `exogait simulate`: closed-loop steps of the real controller
 //! (gait-control) on the simulated exoskeleton and pilot (sim), with the
-//! tables the firmware carries in flash. Prints the run's metrics; writes a
-//! plot (`--plot`, SVG or PNG). No algorithm here: `sim::scenario` runs it.
+//! tables the firmware carries in flash or a table file, optionally with
+//! faults injected (`--inject`). Prints the run's metrics, or with `--json`
+//! what the run did to the pilot and each fault's detection and reaction;
+//! writes a plot (`--plot`, SVG or PNG). No algorithm here:
+//! `sim::scenario`, `sim::inject` and `sim::outcome` do the work.
 
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use gait_control::operator::Gait;
+use serde::Serialize;
+use sim::inject::Injection;
 
 /// Which gait to simulate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -57,6 +62,73 @@ pub struct SimulateArgs {
     /// before the run when the device cannot play it.
     #[arg(long, value_name = "FILE")]
     pub table: Option<std::path::PathBuf>,
+    /// Inject a fault: KIND[=VALUE][:TARGET]@SECONDS, e.g.
+    /// `encoder-parity:left-knee@2.5`, `encoder-jump=200:right-hip@3.1`,
+    /// `motor-weak=0.5:left-knee@2`, `estop@5`, `overrun=5@4`. Repeatable.
+    /// Kinds: encoder-bus, encoder-parity, encoder-error-flag,
+    /// encoder-stuck, encoder-jump=<counts>, encoder-glitch=<counts> (on
+    /// left-/right-hip, -knee, -ankle); fsr-open, fsr-short,
+    /// fsr-over-range, fsr-spike=<newtons> (on left-/right-foot, -crutch);
+    /// adc-bus; motor-weak=<fraction>, motor-stuck, pwm-fail, dir-fail (on
+    /// a hip or knee); estop, estop-read, button-read, overrun=<count>,
+    /// pilot-lean=<rad>, pilot-stops-balancing (no target).
+    #[arg(long, value_name = "FAULT", value_parser = parse_injection)]
+    pub inject: Vec<Injection>,
+    /// Print a JSON summary (landings, tracking, limit margins, fall,
+    /// faults with detection and reaction) instead of the text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn parse_injection(text: &str) -> Result<Injection, String> {
+    text.parse::<Injection>().map_err(|e| e.to_string())
+}
+
+/// `--json`: what the run did to the pilot and each fault's course.
+#[derive(Debug, Serialize)]
+struct SimulateJson {
+    gait: &'static str,
+    steps_asked: usize,
+    landings: usize,
+    landed_on_plan: bool,
+    injected: Vec<InjectedJson>,
+    tracking_rms_rad: [f64; 4],
+    tracking_peak_rad: [f64; 4],
+    worst_limit_margin_rad: f64,
+    worst_limit_joint: &'static str,
+    fell: bool,
+    fell_reason: Option<String>,
+    faults: Vec<FaultJson>,
+    ended_by: Option<String>,
+}
+
+#[derive(Debug, Serialize)]
+struct InjectedJson {
+    fault: String,
+    at_s: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct FaultJson {
+    code: String,
+    name: &'static str,
+    injected_s: Option<f64>,
+    detected_s: f64,
+    latency_ticks: Option<u64>,
+    reaction: &'static str,
+    safe_state_s: Option<f64>,
+}
+
+const JOINT_NAMES: [&str; 4] = ["left-hip", "left-knee", "right-hip", "right-knee"];
+
+fn reaction_name(r: gait_control::faults::Reaction) -> &'static str {
+    use gait_control::faults::Reaction;
+    match r {
+        Reaction::None => "none",
+        Reaction::FinishStepThenHold => "finish-step-then-hold",
+        Reaction::SafeHold => "safe-hold",
+        Reaction::DisableMotors => "motors-disabled",
+    }
 }
 
 /// Runs the steps; exit status 0 when every step asked for landed within
@@ -70,6 +142,13 @@ pub fn run(args: &SimulateArgs) -> u8 {
     }
     if args.steps == 0 || args.steps > 20 {
         eprintln!("exogait simulate: --steps must be in 1..=20");
+        return 2;
+    }
+    if let Some(f) = args.inject.iter().find(|f| f.at_s >= args.seconds) {
+        eprintln!(
+            "exogait simulate: --inject {f}: at {} s it would strike after the run's {} s (--seconds)",
+            f.at_s, args.seconds
+        );
         return 2;
     }
     let device = match exogait_device::DeviceConfig::exogait() {
@@ -108,6 +187,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
         None => sim::scenario::flash_tables(),
     };
     let noise = args.sensor_noise;
+    let injections = args.inject.clone();
     let run = match sim::scenario::run_tables_with(
         &device,
         tables,
@@ -119,6 +199,9 @@ pub fn run(args: &SimulateArgs) -> u8 {
             if let Some((enc, adc)) = noise {
                 rig.set_sensor_noise(enc, adc, 2026);
             }
+            for f in injections {
+                rig.schedule(f);
+            }
         },
     ) {
         Ok(r) => r,
@@ -127,23 +210,6 @@ pub fn run(args: &SimulateArgs) -> u8 {
             return 2;
         }
     };
-    println!(
-        "exogait closed loop: {label}, {} step(s), {source}",
-        args.steps
-    );
-    println!("{}", run.summary);
-    if let Some(e) = &run.ended_by {
-        println!("simulation stopped     {e:?}");
-    }
-    if let Some(path) = &args.plot {
-        match sim::plot::plot_run(&run.rig.trace, &run.summary, path) {
-            Ok(()) => println!("plot                     {}", path.display()),
-            Err(e) => {
-                eprintln!("exogait simulate: {}: {e}", path.display());
-                return 2;
-            }
-        }
-    }
     let step = run.summary.planned_landing_x_m;
     let on_plan = run.summary.landing_points.len() >= args.steps
         && run
@@ -153,6 +219,73 @@ pub fn run(args: &SimulateArgs) -> u8 {
             .take(args.steps)
             .enumerate()
             .all(|(i, (_, x))| (x - step * (i as f64 + 1.0)).abs() < 0.05);
+    if args.json {
+        let o = sim::outcome::outcome(&run.rig, run.ended_by.as_ref());
+        let answer = SimulateJson {
+            gait: gait_opt::clinical_report::gait_name(kind),
+            steps_asked: args.steps,
+            landings: o.landings,
+            landed_on_plan: on_plan,
+            injected: run
+                .rig
+                .injected()
+                .iter()
+                .map(|(f, t)| InjectedJson {
+                    fault: f.to_string(),
+                    at_s: *t,
+                })
+                .collect(),
+            tracking_rms_rad: o.tracking_rms_rad,
+            tracking_peak_rad: o.tracking_peak_rad,
+            worst_limit_margin_rad: o.worst_limit_margin_rad,
+            worst_limit_joint: JOINT_NAMES.get(o.worst_limit_joint).copied().unwrap_or("?"),
+            fell: o.fell.is_some(),
+            fell_reason: o.fell.clone(),
+            faults: o
+                .faults
+                .iter()
+                .map(|f| FaultJson {
+                    code: format!("0x{:04x}", f.code.code()),
+                    name: f.code.name(),
+                    injected_s: f.injected_s,
+                    detected_s: f.detected_s,
+                    latency_ticks: f.latency_ticks,
+                    reaction: reaction_name(f.reaction),
+                    safe_state_s: f.safe_state_s,
+                })
+                .collect(),
+            ended_by: run.ended_by.as_ref().map(ToString::to_string),
+        };
+        match serde_json::to_string_pretty(&answer) {
+            Ok(text) => println!("{text}"),
+            Err(e) => {
+                eprintln!("exogait simulate: JSON: {e}");
+                return 2;
+            }
+        }
+    } else {
+        println!(
+            "exogait closed loop: {label}, {} step(s), {source}",
+            args.steps
+        );
+        for (f, t) in run.rig.injected() {
+            println!("injected               {f} (at {t:.3} s)");
+        }
+        println!("{}", run.summary);
+        if let Some(e) = &run.ended_by {
+            println!("simulation stopped     {e:?}");
+        }
+    }
+    if let Some(path) = &args.plot {
+        match sim::plot::plot_run(&run.rig.trace, &run.summary, path) {
+            Ok(()) if args.json => eprintln!("plot: {}", path.display()),
+            Ok(()) => println!("plot                     {}", path.display()),
+            Err(e) => {
+                eprintln!("exogait simulate: {}: {e}", path.display());
+                return 2;
+            }
+        }
+    }
     if on_plan && run.summary.faults.is_empty() && run.ended_by.is_none() {
         0
     } else {

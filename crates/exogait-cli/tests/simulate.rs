@@ -37,3 +37,86 @@ fn simulate_refuses_bad_options() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--seconds"));
 }
+
+fn simulate_json(args: &[&str]) -> (serde_json::Value, Option<i32>) {
+    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+        .arg("simulate")
+        .args(args)
+        .arg("--json")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let v = serde_json::from_str(text.trim())
+        .unwrap_or_else(|e| panic!("{e}: {text}\n{}", String::from_utf8_lossy(&out.stderr)));
+    (v, out.status.code())
+}
+
+/// The fault of `code` in a `--json` answer.
+fn fault<'a>(v: &'a serde_json::Value, code: &str) -> &'a serde_json::Value {
+    v["faults"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["code"] == code)
+        .unwrap_or_else(|| panic!("no {code} in {v:#}"))
+}
+
+#[test]
+fn a_healthy_run_reports_no_fault_and_exits_0() {
+    let (v, code) = simulate_json(&["--steps", "2"]);
+    assert_eq!(code, Some(0), "{v:#}");
+    assert!(v["landings"].as_u64().unwrap() >= 2);
+    assert_eq!(v["faults"].as_array().unwrap().len(), 0);
+    assert_eq!(v["fell"], false);
+    assert!(v["worst_limit_margin_rad"].as_f64().unwrap() > 0.0);
+    for j in 0..4 {
+        let rms = v["tracking_rms_rad"][j].as_f64().unwrap();
+        let peak = v["tracking_peak_rad"][j].as_f64().unwrap();
+        assert!(
+            rms > 0.0 && rms <= peak && peak < 0.1,
+            "joint {j}: {rms} {peak}"
+        );
+    }
+}
+
+#[test]
+fn an_injected_estop_is_detected_in_its_tick_and_disables_the_motors() {
+    let (v, code) = simulate_json(&["--steps", "2", "--inject", "estop@3"]);
+    assert_eq!(code, Some(1), "a faulted run must not exit 0: {v:#}");
+    assert_eq!(v["injected"][0]["fault"], "estop@3");
+    let f = fault(&v, "0x0501");
+    assert_eq!(f["latency_ticks"], 0);
+    assert_eq!(f["reaction"], "motors-disabled");
+    assert!((f["injected_s"].as_f64().unwrap() - 3.0).abs() < 1e-3);
+    assert!(f["safe_state_s"].as_f64().is_some());
+}
+
+#[test]
+fn an_injected_parity_fault_is_detected_within_its_debounce_and_holds() {
+    let (v, code) = simulate_json(&["--inject", "encoder-parity:left-knee@2.5", "--steps", "2"]);
+    assert_eq!(code, Some(1));
+    let f = fault(&v, "0x0202");
+    // docs/safety.md: the bad-frame debounce (3 of the last ticks).
+    assert!(f["latency_ticks"].as_u64().unwrap() <= 3, "{f}");
+    assert_eq!(f["reaction"], "safe-hold");
+    let held = f["safe_state_s"].as_f64().unwrap() - f["detected_s"].as_f64().unwrap();
+    assert!((0.0..=0.31).contains(&held), "{held}");
+}
+
+#[test]
+fn bad_injections_are_refused_with_exit_2_and_say_why() {
+    for (inj, says) in [
+        ("warp-drive@2", "unknown kind"),
+        ("encoder-parity@2", "needs a target"),
+        ("motor-weak=2:left-knee@2", "fraction"),
+        ("estop@30", "after the run"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+            .args(["simulate", "--inject", inj])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{inj}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{inj}: {err}");
+    }
+}

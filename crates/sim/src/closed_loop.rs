@@ -24,6 +24,7 @@ use gait_core::gait::StanceAnkleProfile;
 use gait_core::tables::GaitTable;
 
 use crate::as5048a::SimAs5048a;
+use crate::inject::{Injector, leaned};
 use crate::mcp3208::SimMcp3208;
 use crate::motor::{SimBridgePin, SimPwm};
 use crate::pilot::PilotTarget;
@@ -162,10 +163,11 @@ pub struct Rig<'t> {
     pub controller: Controller<'t>,
     /// Every tick so far.
     pub trace: Vec<Sample>,
-    device: DeviceConfig,
+    pub(crate) device: DeviceConfig,
     support_ticks: u64,
     pilot: PilotBehaviour,
     transfer_from_phi1: Option<f64>,
+    pub(crate) faults: Injector,
 }
 
 /// Where the pilot's stance shank should be, given the controller's phase
@@ -408,6 +410,7 @@ impl<'t> Rig<'t> {
             support_ticks: setup.support_ticks,
             pilot: setup.pilot,
             transfer_from_phi1: None,
+            faults: Injector::default(),
         };
         // Start the ankle readings at their true values (no lag to settle).
         let s = rig.plant.state();
@@ -494,7 +497,10 @@ impl<'t> Rig<'t> {
 
     /// One controller tick, then one plant step.
     pub fn tick(&mut self) -> Result<&Sample, SimError> {
-        let report = self.controller.tick(&mut self.hw, false);
+        self.inject_due();
+        let overrun = self.faults.overruns_left > 0;
+        self.faults.overruns_left = self.faults.overruns_left.saturating_sub(1);
+        let report = self.controller.tick(&mut self.hw, overrun);
         match report.phase {
             Phase::Transfer { .. } => {
                 if self.transfer_from_phi1.is_none() {
@@ -523,6 +529,7 @@ impl<'t> Rig<'t> {
             self.device.controller.sequencer.transfer_s,
             self.plant.time_s(),
         );
+        let target = leaned(target, self.faults.pilot_lean_rad);
         if target != self.plant.pilot() {
             self.plant.set_pilot(target);
         }

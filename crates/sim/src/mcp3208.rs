@@ -69,12 +69,17 @@ impl ForceSensorCal {
 }
 
 /// An injected channel fault.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ChannelFault {
     /// Sensor or cable open: the input is pulled to ground (0 counts).
     Open,
     /// Shorted to the reference: 4095 counts.
     Short,
+    /// The sensor reads this force, N, whatever it carries (over range:
+    /// an overload or a failing bridge amplifier).
+    Reads(f64),
+    /// The sensor reads this much more than it carries, N (a spike).
+    Adds(f64),
 }
 
 #[derive(Clone, Debug)]
@@ -113,18 +118,22 @@ impl Chip {
             Some(Some(input)) => match input.fault {
                 Some(ChannelFault::Open) => 0,
                 Some(ChannelFault::Short) => FULL_SCALE,
+                Some(ChannelFault::Reads(n)) => input.cal.counts(n),
+                Some(ChannelFault::Adds(n)) => input.cal.counts(input.source.get() + n),
                 None => input.cal.counts(input.source.get()),
             },
             _ => 0,
         }
     }
 
-    /// A conversion: the input's counts plus measurement noise (not on a
-    /// faulted or unconnected input: those sit at a rail).
+    /// A conversion: the input's counts plus measurement noise (not on an
+    /// open, shorted or unconnected input: those sit at a rail).
     fn noisy_counts(&self, channel: usize) -> u16 {
         let c = self.counts(channel);
         match self.inputs.get(channel) {
-            Some(Some(input)) if input.fault.is_none() => {
+            Some(Some(input))
+                if !matches!(input.fault, Some(ChannelFault::Open | ChannelFault::Short)) =>
+            {
                 let v = (i64::from(c) + self.noise.sample()).clamp(0, i64::from(FULL_SCALE));
                 u16::try_from(v).unwrap_or(c)
             }

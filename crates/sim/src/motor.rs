@@ -89,6 +89,10 @@ struct Bridge {
     reversals_under_duty: u32,
     writes: u64,
     drive: Option<Drive>,
+    /// Fault: share of the torque the drive still gives (1 healthy).
+    strength: f64,
+    /// Fault: the output stuck at this torque whatever is commanded.
+    stuck_nm: Option<f64>,
 }
 
 /// The drive behind a bridge and its thermal state.
@@ -137,14 +141,18 @@ impl Bridge {
 
     /// The torque it puts out, N·m.
     fn torque_nm(&self) -> f64 {
+        if let Some(t) = self.stuck_nm {
+            return t;
+        }
         let asked = self.commanded_nm();
-        match &self.drive {
+        let out = match &self.drive {
             Some(d) => {
                 let limit = d.limit_nm(asked.signum());
                 asked.clamp(-limit, limit)
             }
             None => asked,
-        }
+        };
+        out * self.strength
     }
 }
 
@@ -188,6 +196,8 @@ impl SimMotor {
             reversals_under_duty: 0,
             writes: 0,
             drive: None,
+            strength: 1.0,
+            stuck_nm: None,
         })))
     }
 
@@ -278,6 +288,23 @@ impl SimMotor {
     /// Successful writes to the PWM and pins.
     pub fn writes(&self) -> u64 {
         self.0.borrow().writes
+    }
+
+    /// Fault: the drive gives only `fraction` (0 … 1) of the torque it
+    /// should (a worn gear, a failing winding, a current limit set low).
+    pub fn weaken(&self, fraction: f64) {
+        self.0.borrow_mut().strength = if fraction.is_finite() {
+            fraction.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+    }
+
+    /// Fault: the bridge's output sticks at the torque it gives now,
+    /// whatever is commanded or disabled (a welded switch).
+    pub fn stick(&self) {
+        let now = self.torque_nm();
+        self.0.borrow_mut().stuck_nm = Some(now);
     }
 
     /// Fault: the next `n` duty writes fail.

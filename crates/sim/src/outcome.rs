@@ -1,0 +1,148 @@
+//! What a closed-loop run did to the pilot, fault by fault: the figures a
+//! fault injection is judged by (`exogait simulate --json`, the fault
+//! campaigns). Tracking is the true joint angle against the reference;
+//! limit margins are against Table I's stops; a fall is the plant's (hip
+//! down, a link running away) or the torso pitched past 60°.
+
+use gait_control::faults::{FaultCode, Reaction};
+use gait_control::sequencer::Phase;
+
+use crate::closed_loop::Rig;
+use crate::plant::SimError;
+
+/// The torso pitched further than this from upright counts as a fall, rad.
+pub const TORSO_FALL_RAD: f64 = 60.0 * std::f64::consts::PI / 180.0;
+
+/// One fault the controller latched.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaultOutcome {
+    /// Its code.
+    pub code: FaultCode,
+    /// When the injected fault behind it struck, s (the last injection at
+    /// or before the detection; `None`: nothing was injected, a false trip
+    /// or a consequence).
+    pub injected_s: Option<f64>,
+    /// When the controller latched it (the start of that tick), s.
+    pub detected_s: f64,
+    /// Detection latency, ticks.
+    pub latency_ticks: Option<u64>,
+    /// Its reaction.
+    pub reaction: Reaction,
+    /// When the reaction's state was reached, s: the safe hold's ramp
+    /// done, standing after the finished step, or the motors off.
+    pub safe_state_s: Option<f64>,
+}
+
+/// The run, as a fault injection judges it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcome {
+    /// Landings.
+    pub landings: usize,
+    /// Per joint (joint order): RMS of reference − true angle, rad.
+    pub tracking_rms_rad: [f64; 4],
+    /// Per joint: its largest |reference − true angle|, rad.
+    pub tracking_peak_rad: [f64; 4],
+    /// The smallest distance of any hip or knee to its Table I stop over
+    /// the run, rad (negative: a stop was crossed), and the joint.
+    pub worst_limit_margin_rad: f64,
+    /// The joint of [`Outcome::worst_limit_margin_rad`] (joint order).
+    pub worst_limit_joint: usize,
+    /// Why the pilot fell, if they did.
+    pub fell: Option<String>,
+    /// The faults latched, in the order they were.
+    pub faults: Vec<FaultOutcome>,
+}
+
+/// The outcome of `rig`'s run, which ended with `ended_by` (`None`: it
+/// ran to its end).
+pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
+    let trace = &rig.trace;
+    let dt = rig.plant.config().dt_s;
+    let limits = rig.plant.config().model.limits();
+    let range = [
+        (-limits.hip_extension_rad, limits.hip_flexion_rad),
+        (-limits.knee_extension_rad, limits.knee_flexion_rad),
+    ];
+    let mut sq = [0.0f64; 4];
+    let mut peak = [0.0f64; 4];
+    let mut worst = (f64::INFINITY, 0);
+    let mut torso: Option<f64> = None;
+    for s in trace {
+        for j in 0..4 {
+            let q = s.state.joint_angles_rad[j];
+            let e = f64::from(s.report.reference_rad[j]) - q;
+            if e.is_finite() {
+                sq[j] += e * e;
+                peak[j] = peak[j].max(e.abs());
+            }
+            let (lo, hi) = range[j % 2];
+            let margin = (q - lo).min(hi - q);
+            if margin < worst.0 {
+                worst = (margin, j);
+            }
+        }
+        let pitch = s.state.phi[2];
+        if torso.is_none() && pitch.abs() > TORSO_FALL_RAD {
+            torso = Some(s.state.time_s);
+        }
+    }
+    let n = trace.len().max(1) as f64;
+    let fell = match ended_by {
+        Some(e @ (SimError::Fell { .. } | SimError::Runaway { .. })) => Some(e.to_string()),
+        _ => torso.map(|t| format!("the torso pitched past 60° at {t:.3} s")),
+    };
+    Outcome {
+        landings: rig.plant.landings().len(),
+        tracking_rms_rad: sq.map(|v| (v / n).sqrt()),
+        tracking_peak_rad: peak,
+        worst_limit_margin_rad: if worst.0.is_finite() { worst.0 } else { 0.0 },
+        worst_limit_joint: worst.1,
+        fell,
+        faults: fault_outcomes(rig, dt),
+    }
+}
+
+fn fault_outcomes(rig: &Rig<'_>, dt: f64) -> Vec<FaultOutcome> {
+    let trace = &rig.trace;
+    let hold_ramp = f64::from(rig.controller.config().sequencer.hold_ramp_s);
+    let mut out: Vec<FaultOutcome> = Vec::new();
+    for (k, s) in trace.iter().enumerate() {
+        for code in s.report.faults.iter() {
+            if out.iter().any(|f| f.code == code) {
+                continue;
+            }
+            // The tick's start: when it read what it latched.
+            let detected_s = s.state.time_s - dt;
+            let injected_s = rig
+                .injected()
+                .iter()
+                .map(|&(_, t)| t)
+                .rfind(|&t| t <= detected_s + 1e-9);
+            let reaction = code.reaction();
+            let reached = |x: &crate::closed_loop::Sample| match reaction {
+                Reaction::None => true,
+                Reaction::FinishStepThenHold => {
+                    matches!(x.report.phase, Phase::Standing | Phase::SafeHold { .. })
+                }
+                Reaction::SafeHold => matches!(
+                    x.report.phase,
+                    Phase::SafeHold { t_s } if f64::from(t_s) >= hold_ramp - 1e-6
+                ),
+                Reaction::DisableMotors => !x.report.motors_enabled,
+            };
+            let safe_state_s = trace
+                .get(k..)
+                .and_then(|rest| rest.iter().find(|x| reached(x)))
+                .map(|x| x.state.time_s - dt);
+            out.push(FaultOutcome {
+                code,
+                injected_s,
+                detected_s,
+                latency_ticks: injected_s.map(|t| ((detected_s - t) / dt).round().max(0.0) as u64),
+                reaction,
+                safe_state_s,
+            });
+        }
+    }
+    out
+}
