@@ -1,0 +1,268 @@
+//! The checks of one tick, one method per group of the fault table
+//! (operator inputs, deadline, motors, joints, ankles, force sensors); each
+//! raises the codes `docs/safety.md` lists for it.
+
+use super::*;
+
+/// `|x| ≤ limit`; false for NaN, so `!within(..)` trips on NaN.
+fn within(x: f32, limit: f32) -> bool {
+    x.abs() <= limit
+}
+
+impl Supervisor {
+    pub(super) fn check_operator_inputs(&mut self, input: &SupervisorInput, t: &mut Tick) {
+        if input.e_stop_pressed {
+            self.raise(t, FaultCode::EStopPressed, NO_CHANNEL, 1.0);
+        }
+        if input.e_stop_read_error {
+            self.raise(t, FaultCode::EStopInputFault, NO_CHANNEL, 1.0);
+        }
+        if input.button_input_fault {
+            self.raise(t, FaultCode::ButtonInputFault, NO_CHANNEL, 1.0);
+        }
+    }
+
+    pub(super) fn check_deadline(&mut self, input: &SupervisorInput, t: &mut Tick) {
+        if input.deadline_missed {
+            self.deadline_misses_total = self.deadline_misses_total.saturating_add(1);
+            if let Some(slot) = self.misses.get_mut(self.miss_next) {
+                *slot = Some(self.calls);
+            }
+            self.miss_next = (self.miss_next + 1) % self.misses.len();
+        }
+        let now = self.calls;
+        let window = self.cfg.deadline_window_ticks;
+        let recent = self
+            .misses
+            .iter()
+            .flatten()
+            .filter(|&&at| now.wrapping_sub(at) < window)
+            .count();
+        if recent >= usize::from(self.cfg.deadline_miss_count) {
+            self.raise(t, FaultCode::DeadlineMissed, NO_CHANNEL, recent as f32);
+        }
+    }
+
+    pub(super) fn check_motors(&mut self, input: &SupervisorInput, t: &mut Tick) {
+        let limit_ticks = self.cfg.saturation_ticks;
+        for (i, m) in input.motors.iter().enumerate() {
+            let ch = i as u8;
+            let finite = m.commanded_nm.is_finite() && m.applied_nm.is_finite();
+            // `!(limit > 0)` so NaN trips; infinity is caught by is_finite.
+            let limit_ok = m.limit_nm.is_finite() && m.limit_nm > 0.0;
+            if !(finite && limit_ok) {
+                let bad = [m.commanded_nm, m.applied_nm, m.limit_nm]
+                    .into_iter()
+                    .find(|v| !v.is_finite())
+                    .unwrap_or(m.limit_nm);
+                self.raise(t, FaultCode::ControlValueInvalid, ch, bad);
+            }
+            let Some(track) = self.joints.get_mut(i) else {
+                continue;
+            };
+            if m.commanded_nm.abs() < m.limit_nm {
+                track.saturated_ticks = 0;
+            } else {
+                track.saturated_ticks = track.saturated_ticks.saturating_add(1);
+            }
+            let saturated = track.saturated_ticks >= limit_ticks;
+            if saturated {
+                self.raise(t, FaultCode::MotorSaturated, ch, m.commanded_nm);
+            }
+            if m.thermal_fault {
+                self.raise(t, FaultCode::MotorThermal, ch, m.applied_nm);
+            }
+            if m.output_fault {
+                self.raise(t, FaultCode::MotorOutputStage, ch, m.commanded_nm);
+            }
+        }
+    }
+
+    pub(super) fn check_joints(&mut self, input: &SupervisorInput, t: &mut Tick) {
+        let cfg = self.cfg;
+        for i in 0..JOINTS {
+            let ch = i as u8;
+            let (Some(sense), Some(&reference), Some(range), Some(&vmax), Some(motor)) = (
+                input.joints.get(i),
+                input.joint_reference_rad.get(i),
+                cfg.joint_range.get(i),
+                cfg.velocity_limit_rad_s.get(i),
+                input.motors.get(i),
+            ) else {
+                continue;
+            };
+            if !reference.is_finite() {
+                self.raise(t, FaultCode::ControlValueInvalid, ch, reference);
+            }
+            let reference_speed = match self.previous_reference_rad.as_ref().and_then(|p| p.get(i))
+            {
+                Some(&previous) => (reference - previous).abs() / cfg.dt_s,
+                None => 0.0,
+            };
+            // NaN speed or command counts as driven.
+            let driven = !(reference_speed < cfg.frozen_reference_speed_rad_s
+                && motor.commanded_nm.abs() < cfg.frozen_command_fraction * motor.limit_nm);
+
+            let Some(track) = self.joints.get_mut(i) else {
+                continue;
+            };
+            let (frame, invalid) =
+                track
+                    .encoder
+                    .update(sense, cfg.encoder_debounce, cfg.max_jump_counts_per_tick);
+            let mut raised: [Option<(FaultCode, f32)>; 6] = [None; 6];
+            if let Some(v) = invalid {
+                raised[0] = Some((FaultCode::EncoderInvalidValue, v));
+            }
+            if let Frame::Accepted {
+                angle_rad,
+                delta,
+                previous_angle_rad,
+            } = frame
+            {
+                if !range.contains(angle_rad) {
+                    raised[1] = Some((FaultCode::JointPositionLimit, angle_rad));
+                }
+                match delta {
+                    Some((counts, elapsed)) => {
+                        let elapsed_s = cfg.dt_s * elapsed.max(1) as f32;
+                        let raw_velocity = (angle_rad - previous_angle_rad) / elapsed_s;
+                        // Starts from 0 after a (re-)seed, so one noisy
+                        // difference cannot trip the limit alone.
+                        if !track.velocity_rad_s.is_finite() {
+                            track.velocity_rad_s = 0.0;
+                        }
+                        track.velocity_rad_s +=
+                            cfg.velocity_filter_alpha * (raw_velocity - track.velocity_rad_s);
+                        track.velocity_valid = true;
+                        if counts == 0 && driven {
+                            track.frozen_ticks = track.frozen_ticks.saturating_add(1);
+                        } else {
+                            track.frozen_ticks = 0;
+                        }
+                    }
+                    None => {
+                        // (Re-)seeded: no velocity from a single sample.
+                        track.velocity_rad_s = 0.0;
+                        track.velocity_valid = false;
+                        track.frozen_ticks = 0;
+                    }
+                }
+                let error = angle_rad - reference;
+                if error.abs() <= cfg.tracking_error_limit_rad {
+                    track.tracking_ticks = 0;
+                } else {
+                    track.tracking_ticks = track.tracking_ticks.saturating_add(1);
+                }
+                if track.tracking_ticks >= cfg.tracking_error_ticks {
+                    raised[2] = Some((FaultCode::TrackingError, error));
+                }
+            }
+            // Conditions that persist while frames are rejected.
+            if track.velocity_valid && !within(track.velocity_rad_s, vmax) {
+                raised[3] = Some((FaultCode::JointVelocityLimit, track.velocity_rad_s));
+            }
+            if track.frozen_ticks >= cfg.frozen_ticks {
+                raised[4] = Some((FaultCode::EncoderFrozen, track.frozen_ticks as f32));
+            }
+            if let Some((code, n)) = track.encoder.tripped(cfg.encoder_debounce) {
+                raised[5] = Some((code, n as f32));
+            }
+            for (code, value) in raised.into_iter().flatten() {
+                self.raise(t, code, ch, value);
+            }
+        }
+    }
+
+    pub(super) fn check_ankles(&mut self, input: &SupervisorInput, t: &mut Tick) {
+        let cfg = self.cfg;
+        for i in 0..ANKLES {
+            let ch = i as u8;
+            let (Some(sense), Some(range), Some(track)) = (
+                input.ankles.get(i),
+                cfg.ankle_range.get(i),
+                self.ankles.get_mut(i),
+            ) else {
+                continue;
+            };
+            let (frame, invalid) =
+                track.update(sense, cfg.encoder_debounce, cfg.max_jump_counts_per_tick);
+            let tripped = track.tripped(cfg.encoder_debounce);
+            if let Some(v) = invalid {
+                self.raise(t, FaultCode::AnkleEncoder, ch, v);
+            }
+            if let Some((_, n)) = tripped {
+                self.raise(t, FaultCode::AnkleEncoder, ch, n as f32);
+            }
+            if let Frame::Accepted { angle_rad, .. } = frame {
+                if !range.contains(angle_rad) {
+                    self.raise(t, FaultCode::AnklePositionLimit, ch, angle_rad);
+                }
+                // Resting on the stop while the plan is well below it (a
+                // NaN plan never counts; a rejected frame neither counts
+                // nor resets).
+                let plan = input.ankle_plan_rad.get(i).copied().unwrap_or(f32::NAN);
+                let on_stop = angle_rad >= cfg.heel_off_rad - cfg.heel_off_reading_tolerance_rad;
+                let unplanned = plan < cfg.heel_off_rad - cfg.heel_off_plan_margin_rad;
+                if let Some(n) = self.heel_off_ticks.get_mut(i) {
+                    *n = if on_stop && unplanned {
+                        n.saturating_add(1)
+                    } else {
+                        0
+                    };
+                    if *n >= cfg.heel_off_ticks {
+                        self.raise(t, FaultCode::UnplannedHeelOff, ch, angle_rad);
+                    }
+                }
+            }
+        }
+    }
+
+    pub(super) fn check_forces(&mut self, input: &SupervisorInput, t: &mut Tick) {
+        let cfg = self.cfg;
+        for i in 0..FORCES {
+            let ch = i as u8;
+            let (Some(sense), Some(track)) = (input.forces.get(i), self.forces.get_mut(i)) else {
+                continue;
+            };
+            let mut immediate = false;
+            let bad = match sense.status {
+                ForceStatus::BusError => Some(FaultCode::ForceBusError),
+                ForceStatus::Open => Some(FaultCode::ForceOpen),
+                ForceStatus::Shorted => Some(FaultCode::ForceShorted),
+                ForceStatus::OutOfRange => Some(FaultCode::ForceOutOfRange),
+                ForceStatus::Ok => {
+                    if !sense.newtons.is_finite() {
+                        immediate = true;
+                        Some(FaultCode::ForceOutOfRange)
+                    } else if cfg.force_min_n <= sense.newtons && sense.newtons <= cfg.force_max_n {
+                        None
+                    } else {
+                        Some(FaultCode::ForceOutOfRange)
+                    }
+                }
+            };
+            track.window.push(bad.is_some());
+            if bad.is_some() {
+                track.last_bad = bad;
+            }
+            let n = track.window.count(cfg.force_debounce.window_ticks);
+            let tripped = if n >= u32::from(cfg.force_debounce.count) {
+                track.last_bad
+            } else {
+                None
+            };
+            if immediate {
+                self.raise(t, FaultCode::ForceOutOfRange, ch, sense.newtons);
+            }
+            if let Some(code) = tripped {
+                let value = if bad.is_some() {
+                    sense.newtons
+                } else {
+                    n as f32
+                };
+                self.raise(t, code, ch, value);
+            }
+        }
+    }
+}
