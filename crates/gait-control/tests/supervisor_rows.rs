@@ -1,0 +1,423 @@
+//! Safety supervisor: one test per row of the fault table in
+//! `docs/safety.md` (code, reaction, detection bound, not before).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::cast_possible_truncation,
+    missing_docs
+)]
+
+mod supervisor_support;
+
+use supervisor_support::*;
+
+// ------------------------------------------------- the fault table, rows
+
+/// Ramps joint `j` (and its reference) from standing at 1 rad/s and
+/// returns the first injected tick whose reported angle is above `max`.
+fn ramp_joint(j: usize, k: u32) -> f32 {
+    STAND_JOINTS[j] + 0.001 * k as f32
+}
+
+#[test]
+fn row_joint_position_limit() {
+    let max = SupervisorConfig::paper().joint_range[1].max_rad;
+    let expected = (1..)
+        .find(|&k| encoder(ramp_joint(1, k)).angle_rad > max)
+        .unwrap();
+    let (_, v) = inject(expected + 5, |k, input| {
+        let angle = ramp_joint(1, k);
+        input.joints[1] = encoder(angle);
+        input.joint_reference_rad[1] = angle;
+    });
+    assert_row(
+        &v,
+        FaultCode::JointPositionLimit,
+        Reaction::SafeHold,
+        expected,
+    );
+}
+
+#[test]
+fn row_joint_position_limit_hyperextension() {
+    // The knee may read 3° past its 0° stop, not more.
+    let (_, v) = inject(1, |_, input| {
+        input.joints[3] = encoder(-2.5 * DEG);
+        input.joint_reference_rad[3] = -2.5 * DEG;
+    });
+    assert!(v[0].latched.is_empty());
+    let (_, v) = inject(200, |k, input| {
+        let angle = 0.1 - 0.001 * k as f32;
+        input.joints[3] = encoder(angle);
+        input.joint_reference_rad[3] = angle;
+    });
+    let at = detected_at(&v, FaultCode::JointPositionLimit).unwrap();
+    assert!(encoder(0.1 - 0.001 * at as f32).angle_rad < -3.0 * DEG);
+    assert!(encoder(0.1 - 0.001 * (at - 1) as f32).angle_rad >= -3.0 * DEG);
+}
+
+#[test]
+fn row_ankle_position_limit() {
+    let max = SupervisorConfig::paper().ankle_range[0].max_rad;
+    let ramp = |k: u32| STAND_ANKLES[0] + 0.001 * k as f32;
+    let expected = (1..).find(|&k| encoder(ramp(k)).angle_rad > max).unwrap();
+    let (_, v) = inject(expected + 5, |k, input| input.ankles[0] = encoder(ramp(k)));
+    assert_row(
+        &v,
+        FaultCode::AnklePositionLimit,
+        Reaction::FinishStepThenHold,
+        expected,
+    );
+}
+
+#[test]
+fn row_unplanned_heel_off() {
+    // The left ankle on its 20° stop (the heel lifting onto the toe) while
+    // the plan keeps it at 6° (a walk): 50 ticks on the stop trip it.
+    // The ankle rolls onto the stop at 0.02 rad per tick (no jump), then
+    // stays: the 50th tick on the stop trips.
+    let cfg = SupervisorConfig::paper();
+    let stop = cfg.heel_off_rad;
+    let ramp = |k: u32| (STAND_ANKLES[0] + 0.02 * k as f32).min(stop);
+    let on_stop = |k: u32| encoder(ramp(k)).angle_rad >= stop - cfg.heel_off_reading_tolerance_rad;
+    let first = (1..).find(|&k| on_stop(k)).unwrap();
+    let (_, v) = inject(first + 60, |k, input| {
+        input.ankles[0] = encoder(ramp(k));
+        input.ankle_plan_rad[0] = 0.1;
+    });
+    assert_row(
+        &v,
+        FaultCode::UnplannedHeelOff,
+        Reaction::FinishStepThenHold,
+        first + cfg.heel_off_ticks - 1,
+    );
+    // Planned (a descent's stance heel lifts on schedule), nothing planned
+    // (NaN: standing, the swing ankle), or off the stop: nothing.
+    for (reading, plan) in [
+        (stop, stop + 0.2),
+        (stop, stop - 3.0 * DEG),
+        (stop, f32::NAN),
+        (stop - 1.0 * DEG, 0.1),
+    ] {
+        let (_, v) = inject(200, |k, input| {
+            input.ankles[0] = encoder((STAND_ANKLES[0] + 0.02 * k as f32).min(reading));
+            input.ankle_plan_rad[0] = plan;
+        });
+        assert!(
+            v.iter().all(|x| x.reaction == Reaction::None),
+            "reading {reading}, plan {plan}"
+        );
+    }
+    // Leaving the stop restarts the count: 49 on, 1 off, 49 on: nothing.
+    let (_, v) = inject(first + 98, |k, input| {
+        let dip = k == first + 49;
+        input.ankles[0] = encoder(if dip { stop - 2.0 * DEG } else { ramp(k) });
+        input.ankle_plan_rad[0] = 0.1;
+    });
+    assert!(v.iter().all(|x| x.reaction == Reaction::None));
+}
+
+#[test]
+fn row_joint_velocity_limit() {
+    // 8 rad/s on a hip (1.33× its 6 rad/s limit, 21 counts per tick: no
+    // jump). The filter (α = 0.2) passes 6 rad/s after
+    // ceil(ln(1 − 6/8)/ln 0.8) = 7 samples; quantisation moves that by at
+    // most one tick.
+    let (_, v) = inject(20, |k, input| {
+        let angle = STAND_JOINTS[0] + 0.008 * k as f32;
+        input.joints[0] = encoder(angle);
+        input.joint_reference_rad[0] = angle;
+    });
+    let at = detected_at(&v, FaultCode::JointVelocityLimit).unwrap();
+    assert!((6..=8).contains(&at), "detected at {at}");
+    assert_row(&v, FaultCode::JointVelocityLimit, Reaction::SafeHold, at);
+}
+
+#[test]
+fn velocity_below_the_limit_is_fine() {
+    let (_, v) = inject(300, |k, input| {
+        let angle = STAND_JOINTS[0] + 0.004 * k as f32;
+        input.joints[0] = encoder(angle);
+        input.joint_reference_rad[0] = angle;
+    });
+    assert!(v.iter().all(|v| v.latched.is_empty()));
+}
+
+#[test]
+fn row_tracking_error() {
+    let (_, v) = inject(150, |_, input| input.joint_reference_rad[2] += 0.2);
+    assert_row(&v, FaultCode::TrackingError, Reaction::SafeHold, 100);
+}
+
+#[test]
+fn tracking_check_itself_trips_on_nan() {
+    // A NaN reference is invalid at once, and is also a tracking error
+    // once the bound has passed (the comparison does not let NaN through).
+    let (_, v) = inject(120, |_, input| input.joint_reference_rad[1] = f32::NAN);
+    assert_eq!(detected_at(&v, FaultCode::ControlValueInvalid), Some(1));
+    assert_eq!(detected_at(&v, FaultCode::TrackingError), Some(100));
+}
+
+#[test]
+fn tracking_error_needs_consecutive_ticks() {
+    // 99 ticks over, one back, 99 over again: never 100 in a row.
+    let (_, v) = inject(199, |k, input| {
+        if k != 100 {
+            input.joint_reference_rad[2] += 0.2;
+        }
+    });
+    assert!(v.iter().all(|v| v.latched.is_empty()));
+}
+
+fn bad_frames(status: EncoderStatus, code: FaultCode) {
+    let (_, v) = inject(10, |_, input| input.joints[1].status = status);
+    assert_row(&v, code, Reaction::SafeHold, 3);
+}
+
+#[test]
+fn row_encoder_bus_error() {
+    bad_frames(EncoderStatus::BusError, FaultCode::EncoderBusError);
+}
+
+#[test]
+fn row_encoder_parity() {
+    bad_frames(EncoderStatus::Parity, FaultCode::EncoderParity);
+}
+
+#[test]
+fn row_encoder_error_flag() {
+    bad_frames(EncoderStatus::ErrorFlag, FaultCode::EncoderErrorFlag);
+}
+
+#[test]
+fn encoder_bad_frames_counted_in_a_100_tick_window() {
+    // Three within 100 ticks: the third trips.
+    let (_, v) = inject(120, |k, input| {
+        if [1, 50, 100].contains(&k) {
+            input.joints[0].status = EncoderStatus::Parity;
+        }
+    });
+    assert_row(&v, FaultCode::EncoderParity, Reaction::SafeHold, 100);
+    // Three spread over 101 ticks: never.
+    let (_, v) = inject(300, |k, input| {
+        if [1, 50, 101, 160, 250].contains(&k) {
+            input.joints[0].status = EncoderStatus::BusError;
+        }
+    });
+    assert!(v.iter().all(|v| v.latched.is_empty()));
+}
+
+#[test]
+fn row_encoder_frozen() {
+    // The reference moves at 0.5 rad/s; the encoder repeats the last
+    // warm-up frame, so every injected tick is an unchanged one.
+    let frozen = healthy_input(WARMUP - 1).joints[0];
+    let (_, v) = inject(150, |k, input| {
+        input.joints[0] = frozen;
+        input.joint_reference_rad[0] = STAND_JOINTS[0] + 0.0005 * k as f32;
+    });
+    assert_row(&v, FaultCode::EncoderFrozen, Reaction::SafeHold, 100);
+}
+
+#[test]
+fn frozen_under_a_large_command_too() {
+    let frozen = healthy_input(WARMUP - 1).joints[0];
+    let (_, v) = inject(150, |_, input| {
+        input.joints[0] = frozen;
+        input.motors[0].commanded_nm = 0.95 * LIMIT_NM;
+    });
+    assert_row(&v, FaultCode::EncoderFrozen, Reaction::SafeHold, 100);
+    // Holding a still joint with a large but not near-saturated command (a
+    // heavy stance knee) is not "driven": constant counts are fine.
+    let (_, v) = inject(500, |_, input| {
+        input.joints[0] = frozen;
+        input.motors[0].commanded_nm = 0.7 * LIMIT_NM;
+    });
+    assert!(v.iter().all(|v| v.latched.is_empty()));
+    // Not driven (still reference, small command): constant counts are fine.
+    let (_, v) = inject(500, |_, input| input.joints[0] = frozen);
+    assert!(v.iter().all(|v| v.latched.is_empty()));
+}
+
+#[test]
+fn row_encoder_jump() {
+    let jumped = encoder(STAND_JOINTS[1] + 2000.0 * RAD_PER_COUNT);
+    let (_, v) = inject(10, |_, input| input.joints[1] = jumped);
+    assert_row(&v, FaultCode::EncoderJump, Reaction::SafeHold, 3);
+}
+
+#[test]
+fn a_single_jump_frame_is_dropped() {
+    let jumped = encoder(STAND_JOINTS[1] + 2000.0 * RAD_PER_COUNT);
+    let (_, v) = inject(300, |k, input| {
+        if k == 1 {
+            input.joints[1] = jumped;
+        }
+    });
+    assert!(v.iter().all(|v| v.latched.is_empty()));
+}
+
+#[test]
+fn jump_threshold_is_wrap_aware() {
+    // A joint reading near the ±π seam of the counts moves by 10 counts
+    // per tick across it: no jump.
+    let mut sup = supervisor();
+    for tick in 0..200u32 {
+        let mut input = healthy_input(tick);
+        let raw = (COUNTS_PER_REV - 100 + 10 * tick as u16 % COUNTS_PER_REV) % COUNTS_PER_REV;
+        input.joints[0].raw_counts = raw;
+        let v = sup.check(&input);
+        assert!(!v.latched.contains(FaultCode::EncoderJump), "tick {tick}");
+    }
+}
+
+#[test]
+fn row_encoder_invalid_value() {
+    let (_, v) = inject(3, |_, input| input.joints[2].angle_rad = f32::NAN);
+    assert_row(&v, FaultCode::EncoderInvalidValue, Reaction::SafeHold, 1);
+    let (_, v) = inject(3, |_, input| input.joints[2].raw_counts = 0x4000);
+    assert_row(&v, FaultCode::EncoderInvalidValue, Reaction::SafeHold, 1);
+    let (_, v) = inject(3, |_, input| input.joints[2].angle_rad = 4.0);
+    assert_row(&v, FaultCode::EncoderInvalidValue, Reaction::SafeHold, 1);
+}
+
+#[test]
+fn row_ankle_encoder() {
+    let (_, v) = inject(10, |_, input| {
+        input.ankles[1].status = EncoderStatus::Parity
+    });
+    assert_row(&v, FaultCode::AnkleEncoder, Reaction::FinishStepThenHold, 3);
+    let (_, v) = inject(10, |_, input| input.ankles[1].angle_rad = f32::INFINITY);
+    assert_row(&v, FaultCode::AnkleEncoder, Reaction::FinishStepThenHold, 1);
+}
+
+fn bad_force(status: ForceStatus, code: FaultCode) {
+    let (_, v) = inject(10, |_, input| input.forces[2].status = status);
+    assert_row(&v, code, Reaction::FinishStepThenHold, 3);
+}
+
+#[test]
+fn row_force_bus_error() {
+    bad_force(ForceStatus::BusError, FaultCode::ForceBusError);
+}
+
+#[test]
+fn row_force_open() {
+    bad_force(ForceStatus::Open, FaultCode::ForceOpen);
+}
+
+#[test]
+fn row_force_shorted() {
+    bad_force(ForceStatus::Shorted, FaultCode::ForceShorted);
+}
+
+#[test]
+fn row_force_out_of_range() {
+    bad_force(ForceStatus::OutOfRange, FaultCode::ForceOutOfRange);
+    // Reported Ok but outside the configured rated range.
+    let (_, v) = inject(10, |_, input| input.forces[0].newtons = 5000.0);
+    assert_row(
+        &v,
+        FaultCode::ForceOutOfRange,
+        Reaction::FinishStepThenHold,
+        3,
+    );
+    // Not finite: at once.
+    let (_, v) = inject(10, |_, input| input.forces[0].newtons = f32::NAN);
+    assert_row(
+        &v,
+        FaultCode::ForceOutOfRange,
+        Reaction::FinishStepThenHold,
+        1,
+    );
+}
+
+#[test]
+fn row_motor_saturated() {
+    let (_, v) = inject(250, |_, input| {
+        input.motors[3].commanded_nm = -LIMIT_NM;
+        input.motors[3].applied_nm = -LIMIT_NM;
+    });
+    assert_row(&v, FaultCode::MotorSaturated, Reaction::SafeHold, 200);
+}
+
+#[test]
+fn row_motor_thermal() {
+    let (_, v) = inject(3, |_, input| {
+        input.motors[0].thermal_fault = true;
+        input.motors[0].applied_nm = 0.0;
+    });
+    assert_row(&v, FaultCode::MotorThermal, Reaction::SafeHold, 1);
+}
+
+#[test]
+fn row_motor_output_stage() {
+    let (_, v) = inject(3, |_, input| input.motors[2].output_fault = true);
+    assert_row(&v, FaultCode::MotorOutputStage, Reaction::DisableMotors, 1);
+}
+
+#[test]
+fn row_e_stop_pressed() {
+    let (_, v) = inject(3, |_, input| input.e_stop_pressed = true);
+    assert_row(&v, FaultCode::EStopPressed, Reaction::DisableMotors, 1);
+}
+
+#[test]
+fn row_e_stop_input_fault() {
+    let (_, v) = inject(3, |_, input| input.e_stop_read_error = true);
+    assert_row(&v, FaultCode::EStopInputFault, Reaction::DisableMotors, 1);
+}
+
+#[test]
+fn row_button_input_fault() {
+    let (_, v) = inject(3, |_, input| input.button_input_fault = true);
+    assert_row(
+        &v,
+        FaultCode::ButtonInputFault,
+        Reaction::FinishStepThenHold,
+        1,
+    );
+}
+
+#[test]
+fn row_deadline_missed() {
+    // Third miss within 1000 ticks trips.
+    let (sup, v) = inject(600, |k, input| {
+        input.deadline_missed = [1, 2, 500].contains(&k);
+    });
+    assert_row(&v, FaultCode::DeadlineMissed, Reaction::SafeHold, 500);
+    assert_eq!(sup.deadline_misses(), 3);
+}
+
+#[test]
+fn sparse_deadline_misses_only_count() {
+    let (sup, v) = inject(3000, |k, input| input.deadline_missed = k % 600 == 1);
+    assert!(v.iter().all(|v| v.latched.is_empty()));
+    assert_eq!(sup.deadline_misses(), 5);
+}
+
+#[test]
+fn row_control_value_invalid() {
+    let (_, v) = inject(3, |_, input| input.motors[1].commanded_nm = f32::NAN);
+    assert_row(&v, FaultCode::ControlValueInvalid, Reaction::SafeHold, 1);
+    let (_, v) = inject(3, |_, input| input.joint_reference_rad[0] = f32::NAN);
+    assert_eq!(detected_at(&v, FaultCode::ControlValueInvalid), Some(1));
+    let (_, v) = inject(3, |_, input| input.motors[2].limit_nm = 0.0);
+    assert_eq!(detected_at(&v, FaultCode::ControlValueInvalid), Some(1));
+}
+
+#[test]
+fn codes_are_stable_unique_and_grouped() {
+    // Codes unique, grouped, round-trip; ALL agrees with index().
+    for (i, c) in FaultCode::ALL.iter().enumerate() {
+        assert_eq!(usize::from(c.index()), i);
+        assert_eq!(FaultCode::from_code(c.code()), Some(*c));
+        assert!(matches!(c.code() >> 8, 0x01..=0x06), "{c:?}");
+        assert!(!c.name().is_empty());
+    }
+    assert_eq!(FaultCode::EStopPressed.code(), 0x0501);
+    assert_eq!(FaultCode::JointPositionLimit.code(), 0x0101);
+    assert_eq!(FaultCode::from_code(0x0000), None);
+}
