@@ -175,6 +175,7 @@ impl DeviceConfig {
         };
         let mut supervisor = SupervisorConfig::default_for(model32.limits());
         supervisor.dt_s = DT_S;
+        supervisor.max_jump_counts_per_tick = supervisor.physical_jump_counts();
         supervisor.force_min_n = FOOT_LOAD_CELL.rated_min_n;
         supervisor.force_max_n = FOOT_LOAD_CELL.rated_max_n;
         Ok(Self {

@@ -240,3 +240,17 @@ fn sizes_are_small() {
     assert!(core::mem::size_of::<Supervisor>() < 2048);
     assert_eq!(FORCES, 4);
 }
+
+#[test]
+fn the_physical_jump_bound_is_the_fastest_velocity_limit_over_one_tick() {
+    let mut cfg = SupervisorConfig::paper();
+    cfg.dt_s = 0.001;
+    cfg.velocity_limit_rad_s = [6.0, 8.0, 6.0, 8.0];
+    // 8 rad/s × 1 ms = 20.9 counts of 16,384 per turn.
+    assert_eq!(cfg.physical_jump_counts(), 21);
+    cfg.velocity_limit_rad_s = [6.0, 12.0, 6.0, 8.0];
+    assert_eq!(cfg.physical_jump_counts(), 32);
+    // Unusable limits leave the configured bound.
+    cfg.velocity_limit_rad_s = [f32::NAN; JOINTS];
+    assert_eq!(cfg.physical_jump_counts(), cfg.max_jump_counts_per_tick);
+}

@@ -185,8 +185,11 @@ impl Supervisor {
             ) else {
                 continue;
             };
-            let (frame, invalid) =
-                track.update(sense, cfg.encoder_debounce, cfg.max_jump_counts_per_tick);
+            let (frame, invalid) = track.update(
+                sense,
+                cfg.encoder_debounce,
+                cfg.max_ankle_jump_counts_per_tick,
+            );
             let tripped = track.tripped(cfg.encoder_debounce);
             if let Some(v) = invalid {
                 self.raise(t, FaultCode::AnkleEncoder, ch, v);

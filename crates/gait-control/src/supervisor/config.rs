@@ -93,8 +93,12 @@ pub struct SupervisorConfig {
     pub tracking_error_ticks: u32,
     /// Bad encoder frames (bus, parity, error flag, jump) that make a fault.
     pub encoder_debounce: Debounce,
-    /// Largest plausible change of raw counts per tick.
+    /// Largest plausible change of a hip or knee encoder's raw counts per
+    /// tick ([`SupervisorConfig::physical_jump_counts`]).
     pub max_jump_counts_per_tick: u16,
+    /// The same for the passive ankles, which slap onto the ground at a
+    /// landing far faster than a driven joint moves.
+    pub max_ankle_jump_counts_per_tick: u16,
     /// Consecutive ticks of unchanged raw counts while driven that make a
     /// frozen-encoder fault.
     pub frozen_ticks: u32,
@@ -186,6 +190,7 @@ impl SupervisorConfig {
                 window_ticks: 100,
             },
             max_jump_counts_per_tick: 100,
+            max_ankle_jump_counts_per_tick: 100,
             frozen_ticks: 100,
             frozen_reference_speed_rad_s: 0.1,
             frozen_command_fraction: 0.9,
@@ -254,10 +259,32 @@ impl SupervisorConfig {
             || self.saturation_ticks == 0
             || self.heel_off_ticks == 0
             || self.max_jump_counts_per_tick == 0
+            || self.max_ankle_jump_counts_per_tick == 0
         {
             return Err(ConfigError::BadWindow);
         }
         Ok(())
+    }
+
+    /// The largest change of an encoder's reading per tick that a joint
+    /// can physically make, counts (rounded up): the fastest joint velocity
+    /// limit (beyond it 0x0102 trips anyway) over one tick. Any larger
+    /// change is a jump, however many frames were dropped before it: the
+    /// allowance grows by this per tick elapsed, so a step the joint could
+    /// not have made trips within the bad-frame debounce.
+    pub fn physical_jump_counts(&self) -> u16 {
+        let fastest = self
+            .velocity_limit_rad_s
+            .iter()
+            .fold(0.0f32, |m, &v| if v > m { v } else { m });
+        let rad_per_count =
+            2.0 * core::f32::consts::PI / f32::from(crate::drivers::as5048a::COUNTS_PER_REV);
+        let counts = libm::ceilf(fastest * self.dt_s / rad_per_count);
+        if counts.is_finite() && counts >= 1.0 && counts <= f32::from(u16::MAX) {
+            counts as u16
+        } else {
+            self.max_jump_counts_per_tick
+        }
     }
 }
 

@@ -1,0 +1,76 @@
+//! Fault injection in the closed loop, by name (`sim::inject`), on the
+//! device as shipped: healthy runs with sensor noise never trip, and an
+//! encoder step the joint could not have made is a jump fault however the
+//! frames around it went (docs/safety.md, "Fault injection from the command
+//! line").
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
+
+use exogait_device::DeviceConfig;
+use gait_control::faults::FaultCode;
+use gait_control::operator::Gait;
+use sim::inject::Injection;
+use sim::outcome::outcome;
+use sim::scenario::{flash_tables, run_tables_with, strong_pilot};
+
+fn run(
+    gait: Gait,
+    steps: usize,
+    max_s: f64,
+    noise_seed: Option<u64>,
+    faults: &[&str],
+) -> sim::outcome::Outcome {
+    let device = DeviceConfig::exogait().unwrap();
+    let injections: Vec<Injection> = faults.iter().map(|f| f.parse().unwrap()).collect();
+    let run = run_tables_with(
+        &device,
+        flash_tables(),
+        gait,
+        strong_pilot(),
+        max_s,
+        steps,
+        |rig| {
+            if let Some(seed) = noise_seed {
+                rig.set_sensor_noise(3, 10, seed);
+            }
+            for f in injections {
+                rig.schedule(f);
+            }
+        },
+    )
+    .unwrap();
+    outcome(&run.rig, run.ended_by.as_ref())
+}
+
+#[test]
+fn healthy_runs_with_sensor_noise_never_trip() {
+    for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
+        for seed in 1..=4 {
+            let o = run(gait, 3, 25.0, Some(seed), &[]);
+            assert!(
+                o.faults.is_empty() && o.fell.is_none() && o.landings >= 3,
+                "{gait:?}, noise seed {seed}: {o:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn an_encoder_step_the_joint_cannot_make_is_a_jump_fault_within_the_debounce() {
+    // 8 rad/s (the knee's velocity limit) is 21 counts per tick: a step of
+    // 101–299 counts (2.2–6.6°) slipped through when the allowance was 100
+    // counts per tick elapsed.
+    for (joint, counts) in [
+        ("left-hip", 101),
+        ("left-knee", 150),
+        ("right-hip", -299),
+        ("right-knee", 70),
+    ] {
+        for at in [0.5, 2.6] {
+            let fault = format!("encoder-jump={counts}:{joint}@{at}");
+            let o = run(Gait::Walk, 2, 5.0, None, &[fault.as_str()]);
+            let first = o.faults.first().unwrap_or_else(|| panic!("{fault}: nothing latched"));
+            assert_eq!(first.code, FaultCode::EncoderJump, "{fault}: {o:?}");
+            assert!(first.latency_ticks.unwrap() <= 3, "{fault}: {first:?}");
+        }
+    }
+}
