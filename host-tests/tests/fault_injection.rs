@@ -68,9 +68,63 @@ fn an_encoder_step_the_joint_cannot_make_is_a_jump_fault_within_the_debounce() {
         for at in [0.5, 2.6] {
             let fault = format!("encoder-jump={counts}:{joint}@{at}");
             let o = run(Gait::Walk, 2, 5.0, None, &[fault.as_str()]);
-            let first = o.faults.first().unwrap_or_else(|| panic!("{fault}: nothing latched"));
+            let first = o
+                .faults
+                .first()
+                .unwrap_or_else(|| panic!("{fault}: nothing latched"));
             assert_eq!(first.code, FaultCode::EncoderJump, "{fault}: {o:?}");
             assert!(first.latency_ticks.unwrap() <= 3, "{fault}: {first:?}");
         }
+    }
+}
+
+#[test]
+fn a_frame_the_supervisor_drops_never_reaches_control() {
+    // One frame 2,000 counts (44°) off on the left knee, in a swing and
+    // standing: control keeps the last taken angle, so the knee's command
+    // does not jump, and nothing trips (one bad frame is within the
+    // debounce).
+    for at in [0.5, 2.6] {
+        let device = DeviceConfig::exogait().unwrap();
+        let fault: Injection = format!("encoder-glitch=2000:left-knee@{at}")
+            .parse()
+            .unwrap();
+        let run = run_tables_with(
+            &device,
+            flash_tables(),
+            Gait::Walk,
+            strong_pilot(),
+            4.0,
+            1,
+            |rig| {
+                rig.schedule(fault);
+            },
+        )
+        .unwrap();
+        let trace = &run.rig.trace;
+        let k = trace
+            .iter()
+            .position(|s| s.state.time_s > at + 1e-6)
+            .unwrap();
+        // The angle control used, tick to tick, and the knee's command.
+        let window = k.saturating_sub(3)..k + 8;
+        let step = window
+            .clone()
+            .map(|i| (trace[i + 1].report.joints_rad[1] - trace[i].report.joints_rad[1]).abs())
+            .fold(0.0f32, f32::max);
+        assert!(
+            step < 0.02,
+            "at {at} s control saw the knee move {step} rad in a tick"
+        );
+        let before = trace[k.saturating_sub(2)].report.command_nm[1];
+        let swing = window
+            .map(|i| (trace[i].report.command_nm[1] - before).abs())
+            .fold(0.0f32, f32::max);
+        assert!(
+            swing < 10.0,
+            "at {at} s the knee command swung by {swing} N·m"
+        );
+        let o = outcome(&run.rig, run.ended_by.as_ref());
+        assert!(o.faults.is_empty(), "at {at} s: {:?}", o.faults);
     }
 }

@@ -33,7 +33,7 @@ mod tracks;
 pub use config::{
     AngleRange, ConfigError, Debounce, EnvelopeMargins, ResetRefused, SupervisorConfig,
 };
-use tracks::{EncoderTrack, ForceTrack, Frame, JointTrack};
+use tracks::{Class, EncoderTrack, ForceTrack, Frame, JointTrack};
 /// Records kept in the post-mortem log (the newest ones).
 pub const LOG_LEN: usize = 32;
 /// Channel of a [`FaultRecord`] for faults that belong to no channel.
@@ -191,6 +191,27 @@ struct Tick {
 }
 
 impl Supervisor {
+    /// Whether the next check will take `sense` as encoder `channel`'s
+    /// reading (joints in joint order, then the ankles): the same rules,
+    /// nothing changed. The controller uses only the frames this takes, so
+    /// a frame the supervisor drops (a jump) never reaches control.
+    pub fn accepts_encoder(&self, channel: usize, sense: &EncoderSense) -> bool {
+        let cfg = &self.cfg;
+        let (track, max_jump) = match channel.checked_sub(JOINTS) {
+            None => (
+                self.joints.get(channel).map(|j| &j.encoder),
+                cfg.max_jump_counts_per_tick,
+            ),
+            Some(a) => (self.ankles.get(a), cfg.max_ankle_jump_counts_per_tick),
+        };
+        track.is_some_and(|t| {
+            matches!(
+                t.classify(sense, cfg.encoder_debounce, max_jump),
+                Class::Seed | Class::Good { .. }
+            )
+        })
+    }
+
     /// Checks `cfg` and starts with nothing latched.
     pub fn new(cfg: SupervisorConfig) -> Result<Self, ConfigError> {
         cfg.validate()?;

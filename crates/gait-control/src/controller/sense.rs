@@ -51,7 +51,7 @@ impl Controller<'_> {
         ADC: SpiDevice<u8>,
         IN: InputPin,
     {
-        let encoders = self.read_encoders(hw);
+        let (encoders, taken) = self.read_encoders(hw);
         let forces = self.read_forces(hw);
         let mode = hw.mode.tick();
         let go = hw.go.tick();
@@ -65,10 +65,12 @@ impl Controller<'_> {
             joints_rad: joints,
             feet_n: [forces_n[0], forces_n[1]],
             crutches_n: [forces_n[2], forces_n[3]],
-            // This tick's readings (NaN unless the encoder answered well):
-            // a held last-good value must not count as "ready".
-            ankles_rad: [JOINTS, JOINTS + 1]
-                .map(|i| encoders.get(i).map_or(f32::NAN, |e| e.angle_rad)),
+            // This tick's readings (NaN unless the frame was taken): a held
+            // last-good value must not count as "ready".
+            ankles_rad: [JOINTS, JOINTS + 1].map(|i| match (encoders.get(i), taken.get(i)) {
+                (Some(e), Some(true)) => e.angle_rad,
+                _ => f32::NAN,
+            }),
         };
         Senses {
             encoders,
@@ -83,21 +85,46 @@ impl Controller<'_> {
         }
     }
 
+    /// Each encoder's frame as the supervisor will check it, and whether
+    /// control takes it: only the frames the supervisor takes
+    /// ([`crate::supervisor::Supervisor::accepts_encoder`]) move the
+    /// angles and rates control uses; otherwise the last taken one holds.
     fn read_encoders<ENC, ADC, PWM, DIR, EN, IN, OUT>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
-    ) -> [EncoderSense; ENCODERS]
+    ) -> ([EncoderSense; ENCODERS], [bool; ENCODERS])
     where
         ENC: SpiDevice<u8>,
     {
         let mut out = [BAD_ENCODER; ENCODERS];
+        let mut taken = [false; ENCODERS];
         let dt = self.cfg.dt_s;
         // First-order low-pass on the joint rates: α = dt / (RC + dt).
         let rc = 1.0 / (2.0 * core::f32::consts::PI * self.cfg.rate_filter_hz);
         let alpha = dt / (rc + dt);
-        for (i, (enc, o)) in hw.encoders.iter_mut().zip(out.iter_mut()).enumerate() {
+        for (i, ((enc, o), took)) in hw
+            .encoders
+            .iter_mut()
+            .zip(out.iter_mut())
+            .zip(taken.iter_mut())
+            .enumerate()
+        {
             let result = enc.read_angle();
-            if let Ok(r) = &result {
+            let status = EncoderStatus::of(&result);
+            *o = match &result {
+                Ok(r) => EncoderSense {
+                    status,
+                    raw_counts: r.raw_counts,
+                    angle_rad: r.angle_rad,
+                },
+                Err(_) => EncoderSense {
+                    status,
+                    raw_counts: self.last_raw.get(i).copied().unwrap_or(0),
+                    angle_rad: f32::NAN,
+                },
+            };
+            *took = self.supervisor.accepts_encoder(i, o);
+            if let (Ok(r), true) = (&result, *took) {
                 if let (Some(last), Some(raw)) =
                     (self.last_angle.get_mut(i), self.last_raw.get_mut(i))
                 {
@@ -113,18 +140,8 @@ impl Controller<'_> {
                     *raw = r.raw_counts;
                 }
             }
-            let status = EncoderStatus::of(&result);
-            *o = EncoderSense {
-                status,
-                raw_counts: self.last_raw.get(i).copied().unwrap_or(0),
-                angle_rad: if status == EncoderStatus::Ok {
-                    self.last_angle.get(i).copied().unwrap_or(f32::NAN)
-                } else {
-                    f32::NAN
-                },
-            };
         }
-        out
+        (out, taken)
     }
 
     fn read_forces<ENC, ADC, PWM, DIR, EN, IN, OUT>(

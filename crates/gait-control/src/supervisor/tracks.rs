@@ -60,81 +60,128 @@ pub(super) enum Frame {
     Rejected,
 }
 
+/// How the next frame of an encoder would be taken ([`EncoderTrack::classify`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Class {
+    /// A bad frame (bus, parity, error flag, or an impossible value: then
+    /// the value, for the immediate fault).
+    Bad(FaultCode, Option<f32>),
+    /// The first frame, or one after a gap longer than the window: it
+    /// (re-)seeds the track.
+    Seed,
+    /// A change larger than the joint could have made since the last
+    /// accepted frame.
+    Jump,
+    /// A good frame: its change from the last accepted one and the ticks
+    /// between them.
+    Good {
+        delta: i16,
+        elapsed: u32,
+        previous: Accepted,
+    },
+}
+
 impl EncoderTrack {
-    /// Classifies `sense`; raises the immediate invalid-value fault through
-    /// `invalid`. Returns the frame and whether it was bad.
+    /// How `sense` would be taken now, without changing anything: the one
+    /// rule the controller's sense stage (which uses only the frames taken)
+    /// and the check share.
+    pub(super) fn classify(
+        &self,
+        sense: &EncoderSense,
+        debounce: Debounce,
+        max_jump: u16,
+    ) -> Class {
+        let since_last = self.since_last.saturating_add(1);
+        match sense.status {
+            EncoderStatus::BusError => return Class::Bad(FaultCode::EncoderBusError, None),
+            EncoderStatus::Parity => return Class::Bad(FaultCode::EncoderParity, None),
+            EncoderStatus::ErrorFlag => return Class::Bad(FaultCode::EncoderErrorFlag, None),
+            EncoderStatus::Ok => {
+                let angle_ok = sense.angle_rad.abs() <= MAX_ENCODER_ANGLE_RAD;
+                if sense.raw_counts > DATA_MASK || !angle_ok {
+                    return Class::Bad(FaultCode::EncoderInvalidValue, Some(sense.angle_rad));
+                }
+            }
+        }
+        let window = u32::from(debounce.window_ticks);
+        let Some(previous) = self.last.filter(|_| since_last <= window) else {
+            return Class::Seed;
+        };
+        let delta = wrapped_delta(previous.raw, sense.raw_counts);
+        let allowed = u32::from(max_jump).saturating_mul(since_last);
+        if u32::from(delta.unsigned_abs()) > allowed {
+            Class::Jump
+        } else {
+            Class::Good {
+                delta,
+                elapsed: since_last,
+                previous,
+            }
+        }
+    }
+
+    /// Takes `sense` as [`EncoderTrack::classify`] says; raises the
+    /// immediate invalid-value fault through the returned value.
     pub(super) fn update(
         &mut self,
         sense: &EncoderSense,
         debounce: Debounce,
         max_jump: u16,
     ) -> (Frame, Option<f32>) {
+        let class = self.classify(sense, debounce, max_jump);
         self.since_last = self.since_last.saturating_add(1);
-        let mut invalid = None;
-        let bad_code = match sense.status {
-            EncoderStatus::BusError => Some(FaultCode::EncoderBusError),
-            EncoderStatus::Parity => Some(FaultCode::EncoderParity),
-            EncoderStatus::ErrorFlag => Some(FaultCode::EncoderErrorFlag),
-            EncoderStatus::Ok => {
-                let angle_ok = sense.angle_rad.abs() <= MAX_ENCODER_ANGLE_RAD;
-                if sense.raw_counts > DATA_MASK || !angle_ok {
-                    invalid = Some(sense.angle_rad);
-                    Some(FaultCode::EncoderInvalidValue)
-                } else {
-                    None
-                }
-            }
-        };
-        if let Some(code) = bad_code {
-            self.window.push(true);
-            self.last_bad = Some(code);
-            return (Frame::Rejected, invalid);
-        }
         let current = Accepted {
             raw: sense.raw_counts,
             angle_rad: sense.angle_rad,
         };
-        let window = u32::from(debounce.window_ticks);
-        let previous = self.last.filter(|_| self.since_last <= window);
-        let Some(previous) = previous else {
-            // First sample, or a gap longer than the window: (re-)seed.
-            self.window.push(false);
-            self.accept(current);
-            return (
-                Frame::Accepted {
-                    angle_rad: current.angle_rad,
-                    delta: None,
-                    previous_angle_rad: current.angle_rad,
-                },
-                None,
-            );
-        };
-        let delta = wrapped_delta(previous.raw, current.raw);
-        let allowed = u32::from(max_jump).saturating_mul(self.since_last);
-        if u32::from(delta.unsigned_abs()) > allowed {
-            self.window.push(true);
-            self.last_bad = Some(FaultCode::EncoderJump);
-            self.consecutive_jumps = self.consecutive_jumps.saturating_add(1);
-            if self.consecutive_jumps >= debounce.count {
-                // The jump persists: it is where the encoder now reads.
-                // The fault is raised by the window; take the new value
-                // as the reference so the condition can clear.
-                self.last = None;
-                self.consecutive_jumps = 0;
+        match class {
+            Class::Bad(code, invalid) => {
+                self.window.push(true);
+                self.last_bad = Some(code);
+                (Frame::Rejected, invalid)
             }
-            return (Frame::Rejected, None);
+            Class::Seed => {
+                self.window.push(false);
+                self.accept(current);
+                (
+                    Frame::Accepted {
+                        angle_rad: current.angle_rad,
+                        delta: None,
+                        previous_angle_rad: current.angle_rad,
+                    },
+                    None,
+                )
+            }
+            Class::Jump => {
+                self.window.push(true);
+                self.last_bad = Some(FaultCode::EncoderJump);
+                self.consecutive_jumps = self.consecutive_jumps.saturating_add(1);
+                if self.consecutive_jumps >= debounce.count {
+                    // The jump persists: it is where the encoder now reads.
+                    // The fault is raised by the window; take the new value
+                    // as the reference so the condition can clear.
+                    self.last = None;
+                    self.consecutive_jumps = 0;
+                }
+                (Frame::Rejected, None)
+            }
+            Class::Good {
+                delta,
+                elapsed,
+                previous,
+            } => {
+                self.window.push(false);
+                self.accept(current);
+                (
+                    Frame::Accepted {
+                        angle_rad: current.angle_rad,
+                        delta: Some((delta, elapsed)),
+                        previous_angle_rad: previous.angle_rad,
+                    },
+                    None,
+                )
+            }
         }
-        let elapsed = self.since_last;
-        self.window.push(false);
-        self.accept(current);
-        (
-            Frame::Accepted {
-                angle_rad: current.angle_rad,
-                delta: Some((delta, elapsed)),
-                previous_angle_rad: previous.angle_rad,
-            },
-            None,
-        )
     }
 
     pub(super) fn accept(&mut self, sample: Accepted) {
