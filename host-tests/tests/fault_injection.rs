@@ -128,3 +128,50 @@ fn a_frame_the_supervisor_drops_never_reaches_control() {
         assert!(o.faults.is_empty(), "at {at} s: {:?}", o.faults);
     }
 }
+
+#[test]
+fn a_step_whose_landing_cannot_be_sensed_ends_on_the_tables_timing() {
+    use gait_control::sequencer::Phase;
+    let duration = f64::from(gait_core::flash_tables::walk().unwrap().duration_s());
+    // The first swing's foot is the right one; its sensor (or the whole
+    // ADC) fails in the swing.
+    for fault in ["fsr-open:right-foot@2.6", "adc-bus@2.6"] {
+        let device = DeviceConfig::exogait().unwrap();
+        let f: Injection = fault.parse().unwrap();
+        let run = run_tables_with(
+            &device,
+            flash_tables(),
+            Gait::Walk,
+            strong_pilot(),
+            8.0,
+            2,
+            |rig| {
+                rig.schedule(f);
+            },
+        )
+        .unwrap();
+        let trace = &run.rig.trace;
+        let start = trace
+            .iter()
+            .find(|s| matches!(s.report.phase, Phase::Swing { .. }))
+            .unwrap()
+            .state
+            .time_s;
+        let end = trace
+            .iter()
+            .find(|s| s.state.time_s > start && !matches!(s.report.phase, Phase::Swing { .. }))
+            .unwrap_or_else(|| panic!("{fault}: the swing never ended"))
+            .state
+            .time_s;
+        assert!(
+            end - start <= duration + 0.01,
+            "{fault}: the swing lasted {:.3} s, the table {duration:.3} s",
+            end - start
+        );
+        let o = outcome(&run.rig, run.ended_by.as_ref());
+        assert!(
+            o.fell.is_none() && o.worst_limit_margin_rad > 0.0,
+            "{fault}: {o:?}"
+        );
+    }
+}

@@ -433,9 +433,15 @@ impl<'t> Sequencer<'t> {
                 // Contact counts as the landing only once the table has
                 // lifted the foot and played the given fraction of its time
                 // in the air (earlier contact is a scuff).
-                let landed = self.lifted_at_s.is_some_and(|lift| {
+                let in_window = self.lifted_at_s.is_some_and(|lift| {
                     t >= lift + cfg.landing_window_fraction * (duration - lift)
-                }) && swing_foot >= cfg.landing_contact_n;
+                });
+                // A foot whose sensor has failed (NaN) cannot report the
+                // contact: the step ends on the table's own timing, where
+                // the table has put the foot down.
+                let blind = !swing_foot.is_finite();
+                let landed =
+                    in_window && (swing_foot >= cfg.landing_contact_n || (blind && t >= duration));
                 other_share = Some(share);
                 let reference = phi_t.map_or(self.reference, |p| joints_from_phi(&p, stance));
                 if landed {
