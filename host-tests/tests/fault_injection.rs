@@ -175,3 +175,17 @@ fn a_step_whose_landing_cannot_be_sensed_ends_on_the_tables_timing() {
         );
     }
 }
+
+#[test]
+fn a_joint_whose_encoder_is_lost_is_not_driven_on_its_stale_angle() {
+    // The swing hip's encoder fails early in the swing: the safe hold
+    // follows, and the blind hip runs on the model's torque alone instead
+    // of PID on its last angle (which drove it 0.6° past its stop).
+    let o = run(Gait::Walk, 2, 8.0, None, &["encoder-parity:right-hip@2.6"]);
+    assert_eq!(
+        o.faults.first().map(|f| f.code),
+        Some(FaultCode::EncoderParity)
+    );
+    assert!(o.fell.is_none(), "{o:?}");
+    assert!(o.worst_limit_margin_rad > 0.1, "{o:?}");
+}

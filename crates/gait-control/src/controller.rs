@@ -137,6 +137,10 @@ pub struct Controller<'t> {
     crutch: CrutchLoad,
     last_raw: [u16; ENCODERS],
     last_angle: [f32; ENCODERS],
+    /// Consecutive frames of each joint's encoder that control could not
+    /// take (bad or dropped): from [`BLIND_AFTER_FRAMES`] on the joint is
+    /// blind, and runs on its feed-forward alone.
+    untaken: [u8; JOINTS],
     rate: [f32; JOINTS],
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
@@ -183,6 +187,7 @@ impl<'t> Controller<'t> {
             crutch: CrutchLoad::new(),
             last_raw: [0; ENCODERS],
             last_angle: [0.0; ENCODERS],
+            untaken: [0; JOINTS],
             rate: [0.0; JOINTS],
             motor_sense: [idle; JOINTS],
             motors_enabled: false,
@@ -496,6 +501,10 @@ impl<'t> Controller<'t> {
         still && standing && crutches
     }
 }
+
+/// Consecutive untaken frames after which a joint counts as blind: the
+/// supervisor's bad-frame debounce (its fault latches then too).
+pub const BLIND_AFTER_FRAMES: u8 = 3;
 
 /// What *plan* decided.
 struct Planned {

@@ -25,6 +25,20 @@ pub struct JointGains {
 }
 
 impl JointGains {
+    /// The gains with no feedback at all (the loop then passes its
+    /// feed-forward through its limits and slew): for a joint whose
+    /// encoder is lost, which must not be driven by PID on a stale angle.
+    #[must_use]
+    pub fn without_feedback(&self) -> Self {
+        Self {
+            kp_nm_per_rad: 0.0,
+            ki_nm_per_rad_s: 0.0,
+            kd_nm_s_per_rad: 0.0,
+            integral_limit_nm: 0.0,
+            ..*self
+        }
+    }
+
     /// The gains with the position feedback (proportional, integral and the
     /// integral's clamp) scaled by `k` in [0, 1]; damping and limits kept.
     #[must_use]
@@ -162,6 +176,24 @@ fn step_towards(from: f32, to: f32, max_step: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn without_feedback_passes_the_feed_forward_through_limits_and_slew() {
+        let g = G.without_feedback();
+        let mut l = JointLoop::default();
+        let sp = Setpoint {
+            angle_rad: 0.3,
+            rate_rad_s: 0.0,
+            feedforward_nm: 5.0,
+        };
+        // Far from the reference, no feedback: only the feed-forward.
+        let mut last = 0.0;
+        for _ in 0..1000 {
+            last = l.update(&g, &sp, -1.0, 2.0, 0.001).command_nm;
+        }
+        assert!((last - 5.0).abs() < 1e-6, "{last}");
+    }
+
     use super::*;
 
     const G: JointGains = JointGains {

@@ -78,25 +78,36 @@ impl Controller<'_> {
             let (Some(lp), Some(g)) = (self.loops.get_mut(i), self.cfg.gains.get(i)) else {
                 continue;
             };
-            let softened;
-            let g = if r.stance.other().has_joint(i) && carried > 0.0 {
-                softened = g.with_stiffness(1.0 - DOUBLE_SUPPORT_COMPLIANCE * carried);
-                &softened
-            } else {
-                g
-            };
             let sp = Setpoint {
                 angle_rad: r.angle_rad.get(i).copied().unwrap_or(f32::NAN),
                 rate_rad_s: r.rate_rad_s.get(i).copied().unwrap_or(0.0),
                 feedforward_nm: feedforward.get(i).copied().unwrap_or(0.0),
             };
-            let out = lp.update(
-                g,
-                &sp,
-                s.joints.get(i).copied().unwrap_or(f32::NAN),
-                self.rate.get(i).copied().unwrap_or(0.0),
-                dt,
-            );
+            // A joint whose encoder is lost is not driven by PID on its
+            // stale angle: the model's torque for the reference alone.
+            let blind = self
+                .untaken
+                .get(i)
+                .is_some_and(|&n| n >= super::BLIND_AFTER_FRAMES);
+            let adjusted;
+            let (g, measured, rate) = if blind {
+                adjusted = g.without_feedback();
+                (&adjusted, sp.angle_rad, sp.rate_rad_s)
+            } else if r.stance.other().has_joint(i) && carried > 0.0 {
+                adjusted = g.with_stiffness(1.0 - DOUBLE_SUPPORT_COMPLIANCE * carried);
+                (
+                    &adjusted,
+                    s.joints.get(i).copied().unwrap_or(f32::NAN),
+                    self.rate.get(i).copied().unwrap_or(0.0),
+                )
+            } else {
+                (
+                    g,
+                    s.joints.get(i).copied().unwrap_or(f32::NAN),
+                    self.rate.get(i).copied().unwrap_or(0.0),
+                )
+            };
+            let out = lp.update(g, &sp, measured, rate, dt);
             *c = out.command_nm;
         }
         Actuation {

@@ -124,6 +124,9 @@ impl Controller<'_> {
                 },
             };
             *took = self.supervisor.accepts_encoder(i, o);
+            if let Some(n) = self.untaken.get_mut(i) {
+                *n = if *took { 0 } else { n.saturating_add(1) };
+            }
             if let (Ok(r), true) = (&result, *took) {
                 if let (Some(last), Some(raw)) =
                     (self.last_angle.get_mut(i), self.last_raw.get_mut(i))
