@@ -26,10 +26,10 @@ mod cost;
 mod limits;
 mod periodic;
 
-pub use bounds::{Infeasible, TIME_ORDERED_ROWS};
+pub use bounds::{BoundsMismatch, Infeasible, TIME_ORDERED_ROWS};
 pub use case::{EndPosture, PaperCase, StepCase};
 pub use cost::{Cost, CostAccumulator, CostSample, MAX_SAMPLES};
-pub use limits::{JointMotionLimit, JointRangeLimit};
+pub use limits::{JointMotionLimit, JointRangeLimit, LimitError};
 pub use periodic::{PeriodicError, PeriodicStep};
 
 use crate::gait::{CONTROL_ROWS, ControlPoints, Differences, Sampling, Step};

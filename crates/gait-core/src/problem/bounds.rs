@@ -49,7 +49,50 @@ impl core::fmt::Display for Infeasible {
 /// (10–14) has no time column.
 pub const TIME_ORDERED_ROWS: [[usize; 2]; 3] = [R2_ROWS.span(), PHI3_ROWS.span(), PACE_ROWS.span()];
 
+/// An entry of a stored copy of eq. (cons)'s bounds (e.g. a report's) that
+/// does not follow from the problem ([`PaperProblem::check_bounds_copy`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundsMismatch<T> {
+    /// The upper bound U (else the lower bound B).
+    pub upper: bool,
+    /// Row of P.
+    pub row: usize,
+    /// Column of P.
+    pub col: usize,
+    /// The stored value.
+    pub stored: T,
+    /// The value eq. (cons) gives.
+    pub derived: T,
+}
+
 impl<T: Real> PaperProblem<T> {
+    /// Checks a stored copy (B, U) of eq. (cons)'s bounds against
+    /// [`PaperProblem::bounds`], entry by entry to a relative 1e-12.
+    pub fn check_bounds_copy(
+        &self,
+        lower: &ControlPoints<T>,
+        upper: &ControlPoints<T>,
+    ) -> Result<(), BoundsMismatch<T>> {
+        let (lo, hi) = self.bounds();
+        let tol = T::lit(1e-12);
+        for (is_upper, stored, derived) in [(false, lower, &lo), (true, upper, &hi)] {
+            for (row, (a, b)) in stored.iter().zip(derived).enumerate() {
+                for (col, (&x, &y)) in a.iter().zip(b).enumerate() {
+                    if (x - y).abs() > tol * (T::one() + y.abs()) {
+                        return Err(BoundsMismatch {
+                            upper: is_upper,
+                            row,
+                            col,
+                            stored: x,
+                            derived: y,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Eq. (cons): the lower and upper bound matrices (B, U), SI units.
     pub fn bounds(&self) -> (ControlPoints<T>, ControlPoints<T>) {
         let c = &self.case;

@@ -36,8 +36,7 @@ pub struct Cost<T> {
     pub swing_samples: usize,
 }
 
-/// Most samples one step may have (N + 1): 5.11 s at Δt = 0.01 s.
-pub const MAX_SAMPLES: usize = 512;
+pub use crate::gait::MAX_SAMPLES;
 
 /// One dynamics sample as J sees it (k ≥ 2 with eq. (ee2)'s backward
 /// differences).

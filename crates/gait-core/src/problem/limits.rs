@@ -68,7 +68,46 @@ pub struct JointRangeLimit<T> {
     pub weight: T,
 }
 
+/// Why a [`JointRangeLimit`] is refused ([`JointRangeLimit::new`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LimitError {
+    /// The margin is not finite and ≥ 0 rad.
+    Margin,
+    /// The weight is not finite and ≥ 0.
+    Weight,
+}
+
+impl core::fmt::Display for LimitError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::Margin => "the margin must be finite and >= 0 rad",
+            Self::Weight => "the weight must be finite and >= 0",
+        })
+    }
+}
+
 impl<T: Real> JointRangeLimit<T> {
+    /// A range limit inside `limits`, checked: margin and weight finite and
+    /// ≥ 0.
+    pub fn new(
+        limits: crate::model::JointLimits<T>,
+        margin_rad: T,
+        weight: T,
+    ) -> Result<Self, LimitError> {
+        if !(margin_rad.finite() && margin_rad >= T::zero()) {
+            return Err(LimitError::Margin);
+        }
+        if !(weight.finite() && weight >= T::zero()) {
+            return Err(LimitError::Weight);
+        }
+        Ok(Self {
+            limits,
+            margin_rad,
+            weight,
+        })
+    }
+
     /// The term at one posture.
     pub fn penalty(&self, phi: &crate::kinematics::Phi<T>) -> T {
         let a = crate::kinematics::anatomical_angles(&crate::kinematics::theta_from_phi(phi));
