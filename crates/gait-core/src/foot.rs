@@ -57,6 +57,28 @@ pub struct StanceFoot<T> {
     pub heel_off_rad: T,
 }
 
+/// Why a [`StanceFoot`]'s geometry is refused ([`StanceFoot::new`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FootError {
+    /// The toe pivot is not a finite distance > 0 m ahead of the ankle.
+    Toe,
+    /// The ankle height is not finite and ≥ 0 m.
+    AnkleHeight,
+    /// The heel-off angle is not finite and within (−π/2, π/2) rad.
+    HeelOff,
+}
+
+impl core::fmt::Display for FootError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::Toe => "the toe must lie a finite distance > 0 m ahead of the ankle",
+            Self::AnkleHeight => "the ankle height must be finite and >= 0 m",
+            Self::HeelOff => "the heel-off angle must be finite and in (-pi/2, pi/2) rad",
+        })
+    }
+}
+
 /// The stance ankle's position as a function of φ1 and its first two
 /// derivatives, relative to where it is with the foot flat, m.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,6 +92,26 @@ pub struct AnklePlacement<T> {
 }
 
 impl<T: Real> StanceFoot<T> {
+    /// A foot of the given geometry, checked: the toe a finite distance
+    /// ahead of the ankle (> 0 m), the ankle height finite and ≥ 0 m, the
+    /// heel-off angle finite and within (−π/2, π/2) rad.
+    pub fn new(toe_m: T, ankle_height_m: T, heel_off_rad: T) -> Result<Self, FootError> {
+        if !(toe_m.finite() && toe_m > T::zero()) {
+            return Err(FootError::Toe);
+        }
+        if !(ankle_height_m.finite() && ankle_height_m >= T::zero()) {
+            return Err(FootError::AnkleHeight);
+        }
+        if !(heel_off_rad.finite() && heel_off_rad.abs() < T::lit(core::f64::consts::FRAC_PI_2)) {
+            return Err(FootError::HeelOff);
+        }
+        Ok(Self {
+            toe_m,
+            ankle_height_m,
+            heel_off_rad,
+        })
+    }
+
     /// The device's foot ([`TOE_M`], [`ANKLE_HEIGHT_M`]) with the heel
     /// lifting at `heel_off_rad`.
     pub fn device(heel_off_rad: T) -> Self {

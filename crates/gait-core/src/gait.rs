@@ -18,11 +18,11 @@ use crate::kinematics::{Phi, joint_torques};
 use crate::model::{BodyModel, LINKS};
 use crate::scalar::Real;
 
-/// Rows of the control-point matrix P.
-pub const CONTROL_ROWS: usize = 19;
+mod control_points;
 
-/// The paper's control-point matrix P (19 rows of two columns), SI units.
-pub type ControlPoints<T> = [[T; 2]; CONTROL_ROWS];
+pub use control_points::{
+    CONTROL_ROWS, ControlPoints, CurveRows, PACE_ROWS, PATH_ROWS, PHI3_ROWS, R2_ROWS,
+};
 
 /// Which Bézier curve of a step (for error reports).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,6 +108,36 @@ pub fn contact_weight<T: Real>(p5: [T; 2], start: [T; 2], landing: [T; 2], thres
 /// The paper's contact threshold, 2 mm.
 pub const CONTACT_THRESHOLD_M: f64 = 0.002;
 
+/// Most samples one step may have (N + 1): 5.11 s at Δt = 0.01 s. The
+/// cost keeps one (p5, τ) pair per sample ([`crate::problem::CostAccumulator`]).
+pub const MAX_SAMPLES: usize = 512;
+
+/// Why a [`Sampling`] is refused ([`Sampling::new`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SamplingError {
+    /// Δt is not finite and > 0 s.
+    Period,
+    /// N is not within 2..=MAX_SAMPLES − 1.
+    Intervals,
+    /// The u grid has fewer than 2 points.
+    Grid,
+}
+
+impl core::fmt::Display for SamplingError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Period => f.write_str("the sample period must be finite and > 0 s"),
+            Self::Intervals => write!(
+                f,
+                "the number of intervals N must be in 2..={}",
+                MAX_SAMPLES.saturating_sub(1)
+            ),
+            Self::Grid => f.write_str("the u grid must have at least 2 points"),
+        }
+    }
+}
+
 /// How a step is turned into time samples.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sampling<T> {
@@ -120,6 +150,25 @@ pub struct Sampling<T> {
 }
 
 impl<T: Real> Sampling<T> {
+    /// A sampling, checked: Δt finite and > 0 s, 2 ≤ N and N + 1 ≤
+    /// [`MAX_SAMPLES`], at least 2 grid points.
+    pub fn new(dt_s: T, intervals: usize, grid: usize) -> Result<Self, SamplingError> {
+        if !(dt_s.finite() && dt_s > T::zero()) {
+            return Err(SamplingError::Period);
+        }
+        if intervals < 2 || intervals.saturating_add(1) > MAX_SAMPLES {
+            return Err(SamplingError::Intervals);
+        }
+        if grid < 2 {
+            return Err(SamplingError::Grid);
+        }
+        Ok(Self {
+            dt_s,
+            intervals,
+            grid,
+        })
+    }
+
     /// The paper's sampling for a step of `step_time_s`: Δt = 0.01 s,
     /// N = round(ts / Δt), 2,001 grid points.
     pub fn paper(step_time_s: T) -> Self {
@@ -297,7 +346,7 @@ impl<T: Real> Step<T> {
 
     /// The swing-ankle path (x5, y5) as a curve of z (rows 10–14).
     pub fn path(&self) -> Option<Bezier<T, 5>> {
-        rows::<T, 5>(&self.control, 10).map(Bezier::new)
+        rows::<T, 5>(&self.control, PATH_ROWS.start()).map(Bezier::new)
     }
 
     /// Streams the samples k = 0…N in order to `visit`, stopping at the first
@@ -316,9 +365,9 @@ impl<T: Real> Step<T> {
         }
         let grid = self.sampling.grid;
         let (Some(r2c), Some(phc), Some(zc), Some(path)) = (
-            rows::<T, 5>(&self.control, 0),
-            rows::<T, 5>(&self.control, 5),
-            rows::<T, 4>(&self.control, 15),
+            rows::<T, 5>(&self.control, R2_ROWS.start()),
+            rows::<T, 5>(&self.control, PHI3_ROWS.start()),
+            rows::<T, 4>(&self.control, PACE_ROWS.start()),
             self.path(),
         ) else {
             return Err(GaitError::BadSampling.into());
@@ -361,6 +410,23 @@ pub enum Differences {
     /// Central: Φ̇(k) = (Φ(k+1) − Φ(k−1))/2Δt,
     /// Φ̈(k) = (Φ(k+1) − 2Φ(k) + Φ(k−1))/Δt²; exists for 1 ≤ k ≤ N−1.
     Central,
+}
+
+impl Differences {
+    /// The scheme's name in reports: "backward" or "central".
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Backward => "backward",
+            Self::Central => "central",
+        }
+    }
+
+    /// The scheme of a report's name ([`Differences::name`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Self::Backward, Self::Central]
+            .into_iter()
+            .find(|d| d.name() == name)
+    }
 }
 
 /// One evaluated sample: posture, rates and torques.

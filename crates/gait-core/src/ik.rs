@@ -123,7 +123,36 @@ pub struct IkOptions<T> {
     pub knee_range: KneeRange,
 }
 
+/// Why [`IkOptions`] are refused ([`IkOptions::new`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum IkOptionsError {
+    /// The stance-knee cap is not finite and within (0, π/2] rad.
+    StanceKneeCap,
+}
+
+impl core::fmt::Display for IkOptionsError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::StanceKneeCap => f.write_str("the stance-knee cap must be in (0, pi/2] rad"),
+        }
+    }
+}
+
 impl<T: Real> IkOptions<T> {
+    /// Options with a stance-knee cap, checked to be finite and within
+    /// (0, π/2] rad.
+    pub fn new(stance_knee_max_rad: T, knee_range: KneeRange) -> Result<Self, IkOptionsError> {
+        let cap = stance_knee_max_rad;
+        if !(cap.finite() && cap > T::zero() && cap <= T::lit(core::f64::consts::FRAC_PI_2)) {
+            return Err(IkOptionsError::StanceKneeCap);
+        }
+        Ok(Self {
+            stance_knee_max_rad,
+            knee_range,
+        })
+    }
+
     /// The paper's human range: 45° of stance knee, the reach-narrowed range.
     pub fn paper() -> Self {
         Self {

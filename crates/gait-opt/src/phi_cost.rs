@@ -2,17 +2,17 @@
 //! of from control points: for human-data baselines, which are angle
 //! trajectories and need no IK.
 //!
-//! The same definitions as `PaperProblem::cost_unchecked`: swing-ankle
-//! position by forward kinematics, eq. (ee2) backward differences (τ_k for
-//! k ≥ 2), τ = T_θ1 from `inverse_dynamics` + `joint_torques`,
-//! J = (1/(N−1)) Σ_{k=2…N} c_k τ_k² + v_p max_{k=1…N} ‖p5(k) − p5(k−1)‖/Δt,
-//! c_k = 0 within 2 mm of p5(0) or p5(N). Cross-checked against
-//! `PaperProblem::cost` on optimised steps (tests).
+//! Only the samples are made here: swing-ankle position by forward
+//! kinematics, eq. (ee2) backward differences (τ_k for k ≥ 2), τ = T_θ1
+//! from `inverse_dynamics` + `joint_torques`. J itself,
+//! J = (1/(N−1)) Σ_{k=2…N} c_k τ_k² + v_p max_{k=1…N} ‖p5(k) − p5(k−1)‖/Δt
+//! with c_k = 0 within 2 mm of p5(0) or p5(N), is gait-core's
+//! `CostAccumulator`, which `PaperProblem::cost` feeds too. Cross-checked
+//! against `PaperProblem::cost` on optimised steps (tests).
 
-use gait_core::gait::{CONTACT_THRESHOLD_M, contact_weight};
 use gait_core::kinematics::{Phi, forward_kinematics, joint_torques};
 use gait_core::mechanics::inverse_dynamics;
-use gait_core::problem::{Cost, PaperProblem};
+use gait_core::problem::{Cost, CostAccumulator, CostSample, MAX_SAMPLES, PaperProblem};
 
 /// Why a Φ sequence cannot be evaluated.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,6 +29,13 @@ pub enum PhiCostError {
         /// Sample index.
         k: usize,
     },
+    /// More samples than the cost can hold (gait-core's `MAX_SAMPLES`).
+    TooMany {
+        /// Most samples the cost holds.
+        max: usize,
+        /// Samples given.
+        got: usize,
+    },
 }
 
 impl std::fmt::Display for PhiCostError {
@@ -38,6 +45,9 @@ impl std::fmt::Display for PhiCostError {
                 write!(f, "expected {expected} angle samples (N + 1), got {got}")
             }
             Self::NonFinite { k } => write!(f, "sample {k} holds a non-finite angle"),
+            Self::TooMany { max, got } => {
+                write!(f, "at most {max} angle samples fit the cost, got {got}")
+            }
         }
     }
 }
@@ -106,7 +116,9 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
     out
 }
 
-/// J and its parts from Φ(t_k), k = 0…N (see the module documentation).
+/// J and its parts from Φ(t_k), k = 0…N (see the module documentation):
+/// the samples of [`phi_samples`] fed to gait-core's [`CostAccumulator`],
+/// the same computation as `PaperProblem::cost`.
 pub fn cost_from_phi(
     problem: &PaperProblem<f64>,
     phi: &[Phi<f64>],
@@ -121,65 +133,26 @@ pub fn cost_from_phi(
     if let Some(k) = phi.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
         return Err(PhiCostError::NonFinite { k });
     }
-    let samples = phi_samples(problem, phi);
-    let dt = problem.sampling.dt_s;
-    let (Some(first), Some(last)) = (samples.first(), samples.last()) else {
-        return Err(PhiCostError::Length {
-            expected: n + 1,
-            got: phi.len(),
-        });
+    let too_many = |_| PhiCostError::TooMany {
+        max: MAX_SAMPLES,
+        got: phi.len(),
     };
-    let (start, landing) = (first.p5, last.p5);
-    let mut peak_speed = 0.0f64;
-    for w in samples.windows(2) {
-        if let [a, b] = w {
-            let dx = b.p5[0] - a.p5[0];
-            let dy = b.p5[1] - a.p5[1];
-            peak_speed = peak_speed.max((dx * dx + dy * dy).sqrt() / dt);
+    let mut acc = CostAccumulator::new(problem).map_err(too_many)?;
+    let samples = phi_samples(problem, phi);
+    // Φ̇ of the first interval (k = 1), which no dynamics sample holds.
+    let first_rate = samples.get(1).and_then(|s| s.dphi);
+    for (s, p) in samples.iter().zip(phi) {
+        acc.position(s.p5);
+        if let (Some(torque), Some(dphi), Some(ddphi)) = (s.torque, s.dphi, s.ddphi) {
+            let sample = CostSample {
+                p5: s.p5,
+                phi: p,
+                dphi: &dphi,
+                ddphi: &ddphi,
+                ankle_torque_nm: torque[0],
+            };
+            acc.dynamics(&sample, || first_rate);
         }
     }
-    let mut sum_sq = 0.0;
-    let mut peak_tau = 0.0f64;
-    let mut swing = 0usize;
-    for s in &samples {
-        let Some(t) = s.torque else { continue };
-        if problem.count_every_sample
-            || contact_weight(s.p5, start, landing, CONTACT_THRESHOLD_M) > 0.0
-        {
-            sum_sq += t[0] * t[0];
-            peak_tau = peak_tau.max(t[0].abs());
-            swing += 1;
-        }
-    }
-    let torque = sum_sq / (n.saturating_sub(1).max(1) as f64);
-    let velocity = problem.velocity_weight * peak_speed;
-    let motion: f64 = problem.joint_motion_limit.map_or(0.0, |l| {
-        samples
-            .iter()
-            .filter_map(|s| s.dphi.map(|d| l.penalty(&d, s.ddphi.as_ref())))
-            .sum()
-    });
-    let range: f64 = problem.joint_range_limit.map_or(0.0, |r| {
-        samples
-            .iter()
-            .zip(phi)
-            .filter(|(s, _)| s.torque.is_some())
-            .map(|(_, p)| r.penalty(p))
-            .sum()
-    });
-    let joint_motion = motion + range;
-    Ok(Cost {
-        j: torque + velocity + joint_motion,
-        torque,
-        velocity,
-        joint_motion,
-        peak_ankle_speed_m_s: peak_speed,
-        tau_rms_nm: if swing > 0 {
-            (sum_sq / swing as f64).sqrt()
-        } else {
-            0.0
-        },
-        tau_peak_nm: peak_tau,
-        swing_samples: swing,
-    })
+    acc.finish().map_err(too_many)
 }
