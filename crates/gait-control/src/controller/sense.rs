@@ -6,6 +6,7 @@ use embedded_hal::digital::InputPin;
 use embedded_hal::spi::SpiDevice;
 
 use crate::drivers::buttons::Sample;
+use crate::drivers::status_of;
 use crate::posture::JOINTS;
 use crate::sequencer::Sensed;
 use crate::supervisor::{EncoderSense, EncoderStatus, ForceSense, ForceStatus};
@@ -110,7 +111,7 @@ impl Controller<'_> {
             .enumerate()
         {
             let result = enc.read_angle();
-            let status = EncoderStatus::of(&result);
+            let status = status_of(&result);
             *o = match &result {
                 Ok(r) => EncoderSense {
                     status,
@@ -167,7 +168,7 @@ impl Controller<'_> {
         {
             let result = hw.adc.read_force(channel, cal);
             *o = ForceSense {
-                status: ForceStatus::of(&result),
+                status: status_of(&result),
                 newtons: result.unwrap_or(f32::NAN),
             };
         }

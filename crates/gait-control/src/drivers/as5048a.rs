@@ -248,16 +248,6 @@ pub enum ReadStatus {
     ErrorFlag,
 }
 
-impl ReadStatus {
-    /// The status of a read's result.
-    pub fn of<T, E>(result: &Result<T, Error<E>>) -> Self {
-        match result {
-            Ok(_) => Self::Ok,
-            Err(e) => e.kind(),
-        }
-    }
-}
-
 /// Driver errors.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -272,9 +262,11 @@ pub enum Error<E> {
     ErrorFlag(Option<ErrorRegister>),
 }
 
-impl<E> Error<E> {
+impl<E> super::ErrorKind for Error<E> {
+    type Status = ReadStatus;
+
     /// What kind of failure this is ([`ReadStatus`], never `Ok`).
-    pub fn kind(&self) -> ReadStatus {
+    fn kind(&self) -> ReadStatus {
         match self {
             Self::Bus(_) => ReadStatus::BusError,
             Self::Parity => ReadStatus::Parity,
