@@ -6,7 +6,6 @@ use embedded_hal::digital::InputPin;
 use embedded_hal::spi::SpiDevice;
 
 use crate::drivers::buttons::Sample;
-use crate::drivers::status_of;
 use crate::posture::JOINTS;
 use crate::sequencer::Sensed;
 use crate::supervisor::{EncoderSense, EncoderStatus, ForceSense, ForceStatus};
@@ -111,7 +110,7 @@ impl Controller<'_> {
             .enumerate()
         {
             let result = enc.read_angle();
-            let status = status_of(&result);
+            let status = EncoderStatus::of(&result);
             *o = match &result {
                 Ok(r) => EncoderSense {
                     status,
@@ -168,7 +167,7 @@ impl Controller<'_> {
         {
             let result = hw.adc.read_force(channel, cal);
             *o = ForceSense {
-                status: status_of(&result),
+                status: ForceStatus::of(&result),
                 newtons: result.unwrap_or(f32::NAN),
             };
         }

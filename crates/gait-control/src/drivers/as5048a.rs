@@ -248,6 +248,16 @@ pub enum ReadStatus {
     ErrorFlag,
 }
 
+impl ReadStatus {
+    /// The status of a read's result.
+    pub fn of<T, E>(result: &Result<T, Error<E>>) -> Self {
+        match result {
+            Ok(_) => Self::Ok,
+            Err(e) => e.kind(),
+        }
+    }
+}
+
 /// Driver errors.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -262,11 +272,9 @@ pub enum Error<E> {
     ErrorFlag(Option<ErrorRegister>),
 }
 
-impl<E> super::ErrorKind for Error<E> {
-    type Status = ReadStatus;
-
+impl<E> Error<E> {
     /// What kind of failure this is ([`ReadStatus`], never `Ok`).
-    fn kind(&self) -> ReadStatus {
+    pub fn kind(&self) -> ReadStatus {
         match self {
             Self::Bus(_) => ReadStatus::BusError,
             Self::Parity => ReadStatus::Parity,

@@ -199,6 +199,16 @@ pub enum ReadStatus {
     OutOfRange,
 }
 
+impl ReadStatus {
+    /// The status of a conversion's result.
+    pub fn of<T, E>(result: &Result<T, Error<E>>) -> Self {
+        match result {
+            Ok(_) => Self::Ok,
+            Err(e) => e.kind(),
+        }
+    }
+}
+
 /// Driver errors.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -209,11 +219,9 @@ pub enum Error<E> {
     Sensor(ForceFault),
 }
 
-impl<E> super::ErrorKind for Error<E> {
-    type Status = ReadStatus;
-
+impl<E> Error<E> {
     /// What kind of failure this is ([`ReadStatus`], never `Ok`).
-    fn kind(&self) -> ReadStatus {
+    pub fn kind(&self) -> ReadStatus {
         match self {
             Self::Bus(_) => ReadStatus::BusError,
             Self::Sensor(ForceFault::OpenCircuit { .. }) => ReadStatus::Open,

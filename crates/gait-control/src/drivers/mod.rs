@@ -10,20 +10,3 @@ pub mod buttons;
 pub mod mcp3208;
 pub mod motor;
 pub mod status;
-
-/// A driver error that says what kind of failure it is, without the bus's
-/// own error type: what the supervisor counts, as it is.
-pub trait ErrorKind {
-    /// The outcome of a read; its `Default` is a good read.
-    type Status: Default;
-    /// This error's kind (never the default).
-    fn kind(&self) -> Self::Status;
-}
-
-/// The outcome of a read: good, or its error's kind.
-pub fn status_of<T, E: ErrorKind>(result: &Result<T, E>) -> E::Status {
-    match result {
-        Ok(_) => E::Status::default(),
-        Err(e) => e.kind(),
-    }
-}
