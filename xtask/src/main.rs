@@ -63,6 +63,7 @@ fn main() -> ExitCode {
         "size" => Toolchain::detect().and_then(|tc| size_all(&tc)),
         "clippy" => Toolchain::detect().and_then(|tc| clippy(&tc)),
         "tables" => regenerate_tables(),
+        "faults" => fault_campaign(rest),
         "help" | "--help" | "-h" => {
             println!("{}", HELP);
             Ok(())
@@ -95,6 +96,8 @@ usage: cargo xtask <task>
   qemu      build the QEMU image and run its self-test and benchmarks
   size      flash/RAM use per board
   clippy    clippy with warnings denied, host and firmware
+  faults    the randomised fault campaign in the closed loop: `cargo xtask faults
+            --runs N [--seed S] [--json]` (progress bar; tally per fault kind)
   tables    regenerate the flash gait tables (crates/gait-core/src/flash_tables.rs)
             from the optimiser (deterministic; a test checks they are current)
   setup     install missing system packages for cross-building";
@@ -121,6 +124,30 @@ fn ci() -> Result {
     step("QEMU self-test", || qemu(&tc))?;
     step("size report", || size_all(&tc))?;
     Ok(())
+}
+
+/// `cargo xtask faults --runs N [--seed S] [--json]`: `exogait faults`,
+/// built in release. Its exit status 1 (the campaign's goal not met) is
+/// reported, not an error of the task; 2 is.
+fn fault_campaign(args: &[String]) -> Result {
+    run(cargo().args(["build", "--quiet", "--release", "-p", "exogait-cli"]))?;
+    let exe = root().join("target/release/exogait");
+    let status = Command::new(&exe)
+        .current_dir(root())
+        .arg("faults")
+        .args(args)
+        .status()
+        .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
+    match status.code() {
+        Some(0) => Ok(()),
+        Some(1) => {
+            eprintln!(
+                "xtask faults: the campaign's goal (no fall, no stop crossed, no missed detection, no false trip) is not met"
+            );
+            Ok(())
+        }
+        _ => Err("exogait faults could not run the campaign".into()),
+    }
 }
 
 fn regenerate_tables() -> Result {

@@ -7,6 +7,7 @@
 mod commands;
 mod compare;
 mod cost;
+mod faults;
 mod jsonl;
 mod model_file;
 mod optimize;
@@ -74,6 +75,10 @@ enum Command {
     /// An `optimize` report as a gait table in the flash format (checked
     /// against the device first).
     Table(table::TableArgs),
+    /// A seeded randomised fault campaign in the closed loop: one random
+    /// fault per run; the tally per kind (exit 1 unless no run fell,
+    /// crossed a stop, missed a detection or tripped falsely).
+    Faults(faults::FaultsArgs),
 }
 
 fn main() -> ExitCode {
@@ -84,6 +89,13 @@ fn main() -> ExitCode {
             return ExitCode::from(EXIT_FATAL);
         }
         return ExitCode::from(simulate::run(args));
+    }
+    if let Command::Faults(args) = &cli.command {
+        if cli.model.is_some() {
+            eprintln!("exogait: --model does not apply to faults (the device's model is fixed)");
+            return ExitCode::from(EXIT_FATAL);
+        }
+        return ExitCode::from(faults::run(args));
     }
     if let Command::Table(args) = &cli.command {
         if cli.model.is_some() {
@@ -168,7 +180,8 @@ fn main() -> ExitCode {
         | Command::Cost { .. }
         | Command::Simulate(_)
         | Command::Compare(_)
-        | Command::Table(_) => Ok(jsonl::Summary::default()),
+        | Command::Table(_)
+        | Command::Faults(_) => Ok(jsonl::Summary::default()),
     };
     match result {
         Ok(summary) if summary.failed == 0 => ExitCode::from(EXIT_OK),

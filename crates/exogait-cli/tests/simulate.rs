@@ -120,3 +120,38 @@ fn bad_injections_are_refused_with_exit_2_and_say_why() {
         assert!(err.contains(says), "{inj}: {err}");
     }
 }
+
+#[test]
+fn faults_runs_a_seeded_campaign_and_tallies_it() {
+    let run = |seed: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+            .args(["faults", "--runs", "6", "--seed", seed, "--json"])
+            .output()
+            .unwrap();
+        let v: serde_json::Value =
+            serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).unwrap();
+        (v, out.status.code())
+    };
+    let (v, code) = run("3");
+    assert_eq!(v["all"]["runs"], 6);
+    let by_kind: u64 = v["by_kind"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|k| k[1]["runs"].as_u64().unwrap())
+        .sum();
+    assert_eq!(by_kind, 6);
+    // Exit 0 only when the campaign's goal is met.
+    let bad = ["falls", "past_a_stop", "missed", "false_trips", "errors"]
+        .iter()
+        .map(|k| v["all"][*k].as_u64().unwrap())
+        .sum::<u64>();
+    assert_eq!(code, Some(if bad == 0 { 0 } else { 1 }), "{v:#}");
+    // The same seed, the same campaign.
+    assert_eq!(run("3").0, v);
+    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+        .args(["faults", "--runs", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -19,6 +19,7 @@
 //! lock-step at 1 kHz.
 
 pub mod as5048a;
+pub mod campaign;
 pub mod closed_loop;
 pub mod compare;
 pub mod impact;

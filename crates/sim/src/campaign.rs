@@ -1,0 +1,323 @@
+//! A seeded randomised fault campaign: each run walks, climbs or descends
+//! with sensor noise and one fault of a random kind, target, value and time
+//! (standing, in a swing or in a weight transfer), and is judged by
+//! [`crate::outcome`]. The same seed gives the same runs. `exogait faults`
+//! and the campaign test run it; docs/safety.md has the figures.
+
+use exogait_device::DeviceConfig;
+use gait_control::operator::Gait;
+
+use crate::inject::{Injection, Kind, Target};
+use crate::outcome::{Outcome, outcome};
+use crate::scenario::{flash_tables, run_tables_with, strong_pilot};
+
+/// One planned run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CampaignRun {
+    /// The gait.
+    pub gait: Gait,
+    /// The fault.
+    pub fault: Injection,
+    /// Seed of the sensor noise (±3 encoder, ±10 ADC counts).
+    pub noise_seed: u64,
+}
+
+/// What one run gave.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunResult {
+    /// The plan.
+    pub run: CampaignRun,
+    /// Its outcome.
+    pub outcome: Outcome,
+    /// A fault latched before the injection: a false trip.
+    pub false_trip: bool,
+    /// Some fault latched at or after the injection.
+    pub detected: bool,
+    /// Why the simulation stopped early, if it did (other than a fall).
+    pub error: Option<String>,
+}
+
+impl RunResult {
+    /// A kind the supervisor must detect was not detected.
+    pub fn missed(&self) -> bool {
+        must_be_detected(self.run.fault.kind) && !self.detected
+    }
+}
+
+/// Kinds every run must detect: those whose fault the table promises to
+/// see whatever the gait is doing. (A glitch or a spike is tolerated by
+/// design; a weak motor, a stuck bridge, a frozen encoder or the pilot's
+/// lean are found only through their consequences — the model-based checks
+/// are still to come.)
+pub fn must_be_detected(kind: Kind) -> bool {
+    matches!(
+        kind,
+        Kind::EncoderBus
+            | Kind::EncoderParity
+            | Kind::EncoderErrorFlag
+            | Kind::EncoderJump(_)
+            | Kind::FsrOpen
+            | Kind::FsrShort
+            | Kind::AdcBus
+            | Kind::PwmFail
+            | Kind::EStop
+            | Kind::EStopRead
+            | Kind::ButtonRead
+            | Kind::Overrun(_)
+    )
+}
+
+/// A seeded xorshift generator (as [`crate::noise`]: a fixed sequence per
+/// seed across library versions).
+struct Draw(u64);
+
+impl Draw {
+    fn next(&mut self) -> u64 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        self.0 = x;
+        x
+    }
+
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.unit() * n as f64) as usize % n.max(1)
+    }
+
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+}
+
+/// The `runs` runs of campaign `seed`.
+pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
+    let mut d = Draw(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    for _ in 0..8 {
+        d.next();
+    }
+    (0..runs)
+        .map(|_| {
+            let gait = [Gait::Walk, Gait::StairUp, Gait::StairDown][d.below(3)];
+            let joint = Target::Joint(d.below(4));
+            let encoder = if d.below(3) == 0 {
+                Target::Ankle(d.below(2))
+            } else {
+                joint
+            };
+            let force = Target::Force(d.below(4));
+            let sign = if d.below(2) == 0 { -1 } else { 1 };
+            let (kind, target) = match d.below(21) {
+                0 => (Kind::EncoderBus, Some(encoder)),
+                1 => (Kind::EncoderParity, Some(encoder)),
+                2 => (Kind::EncoderErrorFlag, Some(encoder)),
+                3 => (Kind::EncoderStuck, Some(encoder)),
+                4 => (
+                    Kind::EncoderJump(sign * (110 + d.below(400)) as i32),
+                    Some(joint),
+                ),
+                5 => (
+                    Kind::EncoderGlitch(sign * (200 + d.below(3000)) as i32),
+                    Some(encoder),
+                ),
+                6 => (Kind::FsrOpen, Some(force)),
+                7 => (Kind::FsrShort, Some(force)),
+                8 => (Kind::FsrOverRange, Some(force)),
+                9 => (Kind::FsrSpike(d.range(100.0, 500.0)), Some(force)),
+                10 => (Kind::AdcBus, None),
+                11 => (Kind::MotorWeak(d.range(0.2, 0.8)), Some(joint)),
+                12 => (Kind::MotorStuck, Some(joint)),
+                13 => (Kind::PwmFail, Some(joint)),
+                14 => (Kind::DirFail, Some(joint)),
+                15 => (Kind::EStop, None),
+                16 => (Kind::EStopRead, None),
+                17 => (Kind::ButtonRead, None),
+                18 => (Kind::Overrun(3 + d.below(8) as u32), None),
+                19 => (Kind::PilotLean(d.range(0.05, 0.2)), None),
+                _ => (Kind::PilotStopsBalancing, None),
+            };
+            // Standing before GO, then anywhere in the first two steps.
+            let at_s = (d.range(0.3, 5.0) * 1000.0).round() / 1000.0;
+            CampaignRun {
+                gait,
+                fault: Injection { kind, target, at_s },
+                noise_seed: d.next() % 1_000_000,
+            }
+        })
+        .collect()
+}
+
+/// Plays one run: two steps asked, the run ends 4 s after the fault.
+pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
+    let fault = run.fault;
+    let seed = run.noise_seed;
+    let played = run_tables_with(
+        device,
+        flash_tables(),
+        run.gait,
+        strong_pilot(),
+        fault.at_s + 4.0,
+        2,
+        |rig| {
+            rig.set_sensor_noise(3, 10, seed);
+            rig.schedule(fault);
+        },
+    );
+    match played {
+        Ok(r) => {
+            let o = outcome(&r.rig, r.ended_by.as_ref());
+            let injected = r.rig.injected().first().map(|&(_, t)| t);
+            let before = |t: f64| injected.is_none_or(|i| t < i - 1e-9);
+            let false_trip = o.faults.iter().any(|f| before(f.detected_s));
+            let detected = o.faults.iter().any(|f| !before(f.detected_s));
+            let error = match (&r.ended_by, &o.fell) {
+                (Some(e), None) => Some(e.to_string()),
+                _ => None,
+            };
+            RunResult {
+                run: *run,
+                outcome: o,
+                false_trip,
+                detected,
+                error,
+            }
+        }
+        Err(e) => RunResult {
+            run: *run,
+            outcome: Outcome {
+                landings: 0,
+                tracking_rms_rad: [0.0; 4],
+                tracking_peak_rad: [0.0; 4],
+                worst_limit_margin_rad: 0.0,
+                worst_limit_joint: 0,
+                fell: None,
+                faults: Vec::new(),
+            },
+            false_trip: false,
+            detected: false,
+            error: Some(e.to_string()),
+        },
+    }
+}
+
+/// Plays `runs` on the machine's cores (at most 8 threads; each builds its
+/// own rigs), calling `done` after each; the results in the runs' order.
+pub fn play_all(
+    runs: &[CampaignRun],
+    device: &DeviceConfig,
+    done: &(dyn Fn() + Sync),
+) -> Vec<RunResult> {
+    let workers = std::thread::available_parallelism().map_or(2, |n| n.get().clamp(1, 8));
+    let mut parts: Vec<Vec<(usize, RunResult)>> = Vec::new();
+    std::thread::scope(|s| {
+        let handles: Vec<_> = (0..workers)
+            .map(|w| {
+                s.spawn(move || {
+                    runs.iter()
+                        .enumerate()
+                        .skip(w)
+                        .step_by(workers)
+                        .map(|(i, r)| {
+                            let result = play(r, device);
+                            done();
+                            (i, result)
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        for h in handles {
+            // A worker that panicked loses its runs; the tally then has
+            // fewer runs than asked, which the callers check.
+            if let Ok(part) = h.join() {
+                parts.push(part);
+            }
+        }
+    });
+    let mut all: Vec<(usize, RunResult)> = parts.into_iter().flatten().collect();
+    all.sort_by_key(|(i, _)| *i);
+    all.into_iter().map(|(_, r)| r).collect()
+}
+
+/// Counts over a campaign, per kind and in all.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Tally {
+    /// Runs.
+    pub runs: usize,
+    /// Runs in which the pilot fell.
+    pub falls: usize,
+    /// Runs in which a hip or knee went past its Table I stop.
+    pub past_a_stop: usize,
+    /// Runs of a must-detect kind that nothing detected.
+    pub missed: usize,
+    /// Runs with a fault latched before the injection.
+    pub false_trips: usize,
+    /// Runs the simulation could not finish (not a fall).
+    pub errors: usize,
+}
+
+impl Tally {
+    /// Adds one run.
+    pub fn add(&mut self, r: &RunResult) {
+        self.runs += 1;
+        self.falls += usize::from(r.outcome.fell.is_some());
+        self.past_a_stop += usize::from(r.outcome.worst_limit_margin_rad < 0.0);
+        self.missed += usize::from(r.missed());
+        self.false_trips += usize::from(r.false_trip);
+        self.errors += usize::from(r.error.is_some());
+    }
+}
+
+/// The tally of `results` per kind name, in the order kinds first appear,
+/// and over all.
+pub fn tally(results: &[RunResult]) -> (Vec<(&'static str, Tally)>, Tally) {
+    let mut by_kind: Vec<(&'static str, Tally)> = Vec::new();
+    let mut all = Tally::default();
+    for r in results {
+        let name = r.run.fault.kind.name();
+        match by_kind.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, t)) => t.add(r),
+            None => {
+                let mut t = Tally::default();
+                t.add(r);
+                by_kind.push((name, t));
+            }
+        }
+        all.add(r);
+    }
+    (by_kind, all)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_plan_is_seeded_valid_and_covers_every_kind() {
+        let a = plan(7, 400);
+        assert_eq!(a, plan(7, 400));
+        assert_ne!(a, plan(8, 400));
+        for r in &a {
+            // Each planned fault reads back as itself.
+            let text = r.fault.to_string();
+            let back: Injection = text.parse().unwrap_or_else(|e| panic!("{text}: {e}"));
+            assert_eq!(back.kind.name(), r.fault.kind.name());
+            assert!((0.3..=5.0).contains(&r.fault.at_s));
+        }
+        for name in [
+            "encoder-bus",
+            "encoder-jump",
+            "fsr-over-range",
+            "motor-stuck",
+            "overrun",
+            "pilot-stops-balancing",
+        ] {
+            assert!(a.iter().any(|r| r.fault.kind.name() == name), "{name}");
+        }
+    }
+}
