@@ -8,6 +8,8 @@
 //! rustup's `rust-lld` (or `arm-none-eabi-ld`). Missing Debian packages are
 //! installed with apt-get (as root, or through sudo).
 
+mod panic_paths;
+
 use std::env;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -42,7 +44,7 @@ const BOARDS: [Board; 2] = [
     },
 ];
 
-type Result<T = ()> = std::result::Result<T, String>;
+pub(crate) type Result<T = ()> = std::result::Result<T, String>;
 
 fn main() -> ExitCode {
     let args: Vec<String> = env::args().skip(1).collect();
@@ -61,6 +63,7 @@ fn main() -> ExitCode {
         }),
         "qemu" => Toolchain::detect().and_then(|tc| qemu(&tc)),
         "size" => Toolchain::detect().and_then(|tc| size_all(&tc)),
+        "panics" => Toolchain::detect().and_then(|tc| panic_paths_all(&tc)),
         "clippy" => Toolchain::detect().and_then(|tc| clippy(&tc)),
         "tables" => regenerate_tables(),
         "faults" => fault_campaign(rest),
@@ -95,6 +98,8 @@ usage: cargo xtask <task>
   firmware  build the firmware for every board (release)
   qemu      build the QEMU image and run its self-test and benchmarks
   size      flash/RAM use per board
+  panics    the panic paths left in both release images (fails if the control
+            tick reaches one, or our crates branch into one)
   clippy    clippy with warnings denied, host and firmware
   faults    the randomised fault campaign in the closed loop: `cargo xtask faults
             --runs N [--seed S] [--json]` (progress bar; tally per fault kind)
@@ -121,6 +126,7 @@ fn ci() -> Result {
             build_firmware(&tc, b).map(|_| ())
         })?;
     }
+    step("panic paths (both release images)", || panic_paths_all(&tc))?;
     step("QEMU self-test", || qemu(&tc))?;
     step("size report", || size_all(&tc))?;
     Ok(())
@@ -243,7 +249,7 @@ fn run(cmd: &mut Command) -> Result {
     }
 }
 
-fn output(cmd: &mut Command) -> Result<String> {
+pub(crate) fn output(cmd: &mut Command) -> Result<String> {
     let shown = format!("{cmd:?}");
     let out = cmd
         .stderr(Stdio::inherit())
@@ -504,6 +510,14 @@ fn check_device_fingerprint(qemu_stdout: &str) -> Result {
              and the simulator (0x{host:08x})"
         ))
     }
+}
+
+fn panic_paths_all(tc: &Toolchain) -> Result {
+    for b in BOARDS {
+        let elf = build_firmware(tc, b)?;
+        panic_paths::check(&elf)?;
+    }
+    Ok(())
 }
 
 fn size_all(tc: &Toolchain) -> Result {

@@ -228,8 +228,17 @@ impl<'t> Controller<'t> {
         &self.crutch
     }
 
+    /// The board restarted after a panic: start in a hold of the posture the
+    /// first tick finds (fault 0x0603, `docs/safety.md`).
+    pub fn report_restart_after_panic(&mut self) {
+        self.supervisor.report_restart_after_panic();
+    }
+
     /// One control tick. `deadline_missed`: the previous tick overran its
     /// budget (measured by the board's timer).
+    // Never inlined: the firmware check of panic paths (`cargo xtask panics`)
+    // starts from this symbol, and one call a tick costs nothing measurable.
+    #[inline(never)]
     pub fn tick<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,

@@ -8,7 +8,7 @@
 //! the next swing or until the device stands again, so the load the pilot
 //! takes to balance after landing (the paper's observation) is counted.
 
-use heapless::HistoryBuf;
+use crate::ring_log::RingLog;
 
 /// Steps kept in the log.
 pub const LOG_STEPS: usize = 16;
@@ -34,7 +34,7 @@ pub struct StepLoad {
 pub struct CrutchLoad {
     current: Option<StepLoad>,
     steps: u32,
-    log: HistoryBuf<StepLoad, LOG_STEPS>,
+    log: RingLog<StepLoad, LOG_STEPS>,
 }
 
 impl Default for CrutchLoad {
@@ -49,7 +49,7 @@ impl CrutchLoad {
         Self {
             current: None,
             steps: 0,
-            log: HistoryBuf::new(),
+            log: RingLog::new(),
         }
     }
 
@@ -70,7 +70,7 @@ impl CrutchLoad {
     /// The device stands again (or holds): closes the window.
     pub fn end_step(&mut self) -> Option<StepLoad> {
         let done = self.current.take()?;
-        self.log.write(done);
+        self.log.push(done);
         #[cfg(feature = "defmt")]
         defmt::info!(
             "crutch load: step {} F={} N·s peaks L={} N R={} N",
@@ -103,7 +103,7 @@ impl CrutchLoad {
 
     /// Finished steps, oldest first.
     pub fn log(&self) -> impl Iterator<Item = &StepLoad> {
-        self.log.oldest_ordered()
+        self.log.iter()
     }
 }
 

@@ -307,6 +307,15 @@ fault_table! {
         detection_bound: "50 ticks",
         reset_allowed_when: "the ankle is off the stop or the plan reaches it",
     },
+    /// The board restarted after a panic (the panic handler resets it and
+    /// leaves a mark in RAM the reset keeps): whatever step was running is
+    /// lost, so the controller starts in a hold of the posture it finds.
+    RestartedAfterPanic = 0x0603 {
+        name: "restarted after a panic",
+        reaction: Reaction::SafeHold,
+        detection_bound: "first tick after the restart (1)",
+        reset_allowed_when: "a clinician resets in a safe posture",
+    },
 }
 
 // A `FaultSet` has one bit per code in a `u32`.

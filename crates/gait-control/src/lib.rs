@@ -16,5 +16,6 @@ pub mod operator;
 pub mod position_loop;
 pub mod posture;
 pub mod reference;
+pub mod ring_log;
 pub mod sequencer;
 pub mod supervisor;

@@ -6,6 +6,8 @@
 //! this loop's limits shape the controller's behaviour, the driver's protect
 //! the hardware whatever the controller does.
 
+use gait_core::scalar::clamp_f32;
+
 /// Gains and limits of one joint.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -146,8 +148,11 @@ impl JointLoop {
         let error = sp.angle_rad - measured_rad;
         let rate_error = sp.rate_rad_s - measured_rate_rad_s;
         let pd = gains.kp_nm_per_rad * error + gains.kd_nm_s_per_rad * rate_error;
-        let candidate_integral = (self.integral_nm + gains.ki_nm_per_rad_s * error * dt_s)
-            .clamp(-gains.integral_limit_nm, gains.integral_limit_nm);
+        let candidate_integral = clamp_f32(
+            self.integral_nm + gains.ki_nm_per_rad_s * error * dt_s,
+            -gains.integral_limit_nm,
+            gains.integral_limit_nm,
+        );
         let limit = gains.torque_limit_nm;
         let unclamped = sp.feedforward_nm + pd + candidate_integral;
         let saturated = unclamped.abs() > limit;
@@ -158,7 +163,7 @@ impl JointLoop {
         if !grows_into_limit {
             self.integral_nm = candidate_integral;
         }
-        let wanted = (sp.feedforward_nm + pd + self.integral_nm).clamp(-limit, limit);
+        let wanted = clamp_f32(sp.feedforward_nm + pd + self.integral_nm, -limit, limit);
         let cmd = step_towards(self.last_command_nm, wanted, gains.slew_nm_per_tick);
         self.last_command_nm = cmd;
         LoopOutput {
@@ -171,7 +176,7 @@ impl JointLoop {
 
 /// Moves `from` towards `to` by at most `max_step`.
 fn step_towards(from: f32, to: f32, max_step: f32) -> f32 {
-    from + (to - from).clamp(-max_step, max_step)
+    from + clamp_f32(to - from, -max_step, max_step)
 }
 
 #[cfg(test)]

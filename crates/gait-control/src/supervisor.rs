@@ -19,7 +19,7 @@
 //! Every comparison is written so that NaN fails it (`!(x <= limit)` rather
 //! than `x > limit`): a NaN value can only trip a fault, never pass a check.
 
-use heapless::HistoryBuf;
+use crate::ring_log::RingLog;
 
 use crate::drivers::as5048a::{DATA_MASK, wrapped_delta};
 use crate::faults::{FaultCode, FaultSet, Reaction};
@@ -170,7 +170,7 @@ pub struct Supervisor {
     logged_channels: [u8; FaultCode::COUNT],
     /// Whether a no-channel record was logged since the fault latched.
     logged_none: FaultSet,
-    log: HistoryBuf<FaultRecord, LOG_LEN>,
+    log: RingLog<FaultRecord, LOG_LEN>,
     joints: [JointTrack; JOINTS],
     ankles: [EncoderTrack; ANKLES],
     /// Consecutive ticks each ankle has rested on its stop unplanned.
@@ -222,7 +222,7 @@ impl Supervisor {
             present: FaultSet::EMPTY,
             logged_channels: [0; FaultCode::COUNT],
             logged_none: FaultSet::EMPTY,
-            log: HistoryBuf::new(),
+            log: RingLog::new(),
             joints: [JointTrack::default(); JOINTS],
             ankles: [EncoderTrack::default(); ANKLES],
             heel_off_ticks: [0; ANKLES],
@@ -257,7 +257,7 @@ impl Supervisor {
 
     /// The post-mortem log, oldest record first (the newest [`LOG_LEN`]).
     pub fn log(&self) -> impl Iterator<Item = &FaultRecord> {
-        self.log.oldest_ordered()
+        self.log.iter()
     }
 
     /// Clinician reset (MODE + GO held 3 s, `docs/operation.md`). Honoured
@@ -276,6 +276,19 @@ impl Supervisor {
         self.logged_channels = [0; FaultCode::COUNT];
         self.logged_none = FaultSet::EMPTY;
         Ok(())
+    }
+
+    /// Latches [`FaultCode::RestartedAfterPanic`]: the board came back from
+    /// a panic (`firmware`'s panic handler), so the controller must hold the
+    /// posture it finds instead of starting afresh. Call before the first
+    /// tick; a clinician reset clears it like any fault.
+    pub fn report_restart_after_panic(&mut self) {
+        let mut t = Tick {
+            tick: 0,
+            present: FaultSet::EMPTY,
+            new: FaultSet::EMPTY,
+        };
+        self.raise(&mut t, FaultCode::RestartedAfterPanic, NO_CHANNEL, 0.0);
     }
 
     /// The per-tick check: updates every detector with `input`, latches
@@ -327,7 +340,7 @@ impl Supervisor {
             }
         };
         if first_time {
-            self.log.write(FaultRecord {
+            self.log.push(FaultRecord {
                 tick: t.tick,
                 code,
                 channel,

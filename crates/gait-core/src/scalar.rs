@@ -115,6 +115,25 @@ fn round_f32(x: f32) -> f32 {
     (t as i32) as f32
 }
 
+/// `x` limited to `[lo, hi]`, with no panic path.
+///
+/// `f32::clamp` panics when `lo > hi` or either bound is NaN; with bounds
+/// computed at run time (a derated torque limit, a slew step) the optimiser
+/// cannot remove that branch, and the firmware image must hold no panic path
+/// (`docs/safety.md`). Here a NaN `x` stays NaN (the supervisor's finiteness
+/// checks see it), and inverted bounds give `hi`.
+#[inline]
+#[must_use]
+pub fn clamp_f32(x: f32, lo: f32, hi: f32) -> f32 {
+    if x > hi {
+        hi
+    } else if x < lo {
+        lo
+    } else {
+        x
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

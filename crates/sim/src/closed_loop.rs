@@ -168,6 +168,8 @@ pub struct Rig<'t> {
     pilot: PilotBehaviour,
     transfer_from_phi1: Option<f64>,
     pub(crate) faults: Injector,
+    /// The tables the controller was built with (a reboot builds it again).
+    tables: GaitTables<'t>,
 }
 
 /// Where the pilot's stance shank should be, given the controller's phase
@@ -411,6 +413,7 @@ impl<'t> Rig<'t> {
             pilot: setup.pilot,
             transfer_from_phi1: None,
             faults: Injector::default(),
+            tables,
         };
         // Start the ankle readings at their true values (no lag to settle).
         let s = rig.plant.state();
@@ -500,7 +503,10 @@ impl<'t> Rig<'t> {
         self.inject_due();
         let overrun = self.faults.overruns_left > 0;
         self.faults.overruns_left = self.faults.overruns_left.saturating_sub(1);
-        let report = self.controller.tick(&mut self.hw, overrun);
+        let report = match self.rebooting()? {
+            Some(report) => report,
+            None => self.controller.tick(&mut self.hw, overrun),
+        };
         match report.phase {
             Phase::Transfer { .. } => {
                 if self.transfer_from_phi1.is_none() {
@@ -545,6 +551,43 @@ impl<'t> Rig<'t> {
             state: self.plant.state(),
         });
         self.trace.last().ok_or(SimError::NonFinite)
+    }
+
+    /// The board resets after a panic (`Kind::Panic`): every motor is
+    /// disabled through its driver now, as the reset's floating enable lines
+    /// do, and the controller stops ticking until `now + boot`.
+    pub(crate) fn panic_reset(&mut self, now: u64, boot_ms: f64) {
+        for m in &mut self.hw.motors {
+            let _ = m.disable();
+        }
+        let boot_ticks = (boot_ms * 1e-3 / f64::from(self.device.dt_s)).ceil() as u64;
+        self.faults.reboot_until = Some(now + boot_ticks);
+    }
+
+    /// While the board boots after a panic: the report of a board that does
+    /// not tick (the last one, motors off). At the end of the boot the
+    /// controller is built afresh, as the firmware builds it, told it
+    /// restarted after a panic, and `None` lets it tick.
+    fn rebooting(&mut self) -> Result<Option<TickReport>, SimError> {
+        let Some(until) = self.faults.reboot_until else {
+            return Ok(None);
+        };
+        if self.now() < until {
+            let mut report = self
+                .trace
+                .last()
+                .map(|s| s.report)
+                .ok_or(SimError::Config("a panic injected before the first tick"))?;
+            report.motors_enabled = false;
+            report.command_nm = [0.0; 4];
+            return Ok(Some(report));
+        }
+        self.faults.reboot_until = None;
+        let gait = self.controller.planned_gait();
+        self.controller = exogait_device::build_controller(&self.device, self.tables, gait)
+            .map_err(|_| SimError::Config("the rebooted board's controller was refused"))?;
+        self.controller.report_restart_after_panic();
+        Ok(None)
     }
 
     /// Ticks until `done` says so or `max_ticks` pass; returns the ticks run.

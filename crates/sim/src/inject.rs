@@ -60,7 +60,17 @@ pub enum Kind {
     PilotLean(f64),
     /// The pilot stops balancing on the crutches.
     PilotStopsBalancing,
+    /// The firmware panics: the panic handler resets the board, the motors
+    /// are off (limp) for the boot, this many milliseconds, and the new
+    /// controller starts with fault 0x0603 (`docs/safety.md`).
+    Panic(f64),
 }
+
+/// The motor board's boot after a reset, ms, until its first control tick:
+/// the 8 MHz crystal's start-up (≤ 2 ms, STM32F405 datasheet), the PLL lock
+/// and the power-on self-test (measured under QEMU, `cargo xtask qemu`:
+/// "selftest" line), rounded up.
+pub const DEFAULT_BOOT_MS: f64 = 5.0;
 
 /// Where a fault strikes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -130,6 +140,7 @@ impl Kind {
             Self::Overrun(_) => "overrun",
             Self::PilotLean(_) => "pilot-lean",
             Self::PilotStopsBalancing => "pilot-stops-balancing",
+            Self::Panic(_) => "panic",
         }
     }
 
@@ -149,12 +160,13 @@ impl Kind {
             | Self::ButtonRead
             | Self::Overrun(_)
             | Self::PilotLean(_)
-            | Self::PilotStopsBalancing => Needs::Nothing,
+            | Self::PilotStopsBalancing
+            | Self::Panic(_) => Needs::Nothing,
         }
     }
 
     /// Every kind's name, for help texts and errors.
-    pub const NAMES: [&'static str; 21] = [
+    pub const NAMES: [&'static str; 22] = [
         "encoder-bus",
         "encoder-parity",
         "encoder-error-flag",
@@ -176,6 +188,7 @@ impl Kind {
         "overrun=<count>",
         "pilot-lean=<rad>",
         "pilot-stops-balancing",
+        "panic=<boot ms>",
     ];
 }
 
@@ -195,7 +208,9 @@ impl fmt::Display for Injection {
         f.write_str(self.kind.name())?;
         match self.kind {
             Kind::EncoderJump(c) | Kind::EncoderGlitch(c) => write!(f, "={c}")?,
-            Kind::FsrSpike(v) | Kind::MotorWeak(v) | Kind::PilotLean(v) => write!(f, "={v}")?,
+            Kind::FsrSpike(v) | Kind::MotorWeak(v) | Kind::PilotLean(v) | Kind::Panic(v) => {
+                write!(f, "={v}")?;
+            }
             Kind::Overrun(n) => write!(f, "={n}")?,
             _ => {}
         }
@@ -335,6 +350,10 @@ fn parse_kind(text: &str, name: &str, value: Option<&str>) -> Result<Kind, Parse
         }
         "pilot-lean" => Kind::PilotLean(number(-0.5, 0.5, "radians")?),
         "pilot-stops-balancing" => Kind::PilotStopsBalancing,
+        "panic" => Kind::Panic(match value {
+            Some(_) => number(0.0, 1_000.0, "milliseconds")?,
+            None => DEFAULT_BOOT_MS,
+        }),
         _ => {
             return err(
                 text,
@@ -350,6 +369,7 @@ fn parse_kind(text: &str, name: &str, value: Option<&str>) -> Result<Kind, Parse
             | Kind::MotorWeak(_)
             | Kind::Overrun(_)
             | Kind::PilotLean(_)
+            | Kind::Panic(_)
     );
     if value.is_some() && !takes_value {
         return err(text, format!("{name} takes no value"));

@@ -6,7 +6,8 @@
 //! driven low before anything else, the power-on self-test must pass before
 //! the control loop may start, every driver is built and every motor
 //! disabled through the drivers, and only then do the independent watchdog
-//! and the 1 kHz tick start. A panic drives the enable lines low.
+//! and the 1 kHz tick start. A panic resets the board into a hold of the
+//! posture it finds (fault 0x0603, see `panic`).
 //!
 //! # Pin map (motor board rev A, LQFP64)
 //!
@@ -36,14 +37,16 @@
 // attributes also expand to `#[export_name]`, which this lint counts.
 #![allow(unsafe_code)]
 
-use core::cell::RefCell;
 use core::convert::Infallible;
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
 
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
 use defmt_rtt as _;
 use embedded_hal::digital::{ErrorType, OutputPin};
-use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay, RefCellDevice};
+use embedded_hal_bus::spi::{AtomicDevice, ExclusiveDevice, NoDelay};
+use embedded_hal_bus::util::AtomicCell;
 use firmware::board_config::{self, BoardIo, TICK_HZ};
 use firmware::selftest;
 use gait_control::controller::TickReport;
@@ -108,6 +111,7 @@ fn main() -> ! {
     let Some(mut cp) = cortex_m::Peripherals::take() else {
         halt("core peripherals already taken");
     };
+    let restarted_after_panic = take_panic_mark();
     // 1. Motors off before anything else.
     let gpiob = dp.GPIOB.split();
     let mut en = [
@@ -164,7 +168,7 @@ fn main() -> ! {
         polarity: Polarity::IdleLow,
         phase: Phase::CaptureOnFirstTransition,
     };
-    let encoder_bus = RefCell::new(dp.SPI1.spi(
+    let encoder_bus = AtomicCell::new(dp.SPI1.spi(
         (gpioa.pa5, gpioa.pa6, gpioa.pa7),
         mode_1,
         ENCODER_SPI_HZ.Hz(),
@@ -177,7 +181,7 @@ fn main() -> ! {
         &clocks,
     );
     let cs = |pin: ErasedPin<Output>| ChipSelect::<ENCODER_CS_CYCLES>(pin);
-    let encoder = |pin| match RefCellDevice::new_no_delay(&encoder_bus, cs(pin)) {
+    let encoder = |pin| match AtomicDevice::new_no_delay(&encoder_bus, cs(pin)) {
         Ok(d) => d,
         Err(e) => match e {},
     };
@@ -238,6 +242,11 @@ fn main() -> ! {
             halt("bad controller configuration: motors stay disabled");
         }
     };
+
+    if restarted_after_panic {
+        defmt::error!("restarted after a panic: holding the posture found (fault 0x0603)");
+        controller.report_restart_after_panic();
+    }
 
     // 5. The 1 kHz loop under an independent watchdog. The DWT cycle counter
     //    measures each tick's work for the log.
@@ -375,13 +384,46 @@ fn disable_motors() {
     gpiob.bsrr().write(|w| unsafe { w.bits(mask) });
 }
 
-/// A panic leaves the motors disabled (a limp exoskeleton with a reset pending
-/// is safer than a running one whose software state is unknown).
+/// Marks a restart after a panic (the fault code 0x0603 in the top half).
+const PANIC_MARK_MAGIC: u32 = 0x0603_5AFE;
+
+/// Left by the panic handler for the next boot. `.uninit` RAM is neither
+/// zeroed nor initialised by cortex-m-rt, and a system reset keeps SRAM.
+#[unsafe(link_section = ".uninit.exogait_panic_mark")]
+static mut PANIC_MARK: MaybeUninit<u32> = MaybeUninit::uninit();
+
+/// Whether the last reset came from the panic handler; clears the mark.
+fn take_panic_mark() -> bool {
+    // SAFETY: runs once at boot, before any interrupt is enabled, so
+    // nothing else touches the word; the volatile accesses keep the compiler
+    // from assuming anything about RAM that survived a reset (at power-on
+    // it holds noise, which matches the 32-bit magic with odds 2^-32).
+    unsafe {
+        let mark = addr_of_mut!(PANIC_MARK).cast::<u32>();
+        let found = mark.read_volatile() == PANIC_MARK_MAGIC;
+        mark.write_volatile(0);
+        found
+    }
+}
+
+/// A panic — none is reachable from the control tick or our crates, `cargo
+/// xtask panics` proves it on every CI run — leaves a mark in RAM and resets
+/// the board at once. The reset drives the enable lines low for the boot
+/// (about 2 ms to the first tick); the controller then starts with fault
+/// 0x0603 latched, whose reaction is the one the fault table keeps for an
+/// internal error: SAFE HOLD of the posture it finds, motors powered. Never
+/// a limp exoskeleton waiting for a clinician. Nothing is logged here: the
+/// log itself may be what panicked; the next boot logs the restart.
 #[panic_handler]
 fn panic(_info: &core::panic::PanicInfo) -> ! {
-    disable_motors();
-    defmt::error!("panic: motors disabled");
-    cortex_m::asm::udf()
+    // SAFETY: a single aligned word write; whatever else was running is
+    // abandoned by the reset that follows.
+    unsafe {
+        addr_of_mut!(PANIC_MARK)
+            .cast::<u32>()
+            .write_volatile(PANIC_MARK_MAGIC)
+    };
+    cortex_m::peripheral::SCB::sys_reset()
 }
 
 // Timestamps are core cycles (wrap every 25.6 s at 168 MHz).

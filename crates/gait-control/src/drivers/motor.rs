@@ -33,6 +33,7 @@
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
+use gait_core::scalar::clamp_f32;
 
 /// Motor and drive parameters. Torques are at the joint (after the gear).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -319,14 +320,15 @@ where
         self.ticks_since_enable = self.ticks_since_enable.saturating_add(1);
         let derating = self.i2t_a2s > c.i2t_warning_a2s;
         let limit = (self.thermal_limit_nm() * ramp).min(c.torque_limit_nm);
-        let saturated = command.clamp(-limit, limit);
-        let slewed = saturated.clamp(
+        let saturated = clamp_f32(command, -limit, limit);
+        let slewed = clamp_f32(
+            saturated,
             self.applied_nm - c.slew_nm_per_tick,
             self.applied_nm + c.slew_nm_per_tick,
         );
         // Slew may leave the (shrinking) soft-start or derating limit behind;
         // the limit wins.
-        let applied = slewed.clamp(-limit, limit);
+        let applied = clamp_f32(slewed, -limit, limit);
         let limited = applied != command;
 
         let duty_f =

@@ -21,6 +21,8 @@ pub(crate) struct Injector {
     flagging: Vec<Target>,
     pub(crate) overruns_left: u32,
     pub(crate) pilot_lean_rad: f64,
+    /// After an injected panic: the tick the rebooted board ticks again.
+    pub(crate) reboot_until: Option<u64>,
 }
 
 /// What ends a one-frame or short fault.
@@ -196,6 +198,7 @@ impl Rig<'_> {
             Kind::PilotStopsBalancing => {
                 self.set_pilot_behaviour(PilotBehaviour::Fixed(PilotTarget::Off));
             }
+            Kind::Panic(boot_ms) => self.panic_reset(now, boot_ms),
         }
     }
 }
