@@ -29,6 +29,17 @@ fn main() {
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed={}", layout.display());
     println!("cargo:rerun-if-changed=build.rs");
+    // The QEMU image's tick replay (`tick_replay`): the recording xtask
+    // names, or nothing to replay.
+    println!("cargo:rerun-if-env-changed=EXOGAIT_TICK_RECORDS");
+    let records = out.join("tick_records.bin");
+    match env::var_os("EXOGAIT_TICK_RECORDS") {
+        Some(path) if qemu => {
+            println!("cargo:rerun-if-changed={}", PathBuf::from(&path).display());
+            fs::copy(&path, &records).expect("copy the tick recording");
+        }
+        _ => fs::write(&records, []).expect("write an empty tick recording"),
+    }
     let target = env::var("TARGET").unwrap_or_default();
     if target.starts_with("thumb") {
         println!("cargo:rustc-link-arg-bins=--nmagic");

@@ -1,7 +1,8 @@
 //! Board-independent pieces of the firmware: the configuration both boards
 //! run the controller with ([`board_config`]), the power-on self-test
 //! ([`selftest`]) and the in-memory peripherals of the QEMU control-tick
-//! benchmark ([`qemu_rig`]).
+//! benchmark ([`qemu_rig`]) and its replay of ticks recorded in the
+//! simulator ([`tick_replay`]).
 //!
 //! No control logic lives here (that is gait-control's job); this crate only
 //! wires boards to the portable crates.
@@ -11,3 +12,4 @@
 pub mod board_config;
 pub mod qemu_rig;
 pub mod selftest;
+pub mod tick_replay;

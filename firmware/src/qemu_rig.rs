@@ -6,11 +6,14 @@
 //! drivers, so the benchmark also checks that the drivers speak the parts'
 //! protocols. No heap, no `unsafe`, fixed work per call.
 //!
+//! The fakes read what a [`PANEL`] of atomics holds, set between ticks:
 //! [`standing`] builds a rig of a pilot standing still on both feet with
-//! both crutches loaded, e-stop released and no button pressed: the
-//! controller must run it without any fault.
+//! both crutches loaded, e-stop released and no button pressed (the
+//! controller must run it without any fault); [`replay`] sets the panel to
+//! a tick recorded in the simulator.
 
 use core::convert::Infallible;
+use core::sync::atomic::{AtomicBool, AtomicU16, Ordering};
 
 use embedded_hal::digital::{self, InputPin, OutputPin};
 use embedded_hal::pwm::{self, SetDutyCycle};
@@ -19,6 +22,78 @@ use gait_control::drivers::as5048a::{Calibration, Direction};
 use gait_control::drivers::buttons::ActiveLevel;
 
 use exogait_device::{BoardIo, DeviceConfig};
+
+/// What the rig's sensors and inputs read, set from outside between ticks
+/// (the standing rig's fixed values, or a recording's tick after tick):
+/// the fakes, once owned by the drivers, read it at every transfer.
+#[derive(Debug)]
+pub struct Panel {
+    /// Each encoder's counts (joint order, then the ankles).
+    encoders: [AtomicU16; 6],
+    /// Each ADC input's counts, CH0..CH7.
+    adc: [AtomicU16; 8],
+    /// MODE, GO, e-stop input levels (high or not).
+    levels: [AtomicBool; 3],
+}
+
+/// The panel the rig's fakes read.
+pub static PANEL: Panel = Panel {
+    encoders: [const { AtomicU16::new(0) }; 6],
+    adc: [const { AtomicU16::new(0) }; 8],
+    levels: [const { AtomicBool::new(false) }; 3],
+};
+
+/// The panel's input lines.
+#[derive(Clone, Copy, Debug)]
+pub enum Line {
+    /// The MODE button.
+    Mode = 0,
+    /// The GO button.
+    Go = 1,
+    /// The emergency stop.
+    EStop = 2,
+}
+
+impl Panel {
+    /// Sets encoder `channel`'s counts (low 14 bits).
+    pub fn set_encoder(&self, channel: usize, counts: u16) {
+        if let Some(c) = self.encoders.get(channel) {
+            c.store(counts & 0x3FFF, Ordering::Relaxed);
+        }
+    }
+
+    /// Sets ADC input `channel`'s counts (low 12 bits).
+    pub fn set_adc(&self, channel: usize, counts: u16) {
+        if let Some(c) = self.adc.get(channel) {
+            c.store(counts & 0x0FFF, Ordering::Relaxed);
+        }
+    }
+
+    /// Sets an input line's level.
+    pub fn set_level(&self, line: Line, high: bool) {
+        if let Some(l) = self.levels.get(line as usize) {
+            l.store(high, Ordering::Relaxed);
+        }
+    }
+
+    fn encoder(&self, channel: usize) -> u16 {
+        self.encoders
+            .get(channel)
+            .map_or(0, |c| c.load(Ordering::Relaxed))
+    }
+
+    fn adc(&self, channel: usize) -> u16 {
+        self.adc
+            .get(channel)
+            .map_or(0, |c| c.load(Ordering::Relaxed))
+    }
+
+    fn level(&self, line: Line) -> bool {
+        self.levels
+            .get(line as usize)
+            .is_some_and(|l| l.load(Ordering::Relaxed))
+    }
+}
 
 /// AS5048A register addresses (datasheet, "Register Description").
 mod as5048a_reg {
@@ -44,7 +119,8 @@ const fn with_even_parity(frame: u16) -> u16 {
 /// executed on CSn's rising edge): one `transaction` is one CSn window.
 #[derive(Debug)]
 pub struct FakeAs5048a {
-    raw_counts: u16,
+    /// Its counts on the [`PANEL`].
+    channel: usize,
     /// Reply of the next frame (the answer to the last command).
     pending: u16,
     /// Error register: bit 0 framing, bit 2 parity.
@@ -54,29 +130,15 @@ pub struct FakeAs5048a {
 }
 
 impl FakeAs5048a {
-    /// A part reading `raw_counts` (low 14 bits).
+    /// The part whose counts are the [`PANEL`]'s encoder `channel`.
     #[must_use]
-    pub const fn new(raw_counts: u16) -> Self {
+    pub const fn on_panel(channel: usize) -> Self {
         Self {
-            raw_counts: raw_counts & 0x3FFF,
+            channel,
             pending: 0,
             errors: 0,
             frames: 0,
         }
-    }
-
-    /// The part reading the raw counts of `angle_rad` under `cal`.
-    #[must_use]
-    pub fn at_angle(cal: Calibration, angle_rad: f32) -> Self {
-        let counts_per_rad = 16_384.0 / (2.0 * core::f32::consts::PI);
-        // |angle| < π, so the rounded count fits an i16 well.
-        let counts = libm::roundf(angle_rad * counts_per_rad) as i16;
-        let zero = cal.zero_offset_counts as i16;
-        let raw = match cal.direction {
-            Direction::Positive => zero.wrapping_add(counts),
-            Direction::Negative => zero.wrapping_sub(counts),
-        };
-        Self::new(raw as u16)
     }
 
     /// One 16-bit frame: returns the reply, latches the next one.
@@ -103,7 +165,7 @@ impl FakeAs5048a {
                 // OCF set, AGC mid-range, no CORDIC overflow, field in range.
                 as5048a_reg::DIAGNOSTICS_AGC => with_even_parity(0x0100 | 0x0080),
                 as5048a_reg::MAGNITUDE => with_even_parity(0x1000),
-                as5048a_reg::ANGLE => with_even_parity(self.raw_counts),
+                as5048a_reg::ANGLE => with_even_parity(PANEL.encoder(self.channel)),
                 _ => {
                     self.errors |= 0b010;
                     with_even_parity(0x4000)
@@ -153,24 +215,14 @@ impl SpiDevice<u8> for FakeAs5048a {
     }
 }
 
-/// An MCP3208 whose eight inputs hold fixed voltages (12-bit counts).
-#[derive(Debug)]
+/// An MCP3208 whose eight inputs read the [`PANEL`]'s ADC counts.
+#[derive(Debug, Default)]
 pub struct FakeMcp3208 {
-    counts: [u16; 8],
     /// Conversions answered.
     pub conversions: u32,
 }
 
 impl FakeMcp3208 {
-    /// Inputs at `counts` (low 12 bits), CH0..CH7.
-    #[must_use]
-    pub fn new(counts: [u16; 8]) -> Self {
-        Self {
-            counts: counts.map(|c| c & 0x0FFF),
-            conversions: 0,
-        }
-    }
-
     /// One 3-byte conversion window (datasheet section 6.1): byte 0 holds
     /// the start bit (bit 2), SGL/DIFF (bit 1) and D2 (bit 0), byte 1 holds
     /// D1 D0 in bits 7..6. The reply: a null bit (bit 4 of byte 1, zero),
@@ -184,7 +236,7 @@ impl FakeMcp3208 {
         let single = *b0 & 0b010 != 0;
         let channel = usize::from(((*b0 & 1) << 2) | (*b1 >> 6));
         let counts = match (started, single) {
-            (true, true) => self.counts.get(channel).copied().unwrap_or(0),
+            (true, true) => PANEL.adc(channel),
             // Differential or no start bit: not modelled, reads 0.
             _ => 0,
         };
@@ -268,11 +320,11 @@ impl OutputPin for FakeOutput {
     }
 }
 
-/// An input pin at a fixed level.
+/// An input pin reading one of the [`PANEL`]'s lines.
 #[derive(Debug)]
 pub struct FakeInput {
-    /// The level it reads.
-    pub high: bool,
+    /// The line it reads.
+    pub line: Line,
 }
 
 impl digital::ErrorType for FakeInput {
@@ -281,11 +333,11 @@ impl digital::ErrorType for FakeInput {
 
 impl InputPin for FakeInput {
     fn is_high(&mut self) -> Result<bool, Infallible> {
-        Ok(self.high)
+        Ok(PANEL.level(self.line))
     }
 
     fn is_low(&mut self) -> Result<bool, Infallible> {
-        Ok(!self.high)
+        Ok(!PANEL.level(self.line))
     }
 }
 
@@ -322,34 +374,84 @@ pub fn standing_adc_counts(device: &DeviceConfig) -> [u16; 8] {
     ]
 }
 
-/// A pilot standing still on both feet, both crutches loaded, e-stop
-/// released, no button pressed, with the device's calibrations.
+/// The raw counts of `angle_rad` under `cal`.
 #[must_use]
-pub fn standing(device: &DeviceConfig) -> RigIo {
-    let [c0, c1, c2, c3, c4, c5] = device.encoders;
-    let [j0, j1, j2, j3] = STANDING_JOINTS_RAD;
-    let [a0, a1] = STANDING_ANKLES_RAD;
-    let released = |active_high: bool| FakeInput { high: !active_high };
+pub fn counts_at(cal: Calibration, angle_rad: f32) -> u16 {
+    let counts_per_rad = 16_384.0 / (2.0 * core::f32::consts::PI);
+    // |angle| < π, so the rounded count fits an i16 well.
+    let counts = libm::roundf(angle_rad * counts_per_rad) as i16;
+    let zero = cal.zero_offset_counts as i16;
+    let raw = match cal.direction {
+        Direction::Positive => zero.wrapping_add(counts),
+        Direction::Negative => zero.wrapping_sub(counts),
+    };
+    raw as u16
+}
+
+/// Sets the [`PANEL`] to a pilot standing still on both feet, both
+/// crutches loaded, e-stop released, no button pressed, with the device's
+/// calibrations.
+pub fn stand(device: &DeviceConfig) {
+    let angles = [
+        STANDING_JOINTS_RAD.as_slice(),
+        STANDING_ANKLES_RAD.as_slice(),
+    ];
+    for (channel, (cal, &angle)) in device
+        .encoders
+        .iter()
+        .zip(angles.into_iter().flatten())
+        .enumerate()
+    {
+        PANEL.set_encoder(channel, counts_at(*cal, angle));
+    }
+    for (channel, counts) in standing_adc_counts(device).into_iter().enumerate() {
+        PANEL.set_adc(channel, counts);
+    }
     let button_active_high = matches!(device.buttons.active, ActiveLevel::High);
+    PANEL.set_level(Line::Mode, !button_active_high);
+    PANEL.set_level(Line::Go, !button_active_high);
+    PANEL.set_level(Line::EStop, !device.e_stop_active_high);
+}
+
+/// Sets the [`PANEL`] to one recorded tick: the counts as recorded, each
+/// input at the level that means what was recorded under the device's
+/// polarities.
+pub fn replay(device: &DeviceConfig, t: &exogait_device::tick_record::TickRecord) {
+    for (channel, &counts) in t.encoder_counts.iter().enumerate() {
+        PANEL.set_encoder(channel, counts);
+    }
+    for (channel, &counts) in t.adc_counts.iter().enumerate() {
+        PANEL.set_adc(channel, counts);
+    }
+    let button_active_high = matches!(device.buttons.active, ActiveLevel::High);
+    PANEL.set_level(Line::Mode, t.mode_pressed == button_active_high);
+    PANEL.set_level(Line::Go, t.go_pressed == button_active_high);
+    PANEL.set_level(Line::EStop, t.e_stop_pressed == device.e_stop_active_high);
+}
+
+/// The rig's peripherals, all reading the [`PANEL`] (set it with [`stand`]
+/// or [`replay`]).
+#[must_use]
+pub fn peripherals() -> RigIo {
     BoardIo {
-        encoders: [
-            FakeAs5048a::at_angle(c0, j0),
-            FakeAs5048a::at_angle(c1, j1),
-            FakeAs5048a::at_angle(c2, j2),
-            FakeAs5048a::at_angle(c3, j3),
-            FakeAs5048a::at_angle(c4, a0),
-            FakeAs5048a::at_angle(c5, a1),
-        ],
-        adc: FakeMcp3208::new(standing_adc_counts(device)),
+        encoders: [0, 1, 2, 3, 4, 5].map(FakeAs5048a::on_panel),
+        adc: FakeMcp3208::default(),
         pwm: [0; 4].map(|duty| FakePwm { duty }),
         dir: [0; 4].map(|_| FakeOutput { high: false }),
         // Enables start high so the boot-time disable is visible.
         enable: [0; 4].map(|_| FakeOutput { high: true }),
-        mode: released(button_active_high),
-        go: released(button_active_high),
-        e_stop: released(device.e_stop_active_high),
+        mode: FakeInput { line: Line::Mode },
+        go: FakeInput { line: Line::Go },
+        e_stop: FakeInput { line: Line::EStop },
         gait_led: FakeOutput { high: false },
         fault_led: FakeOutput { high: false },
         buzzer: FakeOutput { high: false },
     }
+}
+
+/// A pilot standing still ([`stand`]) and the rig's peripherals.
+#[must_use]
+pub fn standing(device: &DeviceConfig) -> RigIo {
+    stand(device);
+    peripherals()
 }

@@ -9,6 +9,7 @@
 //! installed with apt-get (as root, or through sudo).
 
 mod panic_paths;
+mod tick_replay;
 
 use std::env;
 use std::fmt::Write as _;
@@ -107,7 +108,7 @@ usage: cargo xtask <task>
             from the optimiser (deterministic; a test checks they are current)
   setup     install missing system packages for cross-building";
 
-fn root() -> PathBuf {
+pub(crate) fn root() -> PathBuf {
     // xtask lives in <root>/xtask.
     let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     here.parent().map(Path::to_path_buf).unwrap_or(here)
@@ -224,7 +225,7 @@ fn step(name: &str, f: impl FnOnce() -> Result) -> Result {
     r.map_err(|e| format!("{name}: {e}"))
 }
 
-fn cargo() -> Command {
+pub(crate) fn cargo() -> Command {
     let mut c = Command::new(env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
     c.current_dir(root());
     c
@@ -237,7 +238,7 @@ fn cargo_in_firmware(program: &str) -> Command {
     c
 }
 
-fn run(cmd: &mut Command) -> Result {
+pub(crate) fn run(cmd: &mut Command) -> Result {
     let shown = format!("{cmd:?}");
     let status = cmd
         .status()
@@ -416,9 +417,12 @@ fn apt_install(pkgs: &[&str]) -> Result {
 }
 
 fn build_firmware(tc: &Toolchain, board: Board) -> Result<PathBuf> {
-    run(tc
-        .cargo("build")
-        .args(["--release", "--features", board.feature, "--bin", board.bin]))?;
+    let mut build = tc.cargo("build");
+    build.args(["--release", "--features", board.feature, "--bin", board.bin]);
+    if board.name == "qemu" {
+        build.env("EXOGAIT_TICK_RECORDS", tick_replay::recording()?);
+    }
+    run(&mut build)?;
     let elf = root()
         .join("target/fw")
         .join(TARGET)
@@ -486,7 +490,8 @@ fn qemu(tc: &Toolchain) -> Result {
     if !status.success() {
         return Err(format!("QEMU self-test failed ({status})"));
     }
-    check_device_fingerprint(&text)
+    check_device_fingerprint(&text)?;
+    tick_replay::check(&text)
 }
 
 /// The firmware prints the CRC of the device configuration it was built

@@ -23,6 +23,7 @@ pub mod admission;
 pub mod drive;
 pub mod parts;
 pub mod sensors;
+pub mod tick_record;
 
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;

@@ -163,14 +163,10 @@ pub struct Supervisor {
     cfg: SupervisorConfig,
     /// Calls of `check` so far (the supervisor's own clock).
     calls: u32,
-    latched: FaultSet,
     /// Faults whose condition held at the last check.
     present: FaultSet,
-    /// Per fault (by index), channels already logged since it latched.
-    logged_channels: [u8; FaultCode::COUNT],
-    /// Whether a no-channel record was logged since the fault latched.
-    logged_none: FaultSet,
-    log: RingLog<FaultRecord, LOG_LEN>,
+    /// What latched, and its log.
+    latch: Latch,
     joints: [JointTrack; JOINTS],
     ankles: [EncoderTrack; ANKLES],
     /// Consecutive ticks each ankle has rested on its stop unplanned.
@@ -218,11 +214,13 @@ impl Supervisor {
         Ok(Self {
             cfg,
             calls: 0,
-            latched: FaultSet::EMPTY,
             present: FaultSet::EMPTY,
-            logged_channels: [0; FaultCode::COUNT],
-            logged_none: FaultSet::EMPTY,
-            log: RingLog::new(),
+            latch: Latch {
+                latched: FaultSet::EMPTY,
+                logged_channels: [0; FaultCode::COUNT],
+                logged_none: FaultSet::EMPTY,
+                log: RingLog::new(),
+            },
             joints: [JointTrack::default(); JOINTS],
             ankles: [EncoderTrack::default(); ANKLES],
             heel_off_ticks: [0; ANKLES],
@@ -241,7 +239,7 @@ impl Supervisor {
 
     /// Every latched fault.
     pub const fn latched(&self) -> FaultSet {
-        self.latched
+        self.latch.latched
     }
 
     /// Faults whose condition held at the last check (always a subset of
@@ -257,7 +255,7 @@ impl Supervisor {
 
     /// The post-mortem log, oldest record first (the newest [`LOG_LEN`]).
     pub fn log(&self) -> impl Iterator<Item = &FaultRecord> {
-        self.log.iter()
+        self.latch.log.iter()
     }
 
     /// Clinician reset (MODE + GO held 3 s, `docs/operation.md`). Honoured
@@ -268,13 +266,13 @@ impl Supervisor {
         if !safe_posture {
             return Err(ResetRefused::NotSafePosture);
         }
-        let still = self.present.intersection(self.latched);
+        let still = self.present.intersection(self.latch.latched);
         if !still.is_empty() {
             return Err(ResetRefused::ConditionPresent(still));
         }
-        self.latched = FaultSet::EMPTY;
-        self.logged_channels = [0; FaultCode::COUNT];
-        self.logged_none = FaultSet::EMPTY;
+        self.latch.latched = FaultSet::EMPTY;
+        self.latch.logged_channels = [0; FaultCode::COUNT];
+        self.latch.logged_none = FaultSet::EMPTY;
         Ok(())
     }
 
@@ -288,7 +286,8 @@ impl Supervisor {
             present: FaultSet::EMPTY,
             new: FaultSet::EMPTY,
         };
-        self.raise(&mut t, FaultCode::RestartedAfterPanic, NO_CHANNEL, 0.0);
+        self.latch
+            .raise(&mut t, FaultCode::RestartedAfterPanic, NO_CHANNEL, 0.0);
     }
 
     /// The per-tick check: updates every detector with `input`, latches
@@ -309,15 +308,30 @@ impl Supervisor {
         self.previous_reference_rad = Some(input.joint_reference_rad);
         self.present = t.present;
         Verdict {
-            reaction: self.latched.reaction(),
-            latched: self.latched,
+            reaction: self.latch.latched.reaction(),
+            latched: self.latch.latched,
             new: t.new,
         }
     }
+}
 
+/// What latched, and the post-mortem log: apart from the channels' tracks
+/// so that a check can raise while it holds one of them and reads the
+/// configuration in place.
+#[derive(Debug, Clone)]
+struct Latch {
+    latched: FaultSet,
+    /// Per fault (by index), channels already logged since it latched.
+    logged_channels: [u8; FaultCode::COUNT],
+    /// Whether a no-channel record was logged since the fault latched.
+    logged_none: FaultSet,
+    log: RingLog<FaultRecord, LOG_LEN>,
+}
+
+impl Latch {
     /// Records that `code`'s condition holds now on `channel`: latches it,
     /// and logs it once per channel while latched.
-    fn raise(&mut self, t: &mut Tick, code: FaultCode, channel: u8, value: f32) {
+    pub(super) fn raise(&mut self, t: &mut Tick, code: FaultCode, channel: u8, value: f32) {
         t.present.insert(code);
         if !self.latched.contains(code) {
             self.latched.insert(code);

@@ -125,6 +125,10 @@ pub struct DoubleSupportStatics<T> {
     pub reaction_n: [T; 2],
     /// Joint torques T_Θ (ankle first), N·m.
     pub torques: [T; LINKS],
+    /// The joint torques one newton on the second foot takes, along x and
+    /// along y ([`second_foot_torques`]), N·m/N: what a controller pushing
+    /// that foot harder needs, without computing them again.
+    pub per_newton: ([T; LINKS], [T; LINKS]),
 }
 
 /// Friction coefficient assumed between a foot and the ground when sharing
@@ -301,6 +305,7 @@ pub fn share_load_with_base<T: Real>(
     DoubleSupportStatics {
         reaction_n: [fx, fy],
         torques,
+        per_newton: (mx, my),
     }
 }
 

@@ -342,6 +342,12 @@ impl SimAs5048a {
         self.0.borrow().raw_counts()
     }
 
+    /// What the ANGLE register reads now (zero position applied; noise
+    /// sampled once, so record with noise off).
+    pub fn angle_register(&self) -> u16 {
+        self.0.borrow().angle_register()
+    }
+
     /// Transactions seen (including failed ones).
     pub fn transactions(&self) -> u64 {
         self.0.borrow().transactions

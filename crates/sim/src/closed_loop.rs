@@ -14,6 +14,7 @@ use std::cell::Cell;
 use std::rc::Rc;
 
 use embedded_hal::digital::{self, InputPin, OutputPin};
+use exogait_device::tick_record::TickRecord;
 use exogait_device::{BoardIo, DeviceConfig};
 use gait_control::controller::{Controller, Hardware, TickReport};
 use gait_control::faults::{FaultSet, Reaction};
@@ -170,6 +171,9 @@ pub struct Rig<'t> {
     pub(crate) faults: Injector,
     /// The tables the controller was built with (a reboot builds it again).
     tables: GaitTables<'t>,
+    /// When recording (`record_ticks`): every tick's peripheral state and
+    /// the controller's commands, for a replay on the target.
+    pub recorded: Option<Vec<TickRecord>>,
 }
 
 /// Where the pilot's stance shank should be, given the controller's phase
@@ -414,6 +418,7 @@ impl<'t> Rig<'t> {
             transfer_from_phi1: None,
             faults: Injector::default(),
             tables,
+            recorded: None,
         };
         // Start the ankle readings at their true values (no lag to settle).
         let s = rig.plant.state();
@@ -503,10 +508,18 @@ impl<'t> Rig<'t> {
         self.inject_due();
         let overrun = self.faults.overruns_left > 0;
         self.faults.overruns_left = self.faults.overruns_left.saturating_sub(1);
+        let mut record = self
+            .recorded
+            .is_some()
+            .then(|| self.peripheral_state(overrun));
         let report = match self.rebooting()? {
             Some(report) => report,
             None => self.controller.tick(&mut self.hw, overrun),
         };
+        if let (Some(log), Some(r)) = (&mut self.recorded, &mut record) {
+            r.host_command_nm = report.command_nm;
+            log.push(*r);
+        }
         match report.phase {
             Phase::Transfer { .. } => {
                 if self.transfer_from_phi1.is_none() {
@@ -551,6 +564,30 @@ impl<'t> Rig<'t> {
             state: self.plant.state(),
         });
         self.trace.last().ok_or(SimError::NonFinite)
+    }
+
+    /// Starts recording every tick's peripheral state and commands into
+    /// [`Rig::recorded`] (turn sensor noise off: the record holds one sample
+    /// of each reading, the driver may take others).
+    pub fn record_ticks(&mut self) {
+        self.recorded = Some(Vec::new());
+    }
+
+    /// What the peripherals present to the controller this tick.
+    fn peripheral_state(&self, deadline_missed: bool) -> TickRecord {
+        let now = self.now();
+        TickRecord {
+            encoder_counts: std::array::from_fn(|i| match i.checked_sub(4) {
+                None => self.joint_encoders[i].angle_register(),
+                Some(a) => self.ankle_encoders[a].angle_register(),
+            }),
+            adc_counts: std::array::from_fn(|ch| self.adc.counts(ch)),
+            mode_pressed: self.mode.pressed_at(now),
+            go_pressed: self.go.pressed_at(now),
+            e_stop_pressed: self.e_stop.is_pressed(),
+            deadline_missed,
+            host_command_nm: [0.0; 4],
+        }
     }
 
     /// The board resets after a panic (`Kind::Panic`): every motor is

@@ -22,7 +22,7 @@ use core::hint::black_box;
 use cortex_m::peripheral::{SYST, syst::SystClkSource};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use firmware::{board_config, qemu_rig, selftest};
+use firmware::{board_config, qemu_rig, selftest, tick_replay};
 use gait_control::faults::Reaction;
 use gait_core::BodyModel;
 use gait_core::dynamics::{inverse_dynamics, share_load};
@@ -117,6 +117,7 @@ fn run() -> usize {
             let mut ctr = InstrCounter::new(p.SYST);
             bench(&mut ctr);
             failed += control_tick_bench(&mut ctr);
+            failed += replay_bench(&mut ctr);
         }
         None => {
             hprintln!("bench: SysTick unavailable");
@@ -320,6 +321,56 @@ fn control_tick_bench(ctr: &mut InstrCounter) -> usize {
         failed += 1;
     }
     failed
+}
+
+/// Replays the ticks recorded in the simulator (`firmware::tick_replay`)
+/// and prints, per phase, `tick: phase=<name> avg=<instructions>
+/// worst=<instructions> ticks=<n>`, then how far the target's motor
+/// commands are from the host's. xtask checks the budget and the bound.
+fn replay_bench(ctr: &mut InstrCounter) -> usize {
+    let device = match board_config::device() {
+        Ok(d) => d,
+        Err(e) => {
+            hprintln!("FAIL replay: device configuration refused: {:?}", e);
+            return 1;
+        }
+    };
+    let base = ctr.once(|| black_box(0u32)).0;
+    let result = tick_replay::replay(&device, |tick| {
+        let (instr, report) = ctr.once(tick);
+        (instr.saturating_sub(base), report)
+    });
+    match result {
+        Ok(r) if r.segments == 0 => {
+            hprintln!("tick: no recording built in (cargo xtask qemu records one)");
+            0
+        }
+        Ok(r) => {
+            for (name, p) in tick_replay::PHASES.iter().zip(r.phases) {
+                if p.ticks > 0 {
+                    hprintln!(
+                        "tick: phase={} avg={} worst={} ticks={}",
+                        name,
+                        p.average(),
+                        p.worst,
+                        p.ticks
+                    );
+                }
+            }
+            hprintln!(
+                "tick: replayed runs={} ticks={} max_command_diff_nm={:e} differing_ticks={}",
+                r.segments,
+                r.ticks,
+                r.max_command_diff_nm,
+                r.differing_ticks
+            );
+            0
+        }
+        Err(e) => {
+            hprintln!("FAIL replay: {:?}", e);
+            1
+        }
+    }
 }
 
 #[panic_handler]

@@ -229,7 +229,7 @@ impl Controller<'_> {
         ));
         let shared = foot::share_load(model, &foot, &phi, &single, other_load_n);
         let ff = joint_torques_from_theta_torques(&shared.torques, r.stance);
-        let (_, per_newton_up) = foot::second_foot_torques(model, &foot, &phi);
+        let (_, per_newton_up) = shared.per_newton;
         let per_newton = joint_torques_from_theta_torques(&per_newton_up.map(|v| -v), r.stance);
         let clean = |v: f32| if v.is_finite() { v } else { 0.0 };
         FeedForward {

@@ -12,13 +12,16 @@ fn within(x: f32, limit: f32) -> bool {
 impl Supervisor {
     pub(super) fn check_operator_inputs(&mut self, input: &SupervisorInput, t: &mut Tick) {
         if input.e_stop_pressed {
-            self.raise(t, FaultCode::EStopPressed, NO_CHANNEL, 1.0);
+            self.latch
+                .raise(t, FaultCode::EStopPressed, NO_CHANNEL, 1.0);
         }
         if input.e_stop_read_error {
-            self.raise(t, FaultCode::EStopInputFault, NO_CHANNEL, 1.0);
+            self.latch
+                .raise(t, FaultCode::EStopInputFault, NO_CHANNEL, 1.0);
         }
         if input.button_input_fault {
-            self.raise(t, FaultCode::ButtonInputFault, NO_CHANNEL, 1.0);
+            self.latch
+                .raise(t, FaultCode::ButtonInputFault, NO_CHANNEL, 1.0);
         }
     }
 
@@ -39,7 +42,8 @@ impl Supervisor {
             .filter(|&&at| now.wrapping_sub(at) < window)
             .count();
         if recent >= usize::from(self.cfg.deadline_miss_count) {
-            self.raise(t, FaultCode::DeadlineMissed, NO_CHANNEL, recent as f32);
+            self.latch
+                .raise(t, FaultCode::DeadlineMissed, NO_CHANNEL, recent as f32);
         }
     }
 
@@ -55,7 +59,7 @@ impl Supervisor {
                     .into_iter()
                     .find(|v| !v.is_finite())
                     .unwrap_or(m.limit_nm);
-                self.raise(t, FaultCode::ControlValueInvalid, ch, bad);
+                self.latch.raise(t, FaultCode::ControlValueInvalid, ch, bad);
             }
             let Some(track) = self.joints.get_mut(i) else {
                 continue;
@@ -67,19 +71,22 @@ impl Supervisor {
             }
             let saturated = track.saturated_ticks >= limit_ticks;
             if saturated {
-                self.raise(t, FaultCode::MotorSaturated, ch, m.commanded_nm);
+                self.latch
+                    .raise(t, FaultCode::MotorSaturated, ch, m.commanded_nm);
             }
             if m.thermal_fault {
-                self.raise(t, FaultCode::MotorThermal, ch, m.applied_nm);
+                self.latch
+                    .raise(t, FaultCode::MotorThermal, ch, m.applied_nm);
             }
             if m.output_fault {
-                self.raise(t, FaultCode::MotorOutputStage, ch, m.commanded_nm);
+                self.latch
+                    .raise(t, FaultCode::MotorOutputStage, ch, m.commanded_nm);
             }
         }
     }
 
     pub(super) fn check_joints(&mut self, input: &SupervisorInput, t: &mut Tick) {
-        let cfg = self.cfg;
+        let cfg = &self.cfg;
         for i in 0..JOINTS {
             let ch = i as u8;
             let (Some(sense), Some(&reference), Some(range), Some(&vmax), Some(motor)) = (
@@ -92,7 +99,8 @@ impl Supervisor {
                 continue;
             };
             if !reference.is_finite() {
-                self.raise(t, FaultCode::ControlValueInvalid, ch, reference);
+                self.latch
+                    .raise(t, FaultCode::ControlValueInvalid, ch, reference);
             }
             let reference_speed = match self.previous_reference_rad.as_ref().and_then(|p| p.get(i))
             {
@@ -110,9 +118,10 @@ impl Supervisor {
                 track
                     .encoder
                     .update(sense, cfg.encoder_debounce, cfg.max_jump_counts_per_tick);
-            let mut raised: [Option<(FaultCode, f32)>; 6] = [None; 6];
+            // Raised in this order (the log's order within a tick).
+            let latch = &mut self.latch;
             if let Some(v) = invalid {
-                raised[0] = Some((FaultCode::EncoderInvalidValue, v));
+                latch.raise(t, FaultCode::EncoderInvalidValue, ch, v);
             }
             if let Frame::Accepted {
                 angle_rad,
@@ -121,7 +130,7 @@ impl Supervisor {
             } = frame
             {
                 if !range.contains(angle_rad) {
-                    raised[1] = Some((FaultCode::JointPositionLimit, angle_rad));
+                    latch.raise(t, FaultCode::JointPositionLimit, ch, angle_rad);
                 }
                 match delta {
                     Some((counts, elapsed)) => {
@@ -155,27 +164,24 @@ impl Supervisor {
                     track.tracking_ticks = track.tracking_ticks.saturating_add(1);
                 }
                 if track.tracking_ticks >= cfg.tracking_error_ticks {
-                    raised[2] = Some((FaultCode::TrackingError, error));
+                    latch.raise(t, FaultCode::TrackingError, ch, error);
                 }
             }
             // Conditions that persist while frames are rejected.
             if track.velocity_valid && !within(track.velocity_rad_s, vmax) {
-                raised[3] = Some((FaultCode::JointVelocityLimit, track.velocity_rad_s));
+                latch.raise(t, FaultCode::JointVelocityLimit, ch, track.velocity_rad_s);
             }
             if track.frozen_ticks >= cfg.frozen_ticks {
-                raised[4] = Some((FaultCode::EncoderFrozen, track.frozen_ticks as f32));
+                latch.raise(t, FaultCode::EncoderFrozen, ch, track.frozen_ticks as f32);
             }
             if let Some((code, n)) = track.encoder.tripped(cfg.encoder_debounce) {
-                raised[5] = Some((code, n as f32));
-            }
-            for (code, value) in raised.into_iter().flatten() {
-                self.raise(t, code, ch, value);
+                latch.raise(t, code, ch, n as f32);
             }
         }
     }
 
     pub(super) fn check_ankles(&mut self, input: &SupervisorInput, t: &mut Tick) {
-        let cfg = self.cfg;
+        let cfg = &self.cfg;
         for i in 0..ANKLES {
             let ch = i as u8;
             let (Some(sense), Some(range), Some(track)) = (
@@ -192,14 +198,15 @@ impl Supervisor {
             );
             let tripped = track.tripped(cfg.encoder_debounce);
             if let Some(v) = invalid {
-                self.raise(t, FaultCode::AnkleEncoder, ch, v);
+                self.latch.raise(t, FaultCode::AnkleEncoder, ch, v);
             }
             if let Some((_, n)) = tripped {
-                self.raise(t, FaultCode::AnkleEncoder, ch, n as f32);
+                self.latch.raise(t, FaultCode::AnkleEncoder, ch, n as f32);
             }
             if let Frame::Accepted { angle_rad, .. } = frame {
                 if !range.contains(angle_rad) {
-                    self.raise(t, FaultCode::AnklePositionLimit, ch, angle_rad);
+                    self.latch
+                        .raise(t, FaultCode::AnklePositionLimit, ch, angle_rad);
                 }
                 // Resting on the stop while the plan is well below it (a
                 // NaN plan never counts; a rejected frame neither counts
@@ -214,7 +221,8 @@ impl Supervisor {
                         0
                     };
                     if *n >= cfg.heel_off_ticks {
-                        self.raise(t, FaultCode::UnplannedHeelOff, ch, angle_rad);
+                        self.latch
+                            .raise(t, FaultCode::UnplannedHeelOff, ch, angle_rad);
                     }
                 }
             }
@@ -222,7 +230,7 @@ impl Supervisor {
     }
 
     pub(super) fn check_forces(&mut self, input: &SupervisorInput, t: &mut Tick) {
-        let cfg = self.cfg;
+        let cfg = &self.cfg;
         for i in 0..FORCES {
             let ch = i as u8;
             let (Some(sense), Some(track)) = (input.forces.get(i), self.forces.get_mut(i)) else {
@@ -245,18 +253,21 @@ impl Supervisor {
                     }
                 }
             };
-            track.window.push(bad.is_some());
+            track
+                .window
+                .push(bad.is_some(), cfg.force_debounce.window_ticks);
             if bad.is_some() {
                 track.last_bad = bad;
             }
-            let n = track.window.count(cfg.force_debounce.window_ticks);
+            let n = track.window.count();
             let tripped = if n >= u32::from(cfg.force_debounce.count) {
                 track.last_bad
             } else {
                 None
             };
             if immediate {
-                self.raise(t, FaultCode::ForceOutOfRange, ch, sense.newtons);
+                self.latch
+                    .raise(t, FaultCode::ForceOutOfRange, ch, sense.newtons);
             }
             if let Some(code) = tripped {
                 let value = if bad.is_some() {
@@ -264,7 +275,7 @@ impl Supervisor {
                 } else {
                     n as f32
                 };
-                self.raise(t, code, ch, value);
+                self.latch.raise(t, code, ch, value);
             }
         }
     }

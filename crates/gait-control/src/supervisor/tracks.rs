@@ -5,23 +5,42 @@
 
 use super::*;
 
-/// Sliding window over the last ≤ 128 ticks: bit 0 is this tick.
+/// Sliding window over the last ≤ 128 ticks: bit 0 of word 0 is this tick,
+/// bit 31 of word 0 continues in bit 0 of word 1, and so on (four words,
+/// not a `u128`: the M4 shifts a `u128` by a variable amount in some 25
+/// instructions, a word in one).
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct SampleWindow {
-    pub(super) history: u128,
+    history: [u32; 4],
+    /// Bad samples among the last `window_ticks` pushed, kept as they come
+    /// and go (a 128-bit popcount is some 60 instructions on the M4; this
+    /// is a shift and two adds).
+    bad: u32,
 }
 
 impl SampleWindow {
-    pub(super) fn push(&mut self, bad: bool) {
-        self.history = (self.history << 1) | u128::from(bad);
+    /// Pushes this tick's sample; `window_ticks` (1..=128, the same on every
+    /// push) is the window [`SampleWindow::count`] counts over.
+    pub(super) fn push(&mut self, bad: bool, window_ticks: u8) {
+        let leaving = match usize::from(window_ticks).checked_sub(1) {
+            Some(oldest) => self
+                .history
+                .get(oldest / 32)
+                .map_or(0, |w| (w >> (oldest % 32)) & 1),
+            None => 0,
+        };
+        let mut carry = u32::from(bad);
+        for w in &mut self.history {
+            let out = *w >> 31;
+            *w = (*w << 1) | carry;
+            carry = out;
+        }
+        self.bad = (self.bad + u32::from(bad)).saturating_sub(leaving);
     }
 
-    pub(super) fn count(&self, window_ticks: u8) -> u32 {
-        let mask = match 1u128.checked_shl(u32::from(window_ticks)) {
-            Some(b) => b.wrapping_sub(1),
-            None => u128::MAX,
-        };
-        (self.history & mask).count_ones()
+    /// Bad samples within the window.
+    pub(super) fn count(&self) -> u32 {
+        self.bad
     }
 }
 
@@ -136,12 +155,12 @@ impl EncoderTrack {
         };
         match class {
             Class::Bad(code, invalid) => {
-                self.window.push(true);
+                self.window.push(true, debounce.window_ticks);
                 self.last_bad = Some(code);
                 (Frame::Rejected, invalid)
             }
             Class::Seed => {
-                self.window.push(false);
+                self.window.push(false, debounce.window_ticks);
                 self.accept(current);
                 (
                     Frame::Accepted {
@@ -153,7 +172,7 @@ impl EncoderTrack {
                 )
             }
             Class::Jump => {
-                self.window.push(true);
+                self.window.push(true, debounce.window_ticks);
                 self.last_bad = Some(FaultCode::EncoderJump);
                 self.consecutive_jumps = self.consecutive_jumps.saturating_add(1);
                 if self.consecutive_jumps >= debounce.count {
@@ -170,7 +189,7 @@ impl EncoderTrack {
                 elapsed,
                 previous,
             } => {
-                self.window.push(false);
+                self.window.push(false, debounce.window_ticks);
                 self.accept(current);
                 (
                     Frame::Accepted {
@@ -192,7 +211,7 @@ impl EncoderTrack {
 
     /// The debounced bad-frame fault, if the window holds enough.
     pub(super) fn tripped(&self, debounce: Debounce) -> Option<(FaultCode, u32)> {
-        let n = self.window.count(debounce.window_ticks);
+        let n = self.window.count();
         if n >= u32::from(debounce.count) {
             self.last_bad.map(|c| (c, n))
         } else {

@@ -1,0 +1,78 @@
+//! Recordings of the controller's inputs for a replay on the target
+//! (`exogait_device::tick_record`): the QEMU image plays them through the
+//! same controller, times every tick per phase and compares its motor
+//! commands with the host's (`cargo xtask qemu`).
+//!
+//! [`record_gaits`] records what the main job and the fault campaign
+//! exercise: two steps of each gait with the flash tables and the simulated
+//! pilot, and a walk whose stance knee's encoder jumps in mid-swing, so the
+//! supervisor's safe hold is timed too. No sensor noise: a record holds one
+//! sample of each reading.
+
+use exogait_device::DeviceConfig;
+use exogait_device::tick_record::{self, TickRecord};
+use gait_control::operator::Gait;
+
+use crate::closed_loop::RigError;
+use crate::inject::Injection;
+use crate::scenario::{flash_tables, run_tables_with, strong_pilot};
+
+/// One recorded run.
+#[derive(Clone, Debug)]
+pub struct Recording {
+    /// The gait the controller was built for.
+    pub gait: Gait,
+    /// What was recorded, tick by tick.
+    pub ticks: Vec<TickRecord>,
+}
+
+/// The runs [`record_gaits`] makes: gait, steps, longest run (s), fault.
+const RUNS: [(Gait, usize, f64, Option<&str>); 4] = [
+    (Gait::Walk, 2, 12.0, None),
+    (Gait::StairUp, 2, 12.0, None),
+    (Gait::StairDown, 2, 12.0, None),
+    // Mid first swing (1.36–3.54 s): a jump on the right knee, then a
+    // safe hold for the second it lasts.
+    (Gait::Walk, 2, 4.5, Some("encoder-jump=300:right-knee@2.4")),
+];
+
+/// Records the runs above on `device` with the flash tables.
+pub fn record_gaits(device: &DeviceConfig) -> Result<Vec<Recording>, RigError> {
+    RUNS.iter()
+        .map(|&(gait, steps, max_s, fault)| {
+            let injection: Option<Injection> = fault.and_then(|f| f.parse().ok());
+            let run = run_tables_with(
+                device,
+                flash_tables(),
+                gait,
+                strong_pilot(),
+                max_s,
+                steps,
+                |rig| {
+                    rig.record_ticks();
+                    if let Some(f) = injection {
+                        rig.schedule(f);
+                    }
+                },
+            )?;
+            Ok(Recording {
+                gait,
+                ticks: run.rig.recorded.unwrap_or_default(),
+            })
+        })
+        .collect()
+}
+
+/// The recordings as a tick-record file.
+pub fn encode(recordings: &[Recording]) -> Vec<u8> {
+    let count = u16::try_from(recordings.len()).unwrap_or(u16::MAX);
+    let mut out = tick_record::file_header(count).to_vec();
+    for r in recordings.iter().take(usize::from(count)) {
+        let ticks = u32::try_from(r.ticks.len()).unwrap_or(u32::MAX);
+        out.extend_from_slice(&tick_record::segment_header(r.gait, ticks));
+        for t in r.ticks.iter().take(ticks as usize) {
+            out.extend_from_slice(&t.encode());
+        }
+    }
+    out
+}

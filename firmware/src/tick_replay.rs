@@ -1,0 +1,128 @@
+//! Replays ticks recorded in the simulator (`sim::replay`,
+//! `exogait_device::tick_record`) through the board's controller over the
+//! QEMU rig, timing each tick by the phase the controller reports and
+//! comparing its motor commands with the host's for the same inputs.
+//!
+//! The recording is built in at compile time: `build.rs` copies the file
+//! named by `EXOGAIT_TICK_RECORDS` (written by `cargo xtask qemu`) and an
+//! empty one otherwise, which replays nothing.
+
+use exogait_device::DeviceConfig;
+use exogait_device::tick_record::{self, FileError};
+use gait_control::controller::TickReport;
+use gait_control::sequencer::Phase;
+
+use crate::{board_config, qemu_rig};
+
+/// The recording this image carries.
+pub static TICK_RECORDS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/tick_records.bin"));
+
+/// The phases ticks are grouped by, as printed.
+pub const PHASES: [&str; 5] = [
+    "standing",
+    "waiting-ready",
+    "swing",
+    "transfer",
+    "safe-hold",
+];
+
+/// `phase`'s index in [`PHASES`].
+#[must_use]
+pub const fn phase_index(phase: &Phase) -> usize {
+    match phase {
+        Phase::Standing => 0,
+        Phase::WaitingReady { .. } => 1,
+        Phase::Swing { .. } => 2,
+        Phase::Transfer { .. } => 3,
+        Phase::SafeHold { .. } => 4,
+    }
+}
+
+/// Instructions of the ticks of one phase.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PhaseCost {
+    /// Ticks in the phase.
+    pub ticks: u32,
+    /// Their instructions in all.
+    pub total: u64,
+    /// The costliest one.
+    pub worst: u32,
+}
+
+impl PhaseCost {
+    /// Average instructions per tick.
+    #[must_use]
+    pub fn average(&self) -> u64 {
+        self.total / u64::from(self.ticks.max(1))
+    }
+}
+
+/// What a replay found.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Replay {
+    /// Runs replayed.
+    pub segments: u32,
+    /// Ticks replayed.
+    pub ticks: u32,
+    /// Per phase, in [`PHASES`] order.
+    pub phases: [PhaseCost; 5],
+    /// The largest |target − host| motor command, N·m.
+    pub max_command_diff_nm: f32,
+    /// Ticks whose commands differ from the host's at all.
+    pub differing_ticks: u32,
+}
+
+/// Why a replay could not run.
+#[derive(Clone, Copy, Debug)]
+pub enum ReplayError {
+    /// The recording is malformed.
+    File(FileError),
+    /// The controller or its drivers were refused for a run's gait.
+    Config,
+}
+
+/// Replays [`TICK_RECORDS`] on `device`; `time` runs one tick and says how
+/// many instructions it took.
+pub fn replay(
+    device: &DeviceConfig,
+    mut time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
+) -> Result<Replay, ReplayError> {
+    let mut out = Replay::default();
+    for segment in tick_record::segments(TICK_RECORDS).map_err(ReplayError::File)? {
+        let mut controller =
+            exogait_device::build_controller(device, board_config::flash_tables(), segment.gait)
+                .map_err(|_| ReplayError::Config)?;
+        let mut hw = board_config::hardware(device, qemu_rig::peripherals())
+            .map_err(|_| ReplayError::Config)?;
+        out.segments += 1;
+        for record in segment.ticks() {
+            qemu_rig::replay(device, &record);
+            let (instr, report) = time(&mut || controller.tick(&mut hw, record.deadline_missed));
+            out.ticks += 1;
+            if let Some(p) = out.phases.get_mut(phase_index(&report.phase)) {
+                p.ticks += 1;
+                p.total += u64::from(instr);
+                p.worst = p.worst.max(instr);
+            }
+            let diff = report
+                .command_nm
+                .iter()
+                .zip(record.host_command_nm)
+                .map(|(t, h)| {
+                    if t.to_bits() == h.to_bits() {
+                        0.0
+                    } else {
+                        (t - h).abs()
+                    }
+                })
+                .fold(0.0f32, |m, d| if d.is_nan() || d > m { d } else { m });
+            if diff != 0.0 {
+                out.differing_ticks += 1;
+            }
+            if diff.is_nan() || diff > out.max_command_diff_nm {
+                out.max_command_diff_nm = diff;
+            }
+        }
+    }
+    Ok(out)
+}
