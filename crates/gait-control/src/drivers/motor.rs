@@ -331,15 +331,12 @@ where
         let applied = clamp_f32(slewed, -limit, limit);
         let limited = applied != command;
 
-        let duty_f =
-            libm::roundf(applied.abs() / c.full_scale_torque_nm * f32::from(self.max_duty));
-        let duty = if duty_f >= f32::from(self.max_duty) {
-            self.max_duty
-        } else if duty_f > 0.0 {
-            duty_f as u16
-        } else {
-            0
-        };
+        // Rounded to the nearest count by adding a half and truncating (the
+        // cast saturates, NaN gives 0): libm's `roundf` costs some 30
+        // instructions a motor on the M4 for the same result, except where
+        // x + 0.5 itself rounds up (x one ulp under a half).
+        let duty_f = applied.abs() / c.full_scale_torque_nm * f32::from(self.max_duty);
+        let duty = ((duty_f + 0.5) as u16).min(self.max_duty);
         let positive = applied >= 0.0;
 
         let write = if duty != 0 && positive != self.dir_positive {
