@@ -16,6 +16,7 @@ use gait_control::sequencer::{
     GaitTables, Phase, RefuseReason, Sensed, SeqEvent, Sequencer, SequencerConfig,
 };
 use gait_core::gait::GaitError;
+use gait_core::ik::IkOptions;
 use gait_core::problem::{PaperCase, PaperProblem};
 use gait_core::tables::{GaitKind, GaitTable, encode, image_len};
 
@@ -34,7 +35,7 @@ fn walk_image() -> Vec<u8> {
     })
     .unwrap();
     let mut buf = vec![0u8; image_len(phis.len())];
-    encode(GaitKind::Walk, 10_000, &phis, &mut buf).unwrap();
+    encode(GaitKind::Walk, 10_000, IkOptions::paper(), &phis, &mut buf).unwrap();
     buf
 }
 
