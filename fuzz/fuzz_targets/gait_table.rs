@@ -3,6 +3,7 @@
 //! image with any single bit flipped is refused.
 #![no_main]
 
+use gait_core::ik::IkOptions;
 use gait_core::tables::{GaitKind, GaitTable, encode, image_len};
 use libfuzzer_sys::fuzz_target;
 
@@ -25,7 +26,7 @@ fuzz_target!(|data: &[u8]| {
         let samples: Vec<[f32; 5]> = floats.chunks_exact(5).map(|c| [c[0], c[1], c[2], c[3], c[4]]).collect();
         if samples.len() >= 2 && samples.len() <= 64 {
             let mut buf = vec![0u8; image_len(samples.len())];
-            if encode(GaitKind::Walk, 10_000, &samples, &mut buf).is_ok() {
+            if encode(GaitKind::Walk, 10_000, IkOptions::paper(), &samples, &mut buf).is_ok() {
                 assert!(GaitTable::parse(&buf).is_ok());
                 let bit = usize::from(data[0]) * 8 + usize::from(data[1] & 7);
                 let at = bit / 8 % buf.len();

@@ -170,7 +170,11 @@ pub fn compare(kind: GaitKind, steps: usize) -> Result<(CompareJson, GaitRun, Ga
     case.step_time_s = f64::from(shipped.duration_s());
     let human = playable_human_gait(&case, &gait_opt::default_data_dir())
         .map_err(|e| format!("human-data gait: {e}"))?;
-    let image = gait_opt::tables::table_image(kind, &human.phi)
+    // The human-data gait comes from joint-angle data, not from the IK: its
+    // table carries the clinical case's IK options, the ones the shipped
+    // table of the gait was made with, so that the weight transfers of both
+    // gaits are planned alike.
+    let image = gait_opt::tables::table_image(kind, &case.ik, &human.phi)
         .map_err(|e| format!("human-data gait as a table: {e}"))?;
     let human_table = GaitTable::parse(&image).map_err(|e| format!("human table: {e}"))?;
     let pilot = sim::scenario::strong_pilot();

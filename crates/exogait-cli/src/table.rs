@@ -52,10 +52,13 @@ pub fn image_of_report(text: &str, device: &DeviceConfig) -> Result<Vec<u8>, Tab
         let r = ClinicalReport::from_json(text).map_err(|e| TableFailure::input(e.to_string()))?;
         let kind = gait_kind(&r.gait)
             .ok_or_else(|| TableFailure::input(format!("unknown gait {:?}", r.gait)))?;
+        let case = r
+            .case(device)
+            .map_err(|e| TableFailure::input(e.to_string()))?;
         let (phi, _) = r
             .phi(device)
             .map_err(|e| TableFailure::input(e.to_string()))?;
-        return table_image(kind, &phi).map_err(|e| TableFailure::input(e.to_string()));
+        return table_image(kind, &case.ik, &phi).map_err(|e| TableFailure::input(e.to_string()));
     }
     let r =
         Report::from_json(text).map_err(|e| TableFailure::input(format!("not a report: {e}")))?;
@@ -73,7 +76,7 @@ pub fn image_of_report(text: &str, device: &DeviceConfig) -> Result<Vec<u8>, Tab
         _ if problem.case.landing_m[1] > 0.0 => GaitKind::StairUp,
         _ => GaitKind::Walk,
     };
-    table_image(kind, &phi).map_err(|e| TableFailure::input(e.to_string()))
+    table_image(kind, &problem.case.ik, &phi).map_err(|e| TableFailure::input(e.to_string()))
 }
 
 /// A table file (flash format) or a report, as a verified table image that

@@ -16,6 +16,7 @@ use gait_control::sequencer::{
     GaitTables, Phase, RefuseReason, Sensed, SeqEvent, Sequencer, SequencerConfig,
 };
 use gait_core::gait::GaitError;
+use gait_core::ik::IkOptions;
 use gait_core::problem::{PaperCase, PaperProblem};
 use gait_core::tables::{GaitKind, GaitTable, encode, image_len};
 
@@ -23,6 +24,12 @@ const DT: f32 = 0.001;
 
 /// A walk table from the paper problem's simple feasible gait.
 fn walk_image() -> Vec<u8> {
+    walk_image_with(IkOptions::paper())
+}
+
+/// The same samples (made with the paper's IK) with `label` as the IK
+/// options in the header.
+fn walk_image_with(label: IkOptions<f32>) -> Vec<u8> {
     let pb = PaperProblem::<f64>::paper(PaperCase::Walk);
     let step = pb.step(&pb.initial_guess());
     let mut phis = Vec::new();
@@ -34,7 +41,7 @@ fn walk_image() -> Vec<u8> {
     })
     .unwrap();
     let mut buf = vec![0u8; image_len(phis.len())];
-    encode(GaitKind::Walk, 10_000, &phis, &mut buf).unwrap();
+    encode(GaitKind::Walk, 10_000, label, &phis, &mut buf).unwrap();
     buf
 }
 
@@ -423,5 +430,61 @@ fn weight_transfer_keeps_the_trailing_foot_planted() {
     let start = rig.start_pose(Side::Right);
     for i in 0..JOINTS {
         assert!((rig.seq.reference()[i] - start[i]).abs() < 1e-4);
+    }
+}
+
+/// The reference through the weight transfer after the first landing, with
+/// the model (the transfer planned by the IK).
+fn transfer_trace(image: &[u8]) -> Vec<[f32; JOINTS]> {
+    use gait_core::BodyModel;
+    let mut rig = Rig::new(image);
+    let model: BodyModel<f32> = BodyModel::<f64>::paper_table_iii().cast();
+    rig.seq = rig.seq.with_model(model);
+    let pose = rig.start_pose(Side::Left);
+    rig.seq
+        .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
+    swing_and_land(&mut rig, Side::Left, None);
+    let mut trace = Vec::new();
+    while matches!(rig.seq.phase(), Phase::Transfer { .. }) {
+        trace.push(rig.step(&sensed(pose, [0.0, 500.0], READY_CRUTCHES)));
+    }
+    trace
+}
+
+#[test]
+fn the_transfer_is_planned_with_the_ik_options_the_table_carries() {
+    use gait_core::ik::KneeRange;
+    // The same samples, made with the paper's IK, once labelled with it and
+    // once with the descent's options: the sequencer plans the transfer
+    // with the label (the knee choice r2 is measured in another range), so
+    // the two references part mid-transfer; both end at the start posture.
+    let paper = walk_image();
+    let human =
+        walk_image_with(IkOptions::new(core::f32::consts::FRAC_PI_2, KneeRange::Human).unwrap());
+    assert_eq!(
+        GaitTable::parse(&human).unwrap().ik_options().knee_range,
+        KneeRange::Human
+    );
+    let a = transfer_trace(&paper);
+    let b = transfer_trace(&human);
+    assert_eq!(a.len(), b.len());
+    let apart = a
+        .iter()
+        .zip(&b)
+        .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).abs()))
+        .fold(0.0f32, f32::max);
+    // 0.45 mrad today; f32 rounding alone would be ~1e-6 rad.
+    assert!(apart > 1e-4, "the transfers differ by {apart} rad only");
+    let start = joints_from_phi(&GaitTable::parse(&paper).unwrap().first(), Side::Right);
+    for trace in [&a, &b] {
+        let end = trace.last().unwrap();
+        for i in 0..JOINTS {
+            assert!(
+                (end[i] - start[i]).abs() < 1e-3,
+                "joint {i}: {} vs {}",
+                end[i],
+                start[i]
+            );
+        }
     }
 }

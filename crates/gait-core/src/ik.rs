@@ -160,6 +160,14 @@ impl<T: Real> IkOptions<T> {
             knee_range: KneeRange::Reach,
         }
     }
+
+    /// The same options in another precision (as [`crate::BodyModel::cast`]).
+    pub fn cast<U: Real>(&self) -> IkOptions<U> {
+        IkOptions {
+            stance_knee_max_rad: U::lit(self.stance_knee_max_rad.to_f64()),
+            knee_range: self.knee_range,
+        }
+    }
 }
 
 /// The IK solver: the model's lengths and the tolerances it works to.

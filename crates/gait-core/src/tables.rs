@@ -2,36 +2,54 @@
 //! in a documented, versioned, checksummed binary format.
 //!
 //! The controller never plays a table it has not verified: [`GaitTable::parse`]
-//! checks the magic, the format version, the gait kind, the length, a CRC-32
-//! over the whole image and that every angle is finite, before any sample can
-//! be read. The optimiser writes tables with [`encode`] (the one definition
-//! of the format, shared by writer and reader).
+//! checks the magic, the format version, the gait kind, the IK options, the
+//! length, a CRC-32 over the whole image and that every angle is finite,
+//! before any sample can be read. The optimiser writes tables with [`encode`]
+//! (the one definition of the format, shared by writer and reader).
 //!
-//! # Format, version 1 (all little-endian)
+//! # Format, version 2 (all little-endian)
 //!
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 4 | magic `b"EXGT"` |
-//! | 4 | 2 | format version, `1` |
+//! | 4 | 2 | format version, `2` |
 //! | 6 | 1 | gait kind: 0 walk, 1 stair ascent, 2 stair descent |
 //! | 7 | 1 | reserved, 0 |
 //! | 8 | 4 | sample period, µs |
 //! | 12 | 2 | sample count n (2 ≤ n ≤ [`MAX_TABLE_SAMPLES`]) |
 //! | 14 | 2 | reserved, 0 |
-//! | 16 | 20 n | n samples of Φ (5 × f32, rad; the paper's absolute angles, link 1 = stance shank) |
-//! | 16 + 20 n | 4 | CRC-32/ISO-HDLC of bytes 0 … 15 + 20 n |
+//! | 16 | 4 | IK stance-knee cap, f32 rad ([`IkOptions::stance_knee_max_rad`]; finite, in (0, π/2]) |
+//! | 20 | 1 | IK knee range ([`IkOptions::knee_range`]): 0 [`KneeRange::Reach`], 1 [`KneeRange::Human`] |
+//! | 21 | 3 | reserved, 0 |
+//! | 24 | 20 n | n samples of Φ (5 × f32, rad; the paper's absolute angles, link 1 = stance shank) |
+//! | 24 + 20 n | 4 | CRC-32/ISO-HDLC of bytes 0 … 23 + 20 n |
+//!
+//! The IK options are the ones the table's postures were generated with
+//! (bytes 16–20): the controller plans the weight transfer between steps
+//! with them ([`GaitTable::ik_options`]), so that its IK describes the
+//! table's postures the way the generator's did. They are checked with
+//! [`IkOptions::new`]; a table whose options that refuses is refused
+//! ([`TableError::BadIkOptions`]).
+//!
+//! Version 1 (a 16-byte header without the IK options) is refused
+//! ([`TableError::UnknownVersion`]): its tables must be regenerated.
 //!
 //! A step in a table is always "the swing leg moves": the controller maps
 //! links 1–2 to whichever leg stands and links 4–5 to the one that swings.
 
+use crate::ik::{IkOptions, KneeRange};
 use crate::model::LINKS;
 
 /// First four bytes of every table.
 pub const MAGIC: [u8; 4] = *b"EXGT";
 /// The format version this reader understands.
-pub const FORMAT_VERSION: u16 = 1;
-/// Bytes before the samples.
-pub const HEADER_LEN: usize = 16;
+pub const FORMAT_VERSION: u16 = 2;
+/// Bytes before the samples (a multiple of 8: the samples stay aligned).
+pub const HEADER_LEN: usize = 24;
+/// Offset of the IK stance-knee cap (f32, rad) in the header.
+pub const IK_CAP_OFFSET: usize = 16;
+/// Offset of the IK knee-range tag (one byte) in the header.
+pub const IK_RANGE_OFFSET: usize = 20;
 /// Bytes per sample (five f32).
 pub const SAMPLE_LEN: usize = 4 * LINKS;
 /// Largest sample count a table may hold (10.23 s at 100 Hz).
@@ -71,6 +89,22 @@ impl GaitKind {
     }
 }
 
+/// The knee range's tag in the header.
+fn knee_range_from_byte(b: u8) -> Option<KneeRange> {
+    match b {
+        0 => Some(KneeRange::Reach),
+        1 => Some(KneeRange::Human),
+        _ => None,
+    }
+}
+
+fn knee_range_byte(r: KneeRange) -> u8 {
+    match r {
+        KneeRange::Reach => 0,
+        KneeRange::Human => 1,
+    }
+}
+
 /// Why a table image was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -89,6 +123,10 @@ pub enum TableError {
     BadCrc,
     /// A sample holds NaN or infinity.
     NonFinite,
+    /// The IK options are refused: an unknown knee-range tag, or a
+    /// stance-knee cap that [`IkOptions::new`] refuses (not finite, not in
+    /// (0, π/2] rad).
+    BadIkOptions,
     /// The output buffer is too small (writer).
     BufferTooSmall,
 }
@@ -103,6 +141,9 @@ impl core::fmt::Display for TableError {
             Self::BadHeader => f.write_str("sample count or period out of range"),
             Self::BadCrc => f.write_str("CRC mismatch: table corrupt"),
             Self::NonFinite => f.write_str("table holds a non-finite angle"),
+            Self::BadIkOptions => f.write_str(
+                "table IK options refused (unknown knee range, or stance-knee cap not in (0, pi/2] rad)",
+            ),
             Self::BufferTooSmall => f.write_str("output buffer too small"),
         }
     }
@@ -113,6 +154,7 @@ impl core::fmt::Display for TableError {
 pub struct GaitTable<'a> {
     kind: GaitKind,
     period_us: u32,
+    ik: IkOptions<f32>,
     samples: &'a [u8],
     count: usize,
 }
@@ -137,6 +179,17 @@ fn f32_at(b: &[u8], at: usize) -> Option<f32> {
     u32_at(b, at).map(f32::from_bits)
 }
 
+/// The IK options of a header, checked by [`IkOptions::new`].
+fn ik_options_at(image: &[u8]) -> Result<IkOptions<f32>, TableError> {
+    let cap = f32_at(image, IK_CAP_OFFSET).ok_or(TableError::BadLength)?;
+    let range_byte = image
+        .get(IK_RANGE_OFFSET)
+        .copied()
+        .ok_or(TableError::BadLength)?;
+    let range = knee_range_from_byte(range_byte).ok_or(TableError::BadIkOptions)?;
+    IkOptions::new(cap, range).map_err(|_| TableError::BadIkOptions)
+}
+
 impl<'a> GaitTable<'a> {
     /// Verifies an image and returns the table; nothing of an image that
     /// fails any check can be read.
@@ -158,6 +211,7 @@ impl<'a> GaitTable<'a> {
         if !(2..=MAX_TABLE_SAMPLES).contains(&count) || period_us == 0 || period_us > 1_000_000 {
             return Err(TableError::BadHeader);
         }
+        let ik = ik_options_at(image)?;
         if image.len() != image_len(count) {
             return Err(TableError::BadLength);
         }
@@ -180,6 +234,7 @@ impl<'a> GaitTable<'a> {
         Ok(Self {
             kind,
             period_us,
+            ik,
             samples,
             count,
         })
@@ -188,6 +243,12 @@ impl<'a> GaitTable<'a> {
     /// The movement this table describes.
     pub fn kind(&self) -> GaitKind {
         self.kind
+    }
+
+    /// The IK options the table's postures were generated with (verified
+    /// by [`IkOptions::new`]).
+    pub fn ik_options(&self) -> IkOptions<f32> {
+        self.ik
     }
 
     /// Number of samples.
@@ -253,11 +314,13 @@ impl<'a> GaitTable<'a> {
     }
 }
 
-/// Writes a table image into `out`; returns its length. Refuses samples
+/// Writes a table image into `out`; returns its length. `ik`: the IK
+/// options the samples were generated with. Refuses samples and options
 /// that the reader would refuse.
 pub fn encode(
     kind: GaitKind,
     period_us: u32,
+    ik: IkOptions<f32>,
     samples: &[[f32; LINKS]],
     out: &mut [u8],
 ) -> Result<usize, TableError> {
@@ -265,6 +328,8 @@ pub fn encode(
     if !(2..=MAX_TABLE_SAMPLES).contains(&n) || period_us == 0 || period_us > 1_000_000 {
         return Err(TableError::BadHeader);
     }
+    let ik = IkOptions::new(ik.stance_knee_max_rad, ik.knee_range)
+        .map_err(|_| TableError::BadIkOptions)?;
     if samples.iter().flatten().any(|v| !v.is_finite()) {
         return Err(TableError::NonFinite);
     }
@@ -279,7 +344,9 @@ pub fn encode(
             .chain(&[kind.byte(), 0])
             .chain(&period_us.to_le_bytes())
             .chain(&count.to_le_bytes())
-            .chain(&[0, 0]),
+            .chain(&[0, 0])
+            .chain(&ik.stance_knee_max_rad.to_le_bytes())
+            .chain(&[knee_range_byte(ik.knee_range), 0, 0, 0]),
     ) {
         *dst = *src;
     }
@@ -310,7 +377,7 @@ mod tests {
             [0.1, 0.0, 0.05, 2.9, 3.3],
             [0.2, -0.1, 0.1, 2.8, 3.4],
         ];
-        let n = encode(GaitKind::StairUp, 10_000, &s, &mut buf)?;
+        let n = encode(GaitKind::StairUp, 10_000, IkOptions::paper(), &s, &mut buf)?;
         Ok((buf, n))
     }
 
@@ -351,8 +418,8 @@ mod tests {
             Err(TableError::BadLength)
         );
         let mut v = buf;
-        v[4] = 2;
-        assert_eq!(GaitTable::parse(&v), Err(TableError::UnknownVersion(2)));
+        v[4] = 3;
+        assert_eq!(GaitTable::parse(&v), Err(TableError::UnknownVersion(3)));
         Ok(())
     }
 
@@ -372,17 +439,17 @@ mod tests {
         let mut buf = [0u8; 256];
         let nan = [[f32::NAN; LINKS], [0.0; LINKS]];
         assert_eq!(
-            encode(GaitKind::Walk, 10_000, &nan, &mut buf),
+            encode(GaitKind::Walk, 10_000, IkOptions::paper(), &nan, &mut buf),
             Err(TableError::NonFinite)
         );
         let one = [[0.0; LINKS]];
         assert_eq!(
-            encode(GaitKind::Walk, 10_000, &one, &mut buf),
+            encode(GaitKind::Walk, 10_000, IkOptions::paper(), &one, &mut buf),
             Err(TableError::BadHeader)
         );
         let many = [[0.0; LINKS]; 20];
         assert_eq!(
-            encode(GaitKind::Walk, 10_000, &many, &mut buf),
+            encode(GaitKind::Walk, 10_000, IkOptions::paper(), &many, &mut buf),
             Err(TableError::BufferTooSmall)
         );
     }

@@ -18,6 +18,7 @@ use std::fmt::Write as _;
 
 use gait_core::BodyModel;
 use gait_core::gait::{ControlPoints, GaitError};
+use gait_core::ik::IkOptions;
 use gait_core::kinematics::Phi;
 use gait_core::problem::{
     JointMotionLimit, JointRangeLimit, PaperProblem, PeriodicError, PeriodicStep, StepCase,
@@ -103,11 +104,17 @@ pub fn step_phi(
     Ok(out)
 }
 
-/// A verified table image from Φ samples at [`TABLE_PERIOD_US`].
-pub fn table_image(kind: GaitKind, phi: &[Phi<f64>]) -> Result<Vec<u8>, TableError> {
+/// A verified table image from Φ samples at [`TABLE_PERIOD_US`]; `ik`: the
+/// IK options the samples were generated with (they go into the header,
+/// and the controller plans its weight transfers with them).
+pub fn table_image(
+    kind: GaitKind,
+    ik: &IkOptions<f64>,
+    phi: &[Phi<f64>],
+) -> Result<Vec<u8>, TableError> {
     let f: Vec<[f32; 5]> = phi.iter().map(|p| p.map(|v| v as f32)).collect();
     let mut buf = vec![0u8; image_len(f.len())];
-    let n = encode(kind, TABLE_PERIOD_US, &f, &mut buf)?;
+    let n = encode(kind, TABLE_PERIOD_US, ik.cast(), &f, &mut buf)?;
     buf.truncate(n);
     Ok(buf)
 }
@@ -204,7 +211,7 @@ pub fn clinical_table(
             kind,
             ident,
             provenance,
-            image: table_image(kind, &r.phi).map_err(TableGenError::Table)?,
+            image: table_image(kind, &case.ik, &r.phi).map_err(TableGenError::Table)?,
         },
         report,
     ))

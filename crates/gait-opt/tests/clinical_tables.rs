@@ -113,7 +113,8 @@ fn the_admission_check_names_the_sample_the_joint_and_the_limit() {
     let t = shipped(GaitKind::Walk);
     let phi = phi_of(&t);
     let fast: Vec<[f64; 5]> = phi.iter().step_by(3).copied().collect();
-    let image = gait_opt::tables::table_image(GaitKind::Walk, &fast).unwrap();
+    let image =
+        gait_opt::tables::table_image(GaitKind::Walk, &t.ik_options().cast(), &fast).unwrap();
     let table = GaitTable::parse(&image).unwrap();
     let err = check_table(&device, &table).unwrap_err();
     let text = err.to_string();

@@ -9,7 +9,6 @@ use gait_core::LINKS;
 use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::kinematics::{Phi, forward_kinematics, swap_legs};
 
-use crate::operator::Gait;
 use crate::posture::{JOINTS, Side, joints_from_phi};
 
 use super::{Sequencer, smoothstep};
@@ -39,7 +38,7 @@ impl Sequencer<'_> {
         new_stance: Side,
     ) -> Option<TransferPlan> {
         let model = self.model.as_ref()?;
-        let ik = self.transfer_ik(model);
+        let ik = self.transfer_ik(model)?;
         // The same posture seen from the new stance foot (links swap roles).
         let mirrored = swap_legs(landing_phi);
         let params = |phi: &Phi<f32>| -> Option<[f32; 5]> {
@@ -81,15 +80,11 @@ impl Sequencer<'_> {
         Some(joints_from_phi(&sol.phi, stance))
     }
 
-    /// The IK the gait's tables were made with: the descent's knee range
-    /// is `KneeRange::Human` with a 90° cap (`PeriodicStep::stair_down`),
-    /// the others the paper's.
-    fn transfer_ik(&self, model: &BodyModel<f32>) -> IkSolver<f32> {
-        let options = match self.gait {
-            Gait::StairDown => gait_core::problem::PeriodicStep::<f32>::stair_down().ik,
-            Gait::Walk | Gait::StairUp => gait_core::ik::IkOptions::paper(),
-        };
-        IkSolver::new(model).with_options(options)
+    /// The IK the gait's table was made with (the options its header
+    /// carries); `None` without a table.
+    fn transfer_ik(&self, model: &BodyModel<f32>) -> Option<IkSolver<f32>> {
+        let options = self.tables.get(self.gait)?.ik_options();
+        Some(IkSolver::new(model).with_options(options))
     }
 
     /// The transfer reference at `fraction` (smoothstepped), or the joint
@@ -97,7 +92,7 @@ impl Sequencer<'_> {
     pub(super) fn transfer_reference(&self, fraction: f32, stance: Side) -> [f32; JOINTS] {
         let planned = self.transfer.and_then(|plan| {
             let model = self.model.as_ref()?;
-            let ik = self.transfer_ik(model);
+            let ik = self.transfer_ik(model)?;
             let s = smoothstep(fraction);
             let mut p = plan.from;
             for (v, &b) in p.iter_mut().zip(&plan.to) {
