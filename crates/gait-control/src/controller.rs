@@ -275,8 +275,7 @@ impl<'t> Controller<'t> {
     {
         if !self.primed {
             // First tick: hold the posture the device is in.
-            self.seq = Sequencer::new(self.cfg.sequencer, *self.seq.tables(), s.joints)
-                .with_model(self.cfg.model);
+            self.seq = self.seq.restarted_at(s.joints);
             self.primed = true;
         }
         let status = ControllerStatus {

@@ -196,6 +196,8 @@ pub struct Sequencer<'t> {
     /// [`Sequencer::with_model`]); without, it blends joint angles.
     model: Option<BodyModel<f32>>,
     transfer: Option<TransferPlan>,
+    /// Each table's transfer end ([`transfer::transfer_targets`]).
+    transfer_targets: [Option<[f32; 5]>; 3],
     /// The swing foot's toe at the start of the table being played (stance
     /// foot's flat frame), m.
     swing_start_m: [f32; 2],
@@ -224,9 +226,23 @@ impl<'t> Sequencer<'t> {
             blend_to: posture,
             model: None,
             transfer: None,
+            transfer_targets: [None; 3],
             swing_start_m: [0.0; 2],
             lifted_at_s: None,
             ankle_plan: [f32::NAN; 2],
+        }
+    }
+
+    /// This sequencer started afresh at `posture` (as [`Sequencer::new`]),
+    /// keeping its tables, model and what was computed from them once (the
+    /// controller's first tick holds the measured posture this way, within
+    /// the tick's budget).
+    #[must_use]
+    pub fn restarted_at(&self, posture: [f32; JOINTS]) -> Self {
+        Self {
+            model: self.model,
+            transfer_targets: self.transfer_targets,
+            ..Self::new(self.cfg, self.tables, posture)
         }
     }
 
@@ -237,6 +253,7 @@ impl<'t> Sequencer<'t> {
     /// through the ground.
     #[must_use]
     pub fn with_model(mut self, model: BodyModel<f32>) -> Self {
+        self.transfer_targets = transfer::transfer_targets(&model, &self.tables);
         self.model = Some(model);
         self
     }
@@ -459,9 +476,7 @@ impl<'t> Sequencer<'t> {
                         let table = self.tables.get(self.gait).copied();
                         self.blend_to =
                             table.map_or(reference, |tb| joints_from_phi(&tb.first(), new_stance));
-                        self.transfer = table.and_then(|tb| {
-                            self.plan_transfer(&tb.at_time(t), &tb.first(), new_stance)
-                        });
+                        self.transfer = phi_t.and_then(|p| self.plan_transfer(&p, new_stance));
                         self.phase = Phase::Transfer {
                             stance: new_stance,
                             t_s: 0.0,

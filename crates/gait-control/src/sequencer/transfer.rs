@@ -9,6 +9,7 @@ use gait_core::LINKS;
 use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::kinematics::{Phi, forward_kinematics, swap_legs};
 
+use crate::operator::Gait;
 use crate::posture::{JOINTS, Side, joints_from_phi};
 
 use super::{Sequencer, smoothstep};
@@ -24,42 +25,77 @@ pub(super) struct TransferPlan {
     /// Joint-angle offset at the landing between the reference and the IK's
     /// reconstruction of it (it decays to zero over the transfer, so the
     /// reference is continuous even where the landing posture lies outside
-    /// the IK's human range).
-    offset: [f32; JOINTS],
+    /// the IK's human range). Solved in the transfer's first tick, not in
+    /// the landing's, which already plays the swing: each tick then holds
+    /// at most one IK solve (the tick's budget, `docs/safety.md`).
+    offset: Option<[f32; JOINTS]>,
+    /// The landing reference in the new stance's joints (what the first
+    /// tick holds while it solves the offset; the smoothstep has moved it
+    /// by some 1e-6 of the way by then).
+    landing: [f32; JOINTS],
+}
+
+/// (x5, y5, φ1, φ3, r2) of posture `phi`: the swing ankle, the stance shank
+/// and torso, and where φ2 sits in the IK's range for them.
+fn transfer_params(model: &BodyModel<f32>, ik: &IkSolver<f32>, phi: &Phi<f32>) -> Option<[f32; 5]> {
+    let [x5, y5] = forward_kinematics(model, phi).get(LINKS - 1).copied()?;
+    let (lo, hi) = ik.phi2_range(x5, y5, phi[0]).ok()?;
+    let r2 = if hi - lo > 1e-4 {
+        ((phi[1] - lo) / (hi - lo)).clamp(0.0, 1.0)
+    } else {
+        0.5
+    };
+    Some([x5, y5, phi[0], phi[2], r2])
+}
+
+/// The transfer's end for each gait's table (walk, ascent, descent): the
+/// parameters of its first posture, fixed with the tables, so a landing
+/// need not compute them.
+pub(super) fn transfer_targets(
+    model: &BodyModel<f32>,
+    tables: &crate::sequencer::GaitTables<'_>,
+) -> [Option<[f32; 5]>; 3] {
+    [Gait::Walk, Gait::StairUp, Gait::StairDown].map(|gait| {
+        let table = tables.get(gait)?;
+        let ik = IkSolver::new(model).with_options(table.ik_options());
+        transfer_params(model, &ik, &table.first())
+    })
+}
+
+/// `gait`'s slot in [`transfer_targets`].
+pub(super) const fn target_slot(gait: Gait) -> usize {
+    match gait {
+        Gait::Walk => 0,
+        Gait::StairUp => 1,
+        Gait::StairDown => 2,
+    }
 }
 
 impl Sequencer<'_> {
     /// The double-support plan from the reference Φ at landing (old stance
-    /// frame) to the next table's first posture (new stance frame).
+    /// frame) to the next table's first posture (new stance frame, its
+    /// parameters computed with the tables: [`transfer_targets`]).
     pub(super) fn plan_transfer(
         &self,
         landing_phi: &Phi<f32>,
-        start: &Phi<f32>,
         new_stance: Side,
     ) -> Option<TransferPlan> {
         let model = self.model.as_ref()?;
         let ik = self.transfer_ik(model)?;
+        let to = self
+            .transfer_targets
+            .get(target_slot(self.gait))
+            .copied()
+            .flatten()?;
         // The same posture seen from the new stance foot (links swap roles).
         let mirrored = swap_legs(landing_phi);
-        let params = |phi: &Phi<f32>| -> Option<[f32; 5]> {
-            let [x5, y5] = forward_kinematics(model, phi).get(LINKS - 1).copied()?;
-            let (lo, hi) = ik.phi2_range(x5, y5, phi[0]).ok()?;
-            let r2 = if hi - lo > 1e-4 {
-                ((phi[1] - lo) / (hi - lo)).clamp(0.0, 1.0)
-            } else {
-                0.5
-            };
-            Some([x5, y5, phi[0], phi[2], r2])
-        };
-        let from = params(&mirrored)?;
-        let to = params(start)?;
-        let at_landing = self.transfer_joints(&ik, &from, new_stance)?;
-        let reference = joints_from_phi(&mirrored, new_stance);
-        let mut offset = [0.0; JOINTS];
-        for ((o, r), a) in offset.iter_mut().zip(&reference).zip(&at_landing) {
-            *o = r - a;
-        }
-        Some(TransferPlan { from, to, offset })
+        let from = transfer_params(model, &ik, &mirrored)?;
+        Some(TransferPlan {
+            from,
+            to,
+            offset: None,
+            landing: joints_from_phi(&mirrored, new_stance),
+        })
     }
 
     fn transfer_joints(
@@ -88,22 +124,39 @@ impl Sequencer<'_> {
     }
 
     /// The transfer reference at `fraction` (smoothstepped), or the joint
-    /// blend when there is no plan or the IK fails.
-    pub(super) fn transfer_reference(&self, fraction: f32, stance: Side) -> [f32; JOINTS] {
+    /// blend when there is no plan or the IK fails. The first call of a
+    /// transfer solves the landing's offset and holds the landing reference.
+    pub(super) fn transfer_reference(&mut self, fraction: f32, stance: Side) -> [f32; JOINTS] {
         let planned = self.transfer.and_then(|plan| {
             let model = self.model.as_ref()?;
             let ik = self.transfer_ik(model)?;
+            let Some(offset) = plan.offset else {
+                let at_landing = self.transfer_joints(&ik, &plan.from, stance)?;
+                let mut offset = [0.0; JOINTS];
+                for ((o, r), a) in offset.iter_mut().zip(&plan.landing).zip(&at_landing) {
+                    *o = r - a;
+                }
+                return Some((plan.landing, Some(offset)));
+            };
             let s = smoothstep(fraction);
             let mut p = plan.from;
             for (v, &b) in p.iter_mut().zip(&plan.to) {
                 *v += s * (b - *v);
             }
             let mut joints = self.transfer_joints(&ik, &p, stance)?;
-            for (j, &o) in joints.iter_mut().zip(&plan.offset) {
+            for (j, &o) in joints.iter_mut().zip(&offset) {
                 *j += (1.0 - s) * o;
             }
-            Some(joints)
+            Some((joints, None))
         });
-        planned.unwrap_or_else(|| self.blended(fraction))
+        match planned {
+            Some((joints, solved)) => {
+                if let (Some(offset), Some(plan)) = (solved, self.transfer.as_mut()) {
+                    plan.offset = Some(offset);
+                }
+                joints
+            }
+            None => self.blended(fraction),
+        }
     }
 }
