@@ -80,7 +80,7 @@ pub fn check(qemu_stdout: &str) -> Result {
             over.join(", ")
         ));
     }
-    if !(diff <= COMMAND_BOUND_NM) {
+    if diff.is_nan() || diff > COMMAND_BOUND_NM {
         return Err(format!(
             "the target's motor commands differ from the host's by {diff} N·m \
              (bound {COMMAND_BOUND_NM})"
