@@ -15,6 +15,7 @@
 //! Work per tick is constant: one table interpolation, no search, no loop
 //! whose length depends on data.
 
+mod config;
 mod transfer;
 
 use gait_core::BodyModel;
@@ -25,60 +26,8 @@ use crate::operator::Gait;
 use crate::posture::{JOINTS, Side, joints_from_phi};
 pub use crate::reference::Reference;
 use crate::reference::{ankles_in_start_posture, ankles_in_swing, table_motion};
+pub use config::SequencerConfig;
 use transfer::TransferPlan;
-
-/// Thresholds and timings of gait execution.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct SequencerConfig {
-    /// Each crutch must carry at least this before a swing starts, N.
-    pub crutch_ready_n: f32,
-    /// The feet together must carry at least this before a swing starts,
-    /// N: the device stands on the ground. How the weight is split between
-    /// them is the table's plan (a step may start with the weight on the
-    /// trailing foot and shift it in double support before the lift-off).
-    pub feet_ready_n: f32,
-    /// Swing-foot force that counts as ground contact, N.
-    pub landing_contact_n: f32,
-    /// Landing is accepted from this fraction of the table's duration on
-    /// (earlier contact is a scuff, not a landing).
-    pub landing_window_fraction: f32,
-    /// After the table ends, how long to wait for contact before giving up
-    /// and holding the posture, s.
-    pub landing_timeout_s: f32,
-    /// Largest joint-angle difference from a table's start posture that
-    /// still counts as "in the start posture", rad.
-    pub start_tolerance_rad: f32,
-    /// Duration of the weight transfer between steps, s.
-    pub transfer_s: f32,
-    /// The stance ankle must be within this of the table's stance-shank
-    /// angle at the start (φ1(0)) before a swing starts, rad: the body is
-    /// over the stance foot where the step was planned from. A swing that
-    /// starts with the shank elsewhere pitches the torso by the difference
-    /// (the joints follow the table, the pilot sets φ1).
-    pub start_ankle_tolerance_rad: f32,
-    /// Duration of the ramp into a safe hold, s.
-    pub hold_ramp_s: f32,
-}
-
-impl SequencerConfig {
-    /// Defaults for a 93 kg system: 60 N per crutch and 300 N on the stance
-    /// foot to be "ready", 80 N of swing-foot force for contact, landing
-    /// accepted after 60 % of the step, 1 s timeout, 0.15 rad start
-    /// tolerance, 0.4 s transfer, stance ankle within 0.05 rad (2.9°) of
-    /// the table's start, 0.3 s hold ramp.
-    pub const DEFAULT: Self = Self {
-        crutch_ready_n: 60.0,
-        feet_ready_n: 400.0,
-        landing_contact_n: 80.0,
-        landing_window_fraction: 0.6,
-        landing_timeout_s: 1.0,
-        start_tolerance_rad: 0.15,
-        transfer_s: 0.4,
-        start_ankle_tolerance_rad: 0.05,
-        hold_ramp_s: 0.3,
-    };
-}
 
 /// The verified tables the device carries (a gait without one cannot start).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -1,0 +1,121 @@
+//! What the simulated pilot aims the stance shank at, tick by tick: the
+//! pilot's behaviour (a fixed target, a learnt profile, the table's own
+//! shank) and where it puts the shank in each phase of the controller.
+//! The pilot is the simulation's alone (no device has one).
+
+use gait_control::sequencer::Phase;
+use gait_core::gait::StanceAnkleProfile;
+use gait_core::tables::GaitTable;
+
+use crate::pilot::PilotTarget;
+
+/// How the simulated pilot uses the crutches.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PilotBehaviour {
+    /// A fixed target for the whole run.
+    Fixed(PilotTarget),
+    /// A pilot who has learnt a logistic stance-shank profile: during each
+    /// swing the stance shank follows it, timed from the swing's start as
+    /// the controller reports it; between swings it is held at the
+    /// profile's start angle.
+    FollowsPlan(StanceAnkleProfile<f64>),
+    /// A pilot who has learnt the gait (the paper's pilots practised 25
+    /// cycles first): during each swing the stance shank follows the one
+    /// the table being played plans (its φ1), timed from the swing's start;
+    /// between swings it is held at the table's start.
+    FollowsTable,
+}
+
+/// Where the pilot's stance shank should be, given the controller's phase
+/// and the table it plays: the table's stance shank during a swing; during
+/// the weight transfer a smooth move from where the shank was at landing to
+/// the table's start (as the controller's transfer plans it); otherwise
+/// held at the table's start.
+pub(crate) fn pilot_target(
+    b: &PilotBehaviour,
+    swapped: bool,
+    phase: &Phase,
+    table: Option<&GaitTable<'_>>,
+    transfer_from: Option<f64>,
+    transfer_s: f32,
+    now_s: f64,
+) -> PilotTarget {
+    let start = |fallback: f64| table.map_or(fallback, |t| f64::from(t.first()[0]));
+    match *b {
+        PilotBehaviour::Fixed(t) => t,
+        PilotBehaviour::FollowsPlan(profile) => {
+            follow(phase, profile.at(0.0), transfer_from, transfer_s, |t_s| {
+                PilotTarget::Profile {
+                    profile,
+                    t0_s: now_s - t_s,
+                }
+            })
+        }
+        PilotBehaviour::FollowsTable => {
+            let to = start(0.0);
+            follow(phase, to, transfer_from, transfer_s, |t_s| match table {
+                Some(tb) => {
+                    let (phi1, rate) = table_stance_shank(tb, t_s, swapped);
+                    PilotTarget::Track {
+                        phi1_rad: phi1,
+                        rate_rad_s: rate,
+                        t0_s: now_s,
+                    }
+                }
+                None => PilotTarget::Hold { phi1_rad: to },
+            })
+        }
+    }
+}
+
+/// The stance shank a table plans at `t_s` and its rate (central
+/// differences over one table period, inside the table), rad and rad/s;
+/// held at the last sample once the table has ended.
+/// With `swapped` (the plant has already put the swing foot down and made
+/// it the stance foot, the controller not yet), the shank of that foot in
+/// the table's posture.
+pub fn table_stance_shank(table: &GaitTable<'_>, t_s: f64, swapped: bool) -> (f64, f64) {
+    let h = f64::from(table.period_s());
+    let end = f64::from(table.duration_s());
+    let at = |t: f64| {
+        let phi = table.at_time(t as f32).map(f64::from);
+        if swapped {
+            gait_core::kinematics::swap_legs(&phi)[0]
+        } else {
+            phi[0]
+        }
+    };
+    if t_s >= end {
+        return (at(end), 0.0);
+    }
+    let tc = t_s.max(h).min(end - h);
+    (at(t_s), (at(tc + h) - at(tc - h)) / (2.0 * h))
+}
+
+/// The pilot's target in each phase: `swing(t)` during a swing `t` seconds
+/// in; the smoothstep from the landing's shank to `start` during the
+/// transfer; `start` otherwise.
+fn follow(
+    phase: &Phase,
+    start: f64,
+    transfer_from: Option<f64>,
+    transfer_s: f32,
+    swing: impl FnOnce(f64) -> PilotTarget,
+) -> PilotTarget {
+    match *phase {
+        Phase::Swing { t_s, .. } => swing(f64::from(t_s)),
+        Phase::Transfer { t_s, .. } => {
+            let from = transfer_from.unwrap_or(start);
+            let x = if transfer_s > 0.0 {
+                f64::from(t_s / transfer_s).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            let s = x * x * (3.0 - 2.0 * x);
+            PilotTarget::Hold {
+                phi1_rad: from + s * (start - from),
+            }
+        }
+        _ => PilotTarget::Hold { phi1_rad: start },
+    }
+}
