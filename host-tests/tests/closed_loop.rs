@@ -165,7 +165,16 @@ fn e_stop_disables_the_motors_in_the_same_tick_and_latches() {
     assert_eq!(s.report.reaction, Reaction::DisableMotors);
     assert!(!s.report.motors_enabled);
     assert!(s.report.command_nm.iter().all(|&c| c == 0.0));
-    assert!(rig.wiring.motor_torques_nm().iter().all(|&t| t == 0.0));
+    // Every bridge is off; what the joints feel is the dynamic brake alone,
+    // which only ever opposes their motion.
+    assert!(rig.wiring.motors.iter().all(|m| !m.outputs().2));
+    let rates = rig.plant.state().joint_rates_rad_s;
+    for (t, w) in rig.wiring.motor_torques_nm().iter().zip(rates) {
+        assert!(
+            t * w <= 0.0 && t.abs() <= 400.0 * w.abs(),
+            "brake {t} N·m at {w} rad/s"
+        );
+    }
     assert!(rig.faults().contains(FaultCode::EStopPressed));
     // Released, the fault stays latched until a clinician reset.
     rig.e_stop.set_pressed(false);

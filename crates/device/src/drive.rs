@@ -66,6 +66,20 @@ pub struct AmplifierSpec {
     pub peak_current_a: f32,
 }
 
+/// The drive's dynamic brake: a normally-closed contactor across the
+/// motor's phases, held open by the bridge-enable line. Whenever the
+/// motors are disabled (e-stop, an output-stage fault, a reset, a power
+/// loss) it closes and the motor's back-EMF drives a current through the
+/// winding and the braking resistor: the joint is damped, not limp.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DynamicBrake {
+    /// The part.
+    pub name: &'static str,
+    /// Resistance in series with the shorted winding, Ω (it bounds the
+    /// braking current at speed).
+    pub resistance_ohm: f32,
+}
+
 /// One joint drive: the parts, and the current limit the amplifier is set
 /// to (which sets the joint's peak torque).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,6 +98,9 @@ pub struct DriveSpec {
     pub i2t_warning_share: f32,
     /// Share of the budget at which the output is disabled, 0–1.
     pub i2t_fault_share: f32,
+    /// What holds the joint while the bridge is disabled (`None`: nothing,
+    /// the joint is limp).
+    pub brake: Option<DynamicBrake>,
 }
 
 const RPM_TO_RAD_S: f32 = core::f32::consts::PI / 30.0;
@@ -115,6 +132,26 @@ impl DriveSpec {
     /// The motor current that gives the continuous joint torque, A.
     pub fn continuous_current_a(&self) -> f32 {
         self.continuous_torque_nm() / self.joint_torque_per_amp()
+    }
+
+    /// Joint damping while braked, N·m per (rad/s): the back-EMF k_e·N·ω
+    /// drives I = k_e·N·ω / (R + R_brake) through the shorted winding, whose
+    /// torque k_t·I·N·η opposes the motion: b = η·N²·k_t·k_e / (R + R_brake).
+    /// Zero without a brake. (The winding's inductance is left out: at the
+    /// joint speeds of a braked sink, under 1 rad/s, its reactance is a
+    /// tenth of the resistance.)
+    pub fn brake_damping_nm_s_per_rad(&self) -> f32 {
+        let Some(brake) = self.brake else {
+            return 0.0;
+        };
+        let n = self.gearbox.ratio;
+        let kt = self.motor.torque_constant_mnm_per_a * 1e-3;
+        let r = self.motor.terminal_resistance_ohm + brake.resistance_ohm;
+        if r > 0.0 {
+            self.gearbox.efficiency * n * n * kt * self.back_emf_v_per_rad_s() / r
+        } else {
+            0.0
+        }
     }
 
     /// Back-EMF constant, V per (rad/s) of the motor.

@@ -1,7 +1,7 @@
 //! The parts the device is built from, with the figures of their
 //! datasheets (sources and caveats in `docs/device.md`).
 
-use crate::drive::{AmplifierSpec, DriveSpec, GearboxSpec, MotorSpec};
+use crate::drive::{AmplifierSpec, DriveSpec, DynamicBrake, GearboxSpec, MotorSpec};
 use crate::sensors::LoadCellSpec;
 
 /// TQ RoboDrive ILM 85x26, 48 V winding (frameless, 10 pole pairs): the
@@ -43,6 +43,16 @@ pub const ESCON_70_10_AT_48V: AmplifierSpec = AmplifierSpec {
     peak_current_a: 30.0,
 };
 
+/// The hips' and knees' dynamic brake: a normally-closed three-pole
+/// contactor on the motor phases, opened by the bridge-enable line, with
+/// 0.5 Ω in series (`docs/device.md`): the joint is damped by 375 N·m·s/rad
+/// (a 75 N·m load sinks at 0.2 rad/s, 4.9 A in the winding; 1 rad/s, an
+/// abrupt fall, draws 25 A for a moment).
+pub const JOINT_BRAKE: DynamicBrake = DynamicBrake {
+    name: "normally-closed contactor on the phases, 0.5 Ω in series",
+    resistance_ohm: 0.5,
+};
+
 /// The most a joint may be driven with, N·m (the product's ceiling; the
 /// drive below stays under it).
 pub const JOINT_PEAK_TORQUE_NM: f32 = 150.0;
@@ -60,6 +70,7 @@ pub const JOINT_DRIVE: DriveSpec = DriveSpec {
     current_limit_a: JOINT_PEAK_TORQUE_NM / (0.253 * 80.0 * 0.75),
     i2t_warning_share: 0.3,
     i2t_fault_share: 0.6,
+    brake: Some(JOINT_BRAKE),
 };
 
 /// Foot-sole load cell with its amplifier into the 12-bit ADC: 200 counts

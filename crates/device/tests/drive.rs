@@ -68,3 +68,25 @@ fn the_fingerprint_changes_with_any_value() {
     d.supervisor.tracking_error_ticks += 1;
     assert_ne!(a.fingerprint(), d.fingerprint());
 }
+
+#[test]
+fn the_dynamic_brake_damps_the_joint_as_its_winding_and_resistor_allow() {
+    let d = JOINT_DRIVE;
+    // η N² k_t k_e / (R + R_brake) = 0.75 · 80² · 0.253 · 0.2530 / 0.82.
+    let kt = 0.253_f32;
+    let ke = 1.0 / (37.74 * core::f32::consts::PI / 30.0);
+    let expected = 0.75 * 80.0 * 80.0 * kt * ke / (0.32 + 0.5);
+    let b = d.brake_damping_nm_s_per_rad();
+    assert!((b - expected).abs() < 1e-3 * expected, "{b} vs {expected}");
+    assert!((370.0..380.0).contains(&b), "{b}");
+    // A 75 N·m load sinks at 0.2 rad/s; the braking current is then
+    // under the motor's nominal 11.5 A.
+    let speed = 75.0 / b;
+    let current = ke * 80.0 * speed / (0.32 + 0.5);
+    assert!(
+        speed < 0.21 && current < d.motor.nominal_current_a,
+        "{speed} rad/s, {current} A"
+    );
+    let limp = exogait_device::drive::DriveSpec { brake: None, ..d };
+    assert_eq!(limp.brake_damping_nm_s_per_rad(), 0.0);
+}

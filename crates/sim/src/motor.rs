@@ -105,6 +105,9 @@ struct Drive {
     i2t_a2s: f64,
     /// The joint's speed, rad/s (flexion positive).
     joint_speed_rad_s: f64,
+    /// Damping the dynamic brake gives while the bridge is disabled, as the
+    /// plant's step sees it, N·m·s/rad ([`SimMotor::discretise_brake`]).
+    brake_nm_s_per_rad: f64,
 }
 
 impl Drive {
@@ -143,6 +146,12 @@ impl Bridge {
     fn torque_nm(&self) -> f64 {
         if let Some(t) = self.stuck_nm {
             return t;
+        }
+        if !self.enable_high {
+            // Disabled: the dynamic brake (if the drive has one) damps.
+            return self
+                .drive
+                .map_or(0.0, |d| -d.brake_nm_s_per_rad * d.joint_speed_rad_s);
         }
         let asked = self.commanded_nm();
         let out = match &self.drive {
@@ -210,8 +219,28 @@ impl SimMotor {
             limits,
             i2t_a2s: 0.0,
             joint_speed_rad_s: 0.0,
+            brake_nm_s_per_rad: 0.0,
         });
         m
+    }
+
+    /// Sets the brake's damping as the plant's fixed-torque step of `dt_s`
+    /// can apply it to a joint of inertia `inertia_kgm2`: the damping b of
+    /// the drive's brake, held over a step, is explicit and unstable once
+    /// b·dt/I > 2 (b is some 375 N·m·s/rad, a shank about the knee 0.3
+    /// kg·m²); b / (1 + b·dt/I) is the implicit step's, stable for any b
+    /// and no stronger than the brake (so the simulated pilot is, if
+    /// anything, caught later than on the device).
+    pub fn discretise_brake(&self, inertia_kgm2: f64, dt_s: f64) {
+        if let Some(d) = self.0.borrow_mut().drive.as_mut() {
+            let b = f64::from(d.spec.brake_damping_nm_s_per_rad());
+            let stiffness = if inertia_kgm2 > 0.0 {
+                b * dt_s / inertia_kgm2
+            } else {
+                0.0
+            };
+            d.brake_nm_s_per_rad = b / (1.0 + stiffness);
+        }
     }
 
     /// The joint's speed now, rad/s (the torque–speed line uses it).

@@ -133,7 +133,9 @@ impl Wiring {
             forces: Default::default(),
             motors: std::array::from_fn(|j| {
                 let (spec, limits) = (cfg.drives[j], cfg.motors[j]);
-                SimMotor::with_drive(MAX_DUTY, spec, limits)
+                let m = SimMotor::with_drive(MAX_DUTY, spec, limits);
+                m.discretise_brake(BRAKED_JOINT_INERTIA_KGM2, f64::from(cfg.dt_s));
+                m
             }),
             clock: SimClock::new(),
             encoder_mounts: [e0, e1, e2, e3].map(|c| mount_of(&c)),
@@ -208,6 +210,11 @@ impl Wiring {
         std::array::from_fn(|j| self.motors.get(j).map_or(0.0, SimMotor::torque_nm))
     }
 }
+
+/// The smallest inertia a braked hip or knee moves, kg·m² (a shank and
+/// foot about the knee; the brake's damping is discretised for it,
+/// `SimMotor::discretise_brake`).
+pub const BRAKED_JOINT_INERTIA_KGM2: f64 = 0.3;
 
 /// A bus error kind for fault injection that no healthy bus produces.
 pub const INJECTED_SPI_ERROR: spi::ErrorKind = spi::ErrorKind::ChipSelectFault;
