@@ -376,7 +376,9 @@ impl<'t> Controller<'t> {
         match verdict.reaction {
             Reaction::None => {}
             Reaction::FinishStepThenHold => self.seq.block_new_steps(),
-            Reaction::SafeHold => self.seq.enter_safe_hold(&s.joints),
+            Reaction::SafeHold => self
+                .seq
+                .enter_safe_hold(&s.joints, verdict.latched.in_swing()),
             Reaction::DisableMotors => {
                 self.seq.follow_measured(&s.joints);
                 self.loops.iter_mut().for_each(JointLoop::reset);

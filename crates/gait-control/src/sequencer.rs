@@ -22,6 +22,7 @@ use gait_core::BodyModel;
 use gait_core::kinematics::Phi;
 use gait_core::tables::GaitTable;
 
+use crate::faults::InSwing;
 use crate::operator::Gait;
 use crate::posture::{JOINTS, Side, joints_from_phi};
 pub use crate::reference::Reference;
@@ -304,9 +305,18 @@ impl<'t> Sequencer<'t> {
         self.stop_requested = true;
     }
 
-    /// The supervisor's fatal reaction: ramp to `measured` and hold.
-    pub fn enter_safe_hold(&mut self, measured: &[f32; JOINTS]) {
+    /// The supervisor's fatal reaction: ramp to `measured` and hold; in a
+    /// swing, first play the step to its landing if `in_swing` says so.
+    pub fn enter_safe_hold(&mut self, measured: &[f32; JOINTS], in_swing: InSwing) {
         if matches!(self.phase, Phase::SafeHold { .. }) {
+            return;
+        }
+        if matches!(self.phase, Phase::Swing { .. }) && in_swing == InSwing::LandFirst {
+            // A foot in the air is not a posture to hold: the step goes on
+            // to its landing (sensed, or on the table's own timing when the
+            // foot's sensor is lost), the sequencer stands there, and the
+            // next call holds what it measures then.
+            self.block_new_steps();
             return;
         }
         let target = pick_finite(measured, &self.reference);

@@ -122,7 +122,13 @@ fn each_doc_row_matches_its_code_row() {
         let at = format!("docs/safety.md line {} (0x{:04x})", row.line, row.code);
         let c = FaultCode::from_code(row.code).unwrap_or_else(|| panic!("{at}: no such FaultCode"));
         assert_eq!(row.name, c.name(), "{at}: name");
-        assert_eq!(row.reaction, doc_label(c.reaction()), "{at}: reaction");
+        let label = match c.in_swing() {
+            gait_control::faults::InSwing::LandFirst => {
+                format!("{} (IN A SWING: LAND FIRST)", doc_label(c.reaction()))
+            }
+            gait_control::faults::InSwing::HoldNow => doc_label(c.reaction()).to_owned(),
+        };
+        assert_eq!(row.reaction, label, "{at}: reaction");
         assert_eq!(
             row.detection_bound,
             c.detection_bound(),
@@ -150,4 +156,25 @@ fn the_cell_splitter_keeps_escaped_pipes() {
         cells(r"| a | \|x\| > 1 | b |"),
         vec!["a".to_owned(), "|x| > 1".to_owned(), "b".to_owned()]
     );
+}
+
+#[test]
+fn only_safe_holds_land_first_and_only_for_lost_sensing_or_timing() {
+    use gait_control::faults::InSwing;
+    let landing: Vec<FaultCode> = FaultCode::ALL
+        .into_iter()
+        .filter(|c| c.in_swing() == InSwing::LandFirst)
+        .collect();
+    assert!(landing.iter().all(|c| c.reaction() == Reaction::SafeHold));
+    assert_eq!(
+        landing.iter().map(|c| c.code()).collect::<Vec<_>>(),
+        [0x0201, 0x0202, 0x0203, 0x0205, 0x0206, 0x0601]
+    );
+    // A set lands first only if every safe-hold fault in it does.
+    let mut set: gait_control::faults::FaultSet = [FaultCode::EncoderParity, FaultCode::ForceOpen]
+        .into_iter()
+        .collect();
+    assert_eq!(set.in_swing(), InSwing::LandFirst);
+    set.insert(FaultCode::MotorSaturated);
+    assert_eq!(set.in_swing(), InSwing::HoldNow);
 }

@@ -10,6 +10,7 @@
     missing_docs
 )]
 
+use gait_control::faults::InSwing;
 use gait_control::operator::Gait;
 use gait_control::posture::{JOINTS, Side, joints_from_phi};
 use gait_control::sequencer::{
@@ -321,18 +322,40 @@ fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
     for _ in 0..700 {
         rig.step(&s);
     }
+    assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
     let measured = [0.3, 0.2, 0.1, 0.4];
     let before = rig.seq.reference();
-    rig.seq.enter_safe_hold(&measured);
+    // The controller asks for the hold every tick while the fault is
+    // latched. In a swing the step lands first, then the hold begins.
     let mut last = before;
     let mut max_step = 0.0f32;
-    for _ in 0..400 {
+    let mut phases = Vec::new();
+    for _ in 0..3000 {
+        rig.seq.enter_safe_hold(&measured, InSwing::LandFirst);
         let r = rig.step(&sensed(measured, READY_FEET, READY_CRUTCHES));
         for i in 0..JOINTS {
             max_step = max_step.max((r[i] - last[i]).abs());
         }
         last = r;
+        let kind = std::mem::discriminant(&rig.seq.phase());
+        if phases.last() != Some(&kind) {
+            phases.push(kind);
+        }
     }
+    let swing = std::mem::discriminant(&Phase::Swing {
+        stance: Side::Left,
+        t_s: 0.0,
+    });
+    let hold = std::mem::discriminant(&Phase::SafeHold { t_s: 0.0 });
+    assert_eq!(phases.first(), Some(&swing), "the swing went on");
+    assert_eq!(phases.last(), Some(&hold), "then held");
+    assert!(
+        !phases.contains(&std::mem::discriminant(&Phase::Transfer {
+            stance: Side::Left,
+            t_s: 0.0
+        })),
+        "no weight transfer after the landing: {phases:?}"
+    );
     for i in 0..JOINTS {
         assert!((last[i] - measured[i]).abs() < 1e-6);
     }
@@ -347,6 +370,22 @@ fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
     );
     rig.seq.reset_after_faults();
     assert_eq!(rig.seq.phase(), Phase::Standing);
+}
+
+#[test]
+fn a_safe_hold_for_a_motor_fault_holds_a_swing_at_once() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    for _ in 0..700 {
+        rig.step(&s);
+    }
+    assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
+    rig.seq
+        .enter_safe_hold(&[0.3, 0.2, 0.1, 0.4], InSwing::HoldNow);
+    assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
 }
 
 #[test]

@@ -4,7 +4,7 @@
 
 use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
-use gait_control::sequencer::GaitTables;
+use gait_control::sequencer::{GaitTables, Phase};
 use gait_core::BodyModel;
 use gait_core::clinical::riser_behind_stance_x;
 use gait_core::foot::StanceFoot;
@@ -211,8 +211,11 @@ pub fn run_steps(rig: &mut Rig<'_>, steps: usize, max_s: f64) -> Result<(), SimE
         if landed_at.is_some_and(|k| rig.trace.len() > k + 1500) {
             break;
         }
-        if held_since.is_none() && rig.worst_reaction() >= gait_control::faults::Reaction::SafeHold
-        {
+        // From when the hold begins (a swing may land first) or the motors
+        // are off.
+        let holding = matches!(rig.phase(), Phase::SafeHold { .. })
+            || rig.worst_reaction() >= gait_control::faults::Reaction::DisableMotors;
+        if held_since.is_none() && holding {
             held_since = Some(rig.trace.len());
         }
         if held_since.is_some_and(|k| rig.trace.len() > k + 1000) {
