@@ -312,10 +312,10 @@ fn landing_timeout_holds_the_posture() {
     assert_eq!(rig.seq.phase(), Phase::Standing);
 }
 
-#[test]
-fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
-    let img = walk_image();
-    let mut rig = Rig::new(&img);
+/// A walk started from its start posture and played 0.7 s into its first
+/// swing; the sensed readings it was started with.
+fn walking_in_a_swing(img: &[u8]) -> (Rig<'_>, Sensed) {
+    let mut rig = Rig::new(img);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
     rig.seq.request_start(Gait::Walk, &s);
@@ -323,6 +323,13 @@ fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
         rig.step(&s);
     }
     assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
+    (rig, s)
+}
+
+#[test]
+fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
+    let img = walk_image();
+    let (mut rig, s) = walking_in_a_swing(&img);
     let measured = [0.3, 0.2, 0.1, 0.4];
     let before = rig.seq.reference();
     // The controller asks for the hold every tick while the fault is
@@ -375,14 +382,7 @@ fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
 #[test]
 fn a_safe_hold_for_a_motor_fault_holds_a_swing_at_once() {
     let img = walk_image();
-    let mut rig = Rig::new(&img);
-    let pose = rig.start_pose(Side::Left);
-    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
-    for _ in 0..700 {
-        rig.step(&s);
-    }
-    assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
+    let (mut rig, _) = walking_in_a_swing(&img);
     rig.seq
         .enter_safe_hold(&[0.3, 0.2, 0.1, 0.4], InSwing::HoldNow);
     assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
