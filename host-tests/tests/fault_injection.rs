@@ -293,3 +293,24 @@ fn motors_disabled_brake_the_joints_instead_of_letting_them_go_limp() {
         "limp {limp_worst} rad, braked {braked_worst} rad"
     );
 }
+
+#[test]
+fn missed_deadlines_in_a_swing_land_the_step_before_holding() {
+    // 0x0601 is marked "land first": the step in the air plays on to its
+    // landing, then the hold begins (docs/safety.md, "Reactions").
+    for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
+        let o = run(gait, 2, 8.0, None, &["overrun=5@2.4"]);
+        let f = o
+            .faults
+            .iter()
+            .find(|f| f.code == FaultCode::DeadlineMissed)
+            .unwrap_or_else(|| panic!("{gait:?}: no 0x0601: {o:?}"));
+        assert!(o.fell.is_none(), "{gait:?}: {o:?}");
+        assert!(o.landings >= 1, "{gait:?}: the step did not land: {o:?}");
+        let held_after = f.safe_state_s.unwrap() - f.detected_s;
+        assert!(
+            held_after > 0.35,
+            "{gait:?}: held {held_after} s after detection, before landing"
+        );
+    }
+}

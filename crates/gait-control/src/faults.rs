@@ -141,12 +141,13 @@ pub enum InSwing {
     /// doubt (a saturated or stuck motor, a joint past its envelope or off
     /// its reference, a frozen reading control still believes).
     HoldNow,
-    /// Play the step on to its landing, then hold: a sensor is lost or the
-    /// timing slipped, but the table and the motors are good, and a foot in
-    /// the air is no posture to hold (a lost joint runs on the model's
-    /// torque for the table's reference meanwhile). Measured in the fault
-    /// campaign (`docs/safety.md`): falls after encoder bus, parity and
-    /// error-flag faults 32 → 6 in 297 runs; after overruns 7 → 0 in 96.
+    /// Play the step on to its landing, then hold: the timing slipped, but
+    /// the sensors, the table and the motors are good, and a foot in the
+    /// air is no posture to hold. Measured in the fault campaign
+    /// (`docs/safety.md`, seed 1): falls after overruns 7 → 0 in 96 runs.
+    /// Not for a lost joint encoder: landing on a joint run on the model's
+    /// torque alone fell more often than holding at once (57 against 34
+    /// falls in 400 encoder-fault runs).
     LandFirst,
 }
 
@@ -196,7 +197,6 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "3 ticks when persistent; at the 3rd bad frame within 100 ms",
         reset_allowed_when: "< 3 bad frames in the last 100 ticks",
-        in_swing: InSwing::LandFirst,
     },
     /// Joint encoder: too many bad frames, the last a parity error.
     EncoderParity = 0x0202 {
@@ -204,7 +204,6 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "as 0x0201",
         reset_allowed_when: "as 0x0201",
-        in_swing: InSwing::LandFirst,
     },
     /// Joint encoder: too many bad frames, the last with the error flag.
     EncoderErrorFlag = 0x0203 {
@@ -212,7 +211,6 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "as 0x0201",
         reset_allowed_when: "as 0x0201",
-        in_swing: InSwing::LandFirst,
     },
     /// Joint encoder: raw counts unchanged while the joint is driven.
     EncoderFrozen = 0x0204 {
@@ -227,7 +225,6 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "3 ticks when persistent; a single jumping frame is dropped and tolerated",
         reset_allowed_when: "as 0x0201",
-        in_swing: InSwing::LandFirst,
     },
     /// Joint encoder: a frame reported good carries an impossible value
     /// (raw counts beyond 14 bits, angle not finite or outside (−π, π]).
@@ -236,7 +233,6 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "same tick (1)",
         reset_allowed_when: "the frame is valid and < 3 bad frames in 100 ticks",
-        in_swing: InSwing::LandFirst,
     },
     /// Ankle encoder: any of the encoder faults above on a passive ankle.
     AnkleEncoder = 0x0207 {
