@@ -409,10 +409,11 @@ fn take_panic_mark() -> bool {
 /// A panic — none is reachable from the control tick or our crates, `cargo
 /// xtask panics` proves it on every CI run — leaves a mark in RAM and resets
 /// the board at once. The reset drives the enable lines low for the boot
-/// (about 2 ms to the first tick); the controller then starts with fault
-/// 0x0603 latched, whose reaction is the one the fault table keeps for an
-/// internal error: SAFE HOLD of the posture it finds, motors powered. Never
-/// a limp exoskeleton waiting for a clinician. Nothing is logged here: the
+/// (the drives' dynamic brakes close; a few ms to the first tick); the
+/// controller then starts with fault 0x0603 latched, whose reaction is the
+/// one the fault table keeps for an internal error: SAFE HOLD of the
+/// posture it finds, motors powered. Never a limp exoskeleton waiting for
+/// a clinician. Nothing is logged here: the
 /// log itself may be what panicked; the next boot logs the restart.
 #[panic_handler]
 fn panic(_info: &core::panic::PanicInfo) -> ! {
