@@ -449,16 +449,29 @@ impl FaultSet {
     /// What the safe hold does in a swing: land first only when every fault
     /// that asks for a safe hold lets the step land ([`InSwing`]).
     #[must_use]
-    pub fn in_swing(&self) -> InSwing {
-        let hold_now = self
-            .iter()
-            .filter(|c| c.reaction() == Reaction::SafeHold)
-            .any(|c| c.in_swing() == InSwing::HoldNow);
-        if hold_now {
+    pub const fn in_swing(&self) -> InSwing {
+        if self.0 & HOLD_NOW_IN_SWING != 0 {
             InSwing::HoldNow
         } else {
             InSwing::LandFirst
         }
+    }
+}
+
+/// The faults whose safe hold holds a swing at once, as [`FaultSet`] bits
+/// (worked out from the table when compiling: one AND a tick).
+const HOLD_NOW_IN_SWING: u32 = hold_now_mask(&FaultCode::ALL);
+
+/// The [`FaultSet`] bits of the safe-hold faults in `codes` that hold a
+/// swing at once.
+const fn hold_now_mask(codes: &[FaultCode]) -> u32 {
+    match codes {
+        [c, rest @ ..] => {
+            let here = matches!(c.reaction(), Reaction::SafeHold)
+                && matches!(c.in_swing(), InSwing::HoldNow);
+            (if here { c.bit() } else { 0 }) | hold_now_mask(rest)
+        }
+        [] => 0,
     }
 }
 
