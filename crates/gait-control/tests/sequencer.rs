@@ -417,13 +417,8 @@ fn weight_transfer_keeps_the_trailing_foot_planted() {
     use gait_core::BodyModel;
     use gait_core::kinematics::forward_kinematics;
     let img = walk_image();
-    let mut rig = Rig::new(&img);
+    let (mut rig, pose) = landed_with_the_model(&img);
     let model: BodyModel<f32> = BodyModel::<f64>::paper_table_iii().cast();
-    rig.seq = rig.seq.with_model(model);
-    let pose = rig.start_pose(Side::Left);
-    rig.seq
-        .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
-    swing_and_land(&mut rig, Side::Left, None);
     assert!(matches!(
         rig.seq.phase(),
         Phase::Transfer {
@@ -472,17 +467,23 @@ fn weight_transfer_keeps_the_trailing_foot_planted() {
     }
 }
 
-/// The reference through the weight transfer after the first landing, with
-/// the model (the transfer planned by the IK).
-fn transfer_trace(image: &[u8]) -> Vec<[f32; JOINTS]> {
-    use gait_core::BodyModel;
+/// A walk with the model (the transfer planned by the IK) started from its
+/// start posture and played to its first landing; that start posture.
+fn landed_with_the_model(image: &[u8]) -> (Rig<'_>, [f32; JOINTS]) {
     let mut rig = Rig::new(image);
-    let model: BodyModel<f32> = BodyModel::<f64>::paper_table_iii().cast();
+    let model: gait_core::BodyModel<f32> = gait_core::BodyModel::<f64>::paper_table_iii().cast();
     rig.seq = rig.seq.with_model(model);
     let pose = rig.start_pose(Side::Left);
     rig.seq
         .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
     swing_and_land(&mut rig, Side::Left, None);
+    (rig, pose)
+}
+
+/// The reference through the weight transfer after the first landing, with
+/// the model (the transfer planned by the IK).
+fn transfer_trace(image: &[u8]) -> Vec<[f32; JOINTS]> {
+    let (mut rig, pose) = landed_with_the_model(image);
     let mut trace = Vec::new();
     while matches!(rig.seq.phase(), Phase::Transfer { .. }) {
         trace.push(rig.step(&sensed(pose, [0.0, 500.0], READY_CRUTCHES)));
