@@ -144,6 +144,8 @@ pub struct Controller<'t> {
     rate: [f32; JOINTS],
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
+    /// Joints whose drive the supervisor has disabled (0x0404).
+    braked: [bool; JOINTS],
     primed: bool,
     /// A clinician reset waiting for the supervisor.
     pending_reset: Option<PendingReset>,
@@ -177,6 +179,8 @@ impl<'t> Controller<'t> {
             limit_nm: 0.0,
             thermal_fault: false,
             output_fault: false,
+            enabled: false,
+            feedforward_nm: 0.0,
         };
         Ok(Self {
             cfg,
@@ -191,6 +195,7 @@ impl<'t> Controller<'t> {
             rate: [0.0; JOINTS],
             motor_sense: [idle; JOINTS],
             motors_enabled: false,
+            braked: [false; JOINTS],
             primed: false,
             pending_reset: None,
             other_foot_integral_n: 0.0,
@@ -354,10 +359,20 @@ impl<'t> Controller<'t> {
         deadline_missed: bool,
     ) -> Verdict {
         let mut motors = self.motor_sense;
-        for ((m, &c), &g) in motors.iter_mut().zip(&a.command_nm).zip(&self.cfg.gains) {
+        for (((m, &c), &f), &g) in motors
+            .iter_mut()
+            .zip(&a.command_nm)
+            .zip(&a.feedforward_nm)
+            .zip(&self.cfg.gains)
+        {
             m.commanded_nm = c;
+            m.feedforward_nm = f;
             m.limit_nm = g.torque_limit_nm;
         }
+        let swing_leg = match self.seq.phase() {
+            Phase::Swing { stance, .. } => Some(stance.other()),
+            _ => None,
+        };
         let input = SupervisorInput {
             tick: self.tick,
             joints: [0, 1, 2, 3].map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
@@ -371,6 +386,7 @@ impl<'t> Controller<'t> {
             step_in_progress: self.seq.step_in_progress(),
             button_input_fault: s.mode.input_fault || s.go.input_fault,
             ankle_plan_rad: r.ankle_plan_rad,
+            swing_leg,
         };
         let verdict = self.supervisor.check(&input);
         match verdict.reaction {
@@ -404,7 +420,7 @@ impl<'t> Controller<'t> {
         EN: OutputPin<Error = PinE>,
         OUT: OutputPin,
     {
-        let written = self.write_motors(hw, &a.command_nm, verdict.reaction);
+        let written = self.write_motors(hw, &a.command_nm, verdict);
         let op = &plan.operator;
         let fb = op.feedback;
         let _ = hw.gait_led.update(fb.gait_led, op.tick);
@@ -425,25 +441,28 @@ impl<'t> Controller<'t> {
         }
     }
 
-    /// Enables or disables the motors as `reaction` allows and writes the
+    /// Enables or disables the motors as the verdict allows (every one
+    /// for its reaction, one by one for the braked joints) and writes the
     /// commands; returns what the drivers applied (0 when disabled).
     #[inline(always)]
     fn write_motors<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
         command: &[f32; JOINTS],
-        reaction: Reaction,
+        verdict: &Verdict,
     ) -> [f32; JOINTS]
     where
         PWM: SetDutyCycle<Error = PwmE>,
         DIR: OutputPin<Error = PinE>,
         EN: OutputPin<Error = PinE>,
     {
-        let enable = reaction < Reaction::DisableMotors;
+        let enable = verdict.reaction < Reaction::DisableMotors;
         if enable && !self.motors_enabled {
             let mut all_ok = true;
-            for m in hw.motors.iter_mut() {
-                all_ok &= m.enable().is_ok();
+            for (m, &braked) in hw.motors.iter_mut().zip(&verdict.braked_joints) {
+                if !braked {
+                    all_ok &= m.enable().is_ok();
+                }
             }
             self.motors_enabled = all_ok;
             self.loops.iter_mut().for_each(JointLoop::reset);
@@ -455,7 +474,21 @@ impl<'t> Controller<'t> {
         }
         let mut written = [0.0f32; JOINTS];
         for (i, m) in hw.motors.iter_mut().enumerate() {
-            let cmd = if self.motors_enabled {
+            let braked = verdict.braked_joints.get(i).copied().unwrap_or(false);
+            if let Some(was) = self.braked.get_mut(i) {
+                if braked && !*was {
+                    let _ = m.disable();
+                } else if !braked && *was && self.motors_enabled {
+                    // Released by a reset: back on, from a fresh loop.
+                    let _ = m.enable();
+                    if let Some(lp) = self.loops.get_mut(i) {
+                        lp.reset();
+                    }
+                }
+                *was = braked;
+            }
+            let on = self.motors_enabled && !braked;
+            let cmd = if on {
                 command.get(i).copied().unwrap_or(0.0)
             } else {
                 0.0
@@ -463,6 +496,7 @@ impl<'t> Controller<'t> {
             let sense = self.motor_sense.get_mut(i);
             let result = m.update(cmd);
             if let Some(s) = sense {
+                s.enabled = on && m.at_full_authority();
                 s.thermal_fault = matches!(result, Err(motor::Error::Thermal));
                 s.output_fault = matches!(
                     result,

@@ -50,7 +50,8 @@ macro_rules! fault_table {
             reaction: $reaction:path,
             detection_bound: $bound:literal,
             reset_allowed_when: $reset:literal
-            $(, in_swing: $swing:path)? $(,)?
+            $(, in_swing: $swing:path)?
+            $(, brakes_joint: $brakes:literal)? $(,)?
         }
     ),+ $(,)?) => {
         /// One fault of the fault table. `#[repr(u16)]`: the discriminant is
@@ -127,8 +128,21 @@ macro_rules! fault_table {
                     $(Self::$variant => fault_table!(@in_swing $($swing)?)),+
                 }
             }
+
+            /// Whether the fault disables the drive of the joint it is
+            /// raised on, so that joint's dynamic brake holds it while the
+            /// others hold the posture (`false` unless the row says so): a
+            /// drive that does not give the torque commanded.
+            #[must_use]
+            pub const fn brakes_joint(self) -> bool {
+                match self {
+                    $(Self::$variant => fault_table!(@brakes $($brakes)?)),+
+                }
+            }
         }
     };
+    (@brakes) => { false };
+    (@brakes $brakes:literal) => { $brakes };
     (@in_swing) => { InSwing::HoldNow };
     (@in_swing $swing:path) => { $swing };
 }
@@ -347,6 +361,19 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "first tick after the restart (1)",
         reset_allowed_when: "a clinician resets in a safe posture",
+    },
+    /// A hip or knee does not move as its command and the model say it
+    /// should: the torque reaching the joint is not the torque commanded
+    /// (a drive stuck on an old set value, a weak drive, a slipping
+    /// gearbox). The joint's drive is disabled, so its dynamic brake holds
+    /// it, and the others hold the posture.
+    MotorResponse = 0x0404 {
+        name: "motor not following its command",
+        reaction: Reaction::SafeHold,
+        detection_bound: "10 ticks over the limit; the residual's 3 Hz low-pass: a sudden torque \
+            error of 100 N·m in about 170 ticks, 200 N·m in about 85",
+        reset_allowed_when: "the residual is under the limit",
+        brakes_joint: true,
     },
 }
 

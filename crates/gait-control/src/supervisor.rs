@@ -24,15 +24,17 @@ use crate::ring_log::RingLog;
 use crate::drivers::as5048a::{DATA_MASK, wrapped_delta};
 use crate::faults::{FaultCode, FaultSet, Reaction};
 
-pub use crate::layout::{ANKLES, FORCES, JOINTS};
+pub use crate::layout::{ANKLES, FORCES, JOINTS, Side};
 
 mod checks;
 mod config;
+mod response;
 mod tracks;
 
 pub use config::{
     AngleRange, ConfigError, Debounce, EnvelopeMargins, ResetRefused, SupervisorConfig,
 };
+pub use response::ResponseCheck;
 use tracks::{Class, EncoderTrack, ForceTrack, Frame, JointTrack};
 /// Records kept in the post-mortem log (the newest ones).
 pub const LOG_LEN: usize = 32;
@@ -91,6 +93,12 @@ pub struct MotorSense {
     pub thermal_fault: bool,
     /// The driver has latched an output-stage fault (a write failed).
     pub output_fault: bool,
+    /// The drive is enabled and past its soft start: it gave the torque
+    /// asked for, `applied_nm` (0x0404 checks only then).
+    pub enabled: bool,
+    /// The feed-forward part of `commanded_nm`: the model's torque for the
+    /// reference motion, N·m (0x0404 checks the rest against the motion).
+    pub feedforward_nm: f32,
 }
 
 /// Everything the supervisor needs for one tick. Plain data, filled by the
@@ -126,6 +134,9 @@ pub struct SupervisorInput {
     /// stance ankle's φ1 during a swing; NaN where nothing is planned (the
     /// swing ankle, standing). For the unplanned heel-off rule (0x0105).
     pub ankle_plan_rad: [f32; ANKLES],
+    /// The leg in the air (`None` while both feet are down): its joints
+    /// move only their own links (0x0404's swing inertias).
+    pub swing_leg: Option<Side>,
 }
 
 /// The supervisor's decision for one tick.
@@ -138,6 +149,10 @@ pub struct Verdict {
     pub latched: FaultSet,
     /// Faults latched by this call (not latched before it).
     pub new: FaultSet,
+    /// Joints whose drive must stay disabled, braked (0x0404 latched on
+    /// them: a drive that does not give the torque commanded is worse
+    /// than its brake).
+    pub braked_joints: [bool; JOINTS],
 }
 
 /// One post-mortem record: written when a fault latches, and again when
@@ -220,6 +235,7 @@ impl Supervisor {
                 logged_channels: [0; FaultCode::COUNT],
                 logged_none: FaultSet::EMPTY,
                 log: RingLog::new(),
+                braked: [false; JOINTS],
             },
             joints: [JointTrack::default(); JOINTS],
             ankles: [EncoderTrack::default(); ANKLES],
@@ -273,6 +289,7 @@ impl Supervisor {
         self.latch.latched = FaultSet::EMPTY;
         self.latch.logged_channels = [0; FaultCode::COUNT];
         self.latch.logged_none = FaultSet::EMPTY;
+        self.latch.braked = [false; JOINTS];
         Ok(())
     }
 
@@ -311,6 +328,7 @@ impl Supervisor {
             reaction: self.latch.latched.reaction(),
             latched: self.latch.latched,
             new: t.new,
+            braked_joints: self.latch.braked,
         }
     }
 }
@@ -326,6 +344,9 @@ struct Latch {
     /// Whether a no-channel record was logged since the fault latched.
     logged_none: FaultSet,
     log: RingLog<FaultRecord, LOG_LEN>,
+    /// Joints whose drive a fault has disabled ([`FaultCode::brakes_joint`]),
+    /// until a reset.
+    braked: [bool; JOINTS],
 }
 
 impl Latch {
@@ -333,6 +354,11 @@ impl Latch {
     /// and logs it once per channel while latched.
     pub(super) fn raise(&mut self, t: &mut Tick, code: FaultCode, channel: u8, value: f32) {
         t.present.insert(code);
+        if code.brakes_joint() {
+            if let Some(b) = self.braked.get_mut(usize::from(channel)) {
+                *b = true;
+            }
+        }
         if !self.latched.contains(code) {
             self.latched.insert(code);
             t.new.insert(code);

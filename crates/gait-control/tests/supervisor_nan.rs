@@ -89,15 +89,28 @@ fn random_input() -> impl Strategy<Value = SupervisorInput> {
         float(),
     )
         .prop_map(|(status, newtons)| ForceSense { status, newtons });
-    let motor = (float(), float(), float(), any::<bool>(), any::<bool>()).prop_map(
-        |(commanded_nm, applied_nm, limit_nm, thermal_fault, output_fault)| MotorSense {
-            commanded_nm,
-            applied_nm,
-            limit_nm,
-            thermal_fault,
-            output_fault,
-        },
-    );
+    let motor = (
+        float(),
+        float(),
+        float(),
+        any::<bool>(),
+        any::<bool>(),
+        any::<bool>(),
+        float(),
+    )
+        .prop_map(
+            |(commanded_nm, applied_nm, limit_nm, thermal_fault, output_fault, enabled, ff)| {
+                MotorSense {
+                    commanded_nm,
+                    applied_nm,
+                    limit_nm,
+                    thermal_fault,
+                    output_fault,
+                    enabled,
+                    feedforward_nm: ff,
+                }
+            },
+        );
     (
         any::<u32>(),
         proptest::array::uniform4(encoder_sense()),
@@ -121,6 +134,7 @@ fn random_input() -> impl Strategy<Value = SupervisorInput> {
                 step_in_progress: flags[3],
                 button_input_fault: flags[4],
                 ankle_plan_rad: [f32::NAN; ANKLES],
+                swing_leg: None,
             },
         )
 }

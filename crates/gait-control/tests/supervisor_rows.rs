@@ -343,6 +343,75 @@ fn row_motor_saturated() {
     assert_row(&v, FaultCode::MotorSaturated, Reaction::SafeHold, 200);
 }
 
+/// A drive stuck on its old set value: the position loop asks 100 N·m
+/// more than the model's torque, the joint does not move. The residual's
+/// 3 Hz critically damped low-pass passes 80 % of a step after about 160
+/// ticks, and the fault latches 10 ticks later; the joint's drive is to be
+/// braked.
+#[test]
+fn row_motor_response() {
+    let (_, v) = inject(200, |_, input| {
+        input.motors[1].commanded_nm = 105.0;
+        input.motors[1].applied_nm = 105.0;
+        input.motors[1].limit_nm = 150.0;
+    });
+    let at = detected_at(&v, FaultCode::MotorResponse).unwrap();
+    assert!((150..=190).contains(&at), "detected at tick {at}");
+    assert_row(&v, FaultCode::MotorResponse, Reaction::SafeHold, at);
+    let verdict = v[at as usize - 1];
+    assert_eq!(verdict.braked_joints, [false, true, false, false]);
+}
+
+/// The same push when the joint answers it as the model says (its error
+/// accelerates at u / J) is no fault; a disabled or ramping drive is not
+/// checked at all.
+#[test]
+fn motor_response_follows_the_model_and_only_full_authority_drives() {
+    let inertia = SupervisorConfig::paper().response.stance_inertia_kgm2[1];
+    // Until the tracking error's bound: the error reaches 0.15 rad after
+    // 155 ticks.
+    let (_, v) = inject(250, |k, input| {
+        let t = (k - 1) as f32 * 0.001;
+        let push = 100.0;
+        input.joints[1] = encoder(STAND_JOINTS[1] + 0.5 * push / inertia * t * t);
+        input.motors[1].commanded_nm = 5.0 + push;
+        input.motors[1].applied_nm = 5.0 + push;
+        input.motors[1].limit_nm = 150.0;
+    });
+    assert_eq!(detected_at(&v, FaultCode::MotorResponse), None);
+    assert!(v.last().unwrap().latched.is_empty());
+    let (_, v) = inject(200, |_, input| {
+        input.motors[1].commanded_nm = 105.0;
+        input.motors[1].applied_nm = 105.0;
+        input.motors[1].limit_nm = 150.0;
+        input.motors[1].enabled = false;
+    });
+    assert_eq!(detected_at(&v, FaultCode::MotorResponse), None);
+}
+
+/// The brake stays until a clinician's reset clears the fault, once the
+/// residual is back under the limit.
+#[test]
+fn a_braked_joint_is_released_by_a_reset() {
+    let (mut sup, v) = inject(300, |_, input| {
+        input.motors[3].commanded_nm = -115.0;
+        input.motors[3].applied_nm = -115.0;
+        input.motors[3].limit_nm = 150.0;
+    });
+    assert!(v.last().unwrap().braked_joints[3]);
+    let mut last = *v.last().unwrap();
+    for tick in 0..20 {
+        let mut input = healthy_input(WARMUP + 300 + tick);
+        input.motors[3].enabled = false;
+        last = sup.check(&input);
+    }
+    assert!(last.braked_joints[3], "held until a reset");
+    sup.request_reset(true).unwrap();
+    let v = sup.check(&healthy_input(WARMUP + 400));
+    assert_eq!(v.braked_joints, [false; JOINTS]);
+    assert!(v.latched.is_empty());
+}
+
 #[test]
 fn row_motor_thermal() {
     let (_, v) = inject(3, |_, input| {

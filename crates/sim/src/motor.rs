@@ -91,7 +91,8 @@ struct Bridge {
     drive: Option<Drive>,
     /// Fault: share of the torque the drive still gives (1 healthy).
     strength: f64,
-    /// Fault: the output stuck at this torque whatever is commanded.
+    /// Fault: the set value stuck at this torque whatever is commanded
+    /// (while enabled).
     stuck_nm: Option<f64>,
 }
 
@@ -144,14 +145,16 @@ impl Bridge {
 
     /// The torque it puts out, N·m.
     fn torque_nm(&self) -> f64 {
-        if let Some(t) = self.stuck_nm {
-            return t;
-        }
         if !self.enable_high {
-            // Disabled: the dynamic brake (if the drive has one) damps.
+            // Disabled: the dynamic brake (if the drive has one) damps. The
+            // enable line switches the power stage off whatever the set
+            // value, a stuck one included (the ESCON's enable input).
             return self
                 .drive
                 .map_or(0.0, |d| -d.brake_nm_s_per_rad * d.joint_speed_rad_s);
+        }
+        if let Some(t) = self.stuck_nm {
+            return t;
         }
         let asked = self.commanded_nm();
         let out = match &self.drive {
@@ -329,10 +332,16 @@ impl SimMotor {
         };
     }
 
-    /// Fault: the bridge's output sticks at the torque it gives now,
-    /// whatever is commanded or disabled (a welded switch).
+    /// Fault: the drive's set value sticks at the torque it gives now
+    /// (its PWM input or its own controller frozen), whatever is commanded.
+    /// The enable line still switches its power stage off (the ESCON's
+    /// enable is a separate input): disabled, the brake holds the joint.
     pub fn stick(&self) {
-        let now = self.torque_nm();
+        let now = if self.0.borrow().enable_high {
+            self.torque_nm()
+        } else {
+            0.0
+        };
         self.0.borrow_mut().stuck_nm = Some(now);
     }
 

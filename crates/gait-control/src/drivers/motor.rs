@@ -254,6 +254,12 @@ where
         self.enabled
     }
 
+    /// Enabled and past the soft start: the drive gives the torque it is
+    /// asked for (up to its limits).
+    pub const fn at_full_authority(&self) -> bool {
+        self.enabled && self.ticks_since_enable > self.cfg.soft_start_ticks
+    }
+
     /// The I²t accumulator, A²·s above continuous.
     pub const fn i2t_a2s(&self) -> f32 {
         self.i2t_a2s

@@ -166,6 +166,41 @@ impl Supervisor {
                 if track.tracking_ticks >= cfg.tracking_error_ticks {
                     latch.raise(t, FaultCode::TrackingError, ch, error);
                 }
+                // A reference faster than the joint can go is a jump of the
+                // plan (a hold's start, a reset), not a motion to check
+                // against: the observer restarts from it.
+                if motor.enabled && delta.is_some() && reference_speed <= vmax {
+                    let r = &cfg.response;
+                    let swing = input.swing_leg.is_some_and(|leg| leg.has_joint(i));
+                    let inertia = if swing {
+                        r.swing_inertia_kgm2
+                    } else {
+                        r.stance_inertia_kgm2
+                    };
+                    let d = track.residual.update(
+                        error,
+                        motor.applied_nm,
+                        motor.feedforward_nm,
+                        inertia.get(i % 2).copied().unwrap_or(f32::NAN),
+                        2.0 * core::f32::consts::PI * r.bandwidth_hz,
+                        cfg.dt_s,
+                    );
+                    if within(d, r.limit_nm) {
+                        track.residual.over_ticks = 0;
+                    } else {
+                        track.residual.over_ticks = track.residual.over_ticks.saturating_add(1);
+                    }
+                    if track.residual.over_ticks >= r.ticks {
+                        latch.raise(t, FaultCode::MotorResponse, ch, d);
+                    }
+                    if !d.is_finite() {
+                        track.residual.stop(motor.feedforward_nm);
+                    }
+                } else {
+                    track.residual.stop(motor.feedforward_nm);
+                }
+            } else {
+                track.residual.stop(motor.feedforward_nm);
             }
             // Conditions that persist while frames are rejected.
             if track.velocity_valid && !within(track.velocity_rad_s, vmax) {

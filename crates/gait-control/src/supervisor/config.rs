@@ -134,6 +134,8 @@ pub struct SupervisorConfig {
     pub deadline_miss_count: u8,
     /// Window of the deadline rule, ticks.
     pub deadline_window_ticks: u32,
+    /// The drives' torque residual (0x0404).
+    pub response: ResponseCheck,
 }
 
 impl SupervisorConfig {
@@ -210,6 +212,7 @@ impl SupervisorConfig {
             heel_off_ticks: 50,
             deadline_miss_count: 3,
             deadline_window_ticks: 1000,
+            response: ResponseCheck::DEFAULT,
         }
     }
 
@@ -230,7 +233,9 @@ impl SupervisorConfig {
             .velocity_limit_rad_s
             .iter()
             .all(|v| v.is_finite() && *v > 0.0);
-        if !(positive.iter().all(|v| v.is_finite() && *v > 0.0) && velocities_ok)
+        if !(positive.iter().all(|v| v.is_finite() && *v > 0.0)
+            && velocities_ok
+            && self.response.is_valid())
             || self.velocity_filter_alpha > 1.0
         {
             return Err(ConfigError::NotPositive);

@@ -229,6 +229,7 @@ pub(super) struct JointTrack {
     pub(super) tracking_ticks: u32,
     pub(super) frozen_ticks: u32,
     pub(super) saturated_ticks: u32,
+    pub(super) residual: super::response::Residual,
 }
 
 /// Per-force-sensor history.

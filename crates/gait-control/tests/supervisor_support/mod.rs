@@ -78,6 +78,8 @@ pub fn healthy_input(tick: u32) -> SupervisorInput {
             limit_nm: LIMIT_NM,
             thermal_fault: false,
             output_fault: false,
+            enabled: true,
+            feedforward_nm: 5.0,
         }; JOINTS],
         e_stop_pressed: false,
         e_stop_read_error: false,
@@ -85,6 +87,7 @@ pub fn healthy_input(tick: u32) -> SupervisorInput {
         step_in_progress: false,
         button_input_fault: false,
         ankle_plan_rad: [f32::NAN; ANKLES],
+        swing_leg: None,
     }
 }
 
@@ -100,6 +103,8 @@ pub fn moving_input(tick: u32) -> SupervisorInput {
         input.joint_reference_rad[j] = angle;
         input.motors[j].commanded_nm = 20.0 * libm::cosf(t + phase);
         input.motors[j].applied_nm = input.motors[j].commanded_nm;
+        // The model's torque for this motion is what is commanded.
+        input.motors[j].feedforward_nm = input.motors[j].commanded_nm;
     }
     for a in 0..ANKLES {
         input.ankles[a] = encoder(0.1 + 0.08 * libm::sinf(3.0 * t + a as f32));
