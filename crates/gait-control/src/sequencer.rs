@@ -19,7 +19,7 @@ mod config;
 mod transfer;
 
 use gait_core::BodyModel;
-use gait_core::kinematics::Phi;
+use gait_core::kinematics::Posture;
 use gait_core::tables::GaitTable;
 
 use crate::faults::InSwing;
@@ -208,20 +208,20 @@ impl<'t> Sequencer<'t> {
         self
     }
 
-    /// The swing foot's toe at the table's Φ `phi` (stance foot's flat
+    /// The swing foot's toe at the table's posture (stance foot's flat
     /// frame), m; `None` without a model or table.
-    fn planned_swing_toe(&self, phi: Option<&Phi<f32>>) -> Option<[f32; 2]> {
+    fn planned_swing_toe(&self, posture: Option<&Posture<f32>>) -> Option<[f32; 2]> {
         let model = self.model.as_ref()?;
-        let phi = phi?;
+        let posture = posture?;
         let foot = gait_core::foot::StanceFoot::for_model(model);
-        Some(gait_core::playback::swing_toe(model, &foot, phi))
+        Some(gait_core::playback::swing_toe_at(model, &foot, posture))
     }
 
-    /// The other foot's share at the table's Φ `phi` in the present swing
+    /// The other foot's share at the table's posture in the present swing
     /// (0 without a model: the foot is taken as lifted from the start, and
     /// the landing window counts from the swing's start).
-    fn swing_share(&self, phi: Option<&Phi<f32>>) -> f32 {
-        self.planned_swing_toe(phi).map_or(0.0, |p| {
+    fn swing_share(&self, posture: Option<&Posture<f32>>) -> f32 {
+        self.planned_swing_toe(posture).map_or(0.0, |p| {
             gait_core::playback::other_foot_share(p, self.swing_start_m)
         })
     }
@@ -373,7 +373,7 @@ impl<'t> Sequencer<'t> {
     ) -> Reference {
         let cfg = self.cfg;
         // The table's Φ at the swing's time while it plays (stance, t, Φ).
-        let mut swing: Option<(Side, f32, Option<Phi<f32>>)> = None;
+        let mut swing: Option<(Side, f32, Option<Posture<f32>>)> = None;
         let mut other_share = Some(1.0);
         let next_reference = match self.phase {
             Phase::Standing => self.blend_to,
@@ -385,7 +385,9 @@ impl<'t> Sequencer<'t> {
                 } else if self.ready(sensed, stance) {
                     self.phase = Phase::Swing { stance, t_s: 0.0 };
                     let start = self.tables.get(self.gait).map(|tb| tb.at_time(0.0));
-                    self.swing_start_m = self.planned_swing_toe(start.as_ref()).unwrap_or([0.0; 2]);
+                    self.swing_start_m = self
+                        .planned_swing_toe(start.map(|p| Posture::new(&p)).as_ref())
+                        .unwrap_or([0.0; 2]);
                     self.lifted_at_s = None;
                     events(SeqEvent::SwingStarted(self.gait, stance));
                     start.map_or(self.reference, |p| joints_from_phi(&p, stance))
@@ -402,7 +404,8 @@ impl<'t> Sequencer<'t> {
                     .copied()
                     .unwrap_or(f32::NAN);
                 let phi_t = self.tables.get(self.gait).map(|tb| tb.at_time(t));
-                let share = self.swing_share(phi_t.as_ref());
+                let posture_t = phi_t.map(|p| Posture::new(&p));
+                let share = self.swing_share(posture_t.as_ref());
                 if self.lifted_at_s.is_none() && share <= 0.0 {
                     self.lifted_at_s = Some(t);
                 }
@@ -449,7 +452,7 @@ impl<'t> Sequencer<'t> {
                     events(SeqEvent::Stopped);
                 } else {
                     self.phase = Phase::Swing { stance, t_s: t };
-                    swing = Some((stance, t, phi_t));
+                    swing = Some((stance, t, posture_t));
                 }
                 reference
             }
@@ -503,7 +506,7 @@ impl<'t> Sequencer<'t> {
             // table is read).
             Phase::Swing { .. } => swing.map_or([f32::NAN; 2], |(s, t, phi)| {
                 let phi1 = match (table, phi) {
-                    (Some(tb), Some(p)) if t <= tb.duration_s() => p[0],
+                    (Some(tb), Some(p)) if t <= tb.duration_s() => p.phi[0],
                     (Some(tb), _) => tb.at_time(tb.duration_s())[0],
                     (None, _) => f32::NAN,
                 };

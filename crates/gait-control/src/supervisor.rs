@@ -176,6 +176,8 @@ pub struct FaultRecord {
 #[derive(Debug, Clone)]
 pub struct Supervisor {
     cfg: SupervisorConfig,
+    /// 0x0404's observer constants, from `cfg.response`.
+    observer: response::Observer,
     /// Calls of `check` so far (the supervisor's own clock).
     calls: u32,
     /// Faults whose condition held at the last check.
@@ -227,6 +229,7 @@ impl Supervisor {
     pub fn new(cfg: SupervisorConfig) -> Result<Self, ConfigError> {
         cfg.validate()?;
         Ok(Self {
+            observer: response::Observer::new(&cfg.response, cfg.dt_s),
             cfg,
             calls: 0,
             present: FaultSet::EMPTY,

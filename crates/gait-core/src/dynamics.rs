@@ -10,7 +10,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::kinematics::{Phi, joint_torques};
+use crate::kinematics::{Phi, Posture, joint_torques};
 use crate::model::{BodyModel, LINKS};
 use crate::scalar::Real;
 
@@ -81,10 +81,20 @@ pub fn inverse_dynamics<T: Real>(
     dphi: &Phi<T>,
     ddphi: &Phi<T>,
 ) -> TPhi<T> {
-    let sc = phi.map(|x| x.sin_cos_fast());
+    inverse_dynamics_at(model, &Posture::new(phi), dphi, ddphi)
+}
+
+/// [`inverse_dynamics`] at a posture whose sines are known.
+pub fn inverse_dynamics_at<T: Real>(
+    model: &BodyModel<T>,
+    posture: &Posture<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> TPhi<T> {
+    let sc = &posture.sin_cos;
     let w2 = dphi.map(|w| w * w);
     let mut out = [T::zero(); LINKS];
-    for (((o, &(si, ci)), prow), &gi) in out.iter_mut().zip(&sc).zip(model.p()).zip(model.g()) {
+    for (((o, &(si, ci)), prow), &gi) in out.iter_mut().zip(sc).zip(model.p()).zip(model.g()) {
         let mut acc = -gi * si;
         for (((&(sj, cj), &pij), &aj), &wj2) in sc.iter().zip(prow).zip(ddphi).zip(&w2) {
             let cos_ij = ci * cj + si * sj;
@@ -196,19 +206,28 @@ pub fn second_foot_torques<T: Real>(
     base_d1: [T; 2],
     swing_d5: [T; 2],
 ) -> ([T; LINKS], [T; LINKS]) {
+    second_foot_torques_at(model, &Posture::new(phi), base_d1, swing_d5)
+}
+
+/// [`second_foot_torques`] at a posture whose sines are known.
+pub fn second_foot_torques_at<T: Real>(
+    model: &BodyModel<T>,
+    posture: &Posture<T>,
+    base_d1: [T; 2],
+    swing_d5: [T; 2],
+) -> ([T; LINKS], [T; LINKS]) {
     let l = model.lengths();
     // Jᵀ e_x and Jᵀ e_y: ∂p5/∂φ_i = l_i (cos φ_i, −sin φ_i) for the links
     // between the stance ankle and the swing ankle (not the torso).
     let mut jx = [T::zero(); LINKS];
     let mut jy = [T::zero(); LINKS];
-    for (i, ((x, y), (&li, &p))) in jx
+    for (i, ((x, y), (&li, &(s, c)))) in jx
         .iter_mut()
         .zip(jy.iter_mut())
-        .zip(l.iter().zip(phi))
+        .zip(l.iter().zip(&posture.sin_cos))
         .enumerate()
     {
         if i != 2 {
-            let (s, c) = p.sin_cos_fast();
             *x = li * c;
             *y = -li * s;
         }
@@ -236,7 +255,26 @@ pub fn share_load_with_base<T: Real>(
     base_d1: [T; 2],
     swing_d5: [T; 2],
 ) -> DoubleSupportStatics<T> {
-    let (mx, my) = second_foot_torques(model, phi, base_d1, swing_d5);
+    share_load_with_base_at(
+        model,
+        &Posture::new(phi),
+        single,
+        max_load_n,
+        base_d1,
+        swing_d5,
+    )
+}
+
+/// [`share_load_with_base`] at a posture whose sines are known.
+pub fn share_load_with_base_at<T: Real>(
+    model: &BodyModel<T>,
+    posture: &Posture<T>,
+    single: &[T; LINKS],
+    max_load_n: T,
+    base_d1: [T; 2],
+    swing_d5: [T; 2],
+) -> DoubleSupportStatics<T> {
+    let (mx, my) = second_foot_torques_at(model, posture, base_d1, swing_d5);
     let w = T::lit(ANKLE_EFFORT_WEIGHT);
     let dot = |a: &[T; LINKS], b: &[T; LINKS]| {
         a.iter()

@@ -32,7 +32,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::dynamics::{self, DoubleSupportStatics, DynamicsError, DynamicsTerms, TPhi};
-use crate::kinematics::{Phi, Point, forward_kinematics, link_com};
+use crate::kinematics::{Phi, Point, Posture, forward_kinematics, forward_kinematics_at, link_com};
 use crate::model::{BodyModel, CARRIED, GRAVITY_M_S2, LINKS};
 use crate::scalar::Real;
 
@@ -193,6 +193,12 @@ impl<T: Real> StanceFoot<T> {
         forward_kinematics(model, phi).map(|p| [p[0] + a[0], p[1] + a[1]])
     }
 
+    /// [`StanceFoot::points`] at a posture whose sines are known.
+    pub fn points_at(&self, model: &BodyModel<T>, posture: &Posture<T>) -> [Point<T>; LINKS] {
+        let a = self.ankle(first(&posture.phi)).position_m;
+        forward_kinematics_at(model, posture).map(|p| [p[0] + a[0], p[1] + a[1]])
+    }
+
     /// Link centres of mass with this foot, flat foot's frame, m.
     pub fn link_com(&self, model: &BodyModel<T>, phi: &Phi<T>) -> [Point<T>; LINKS] {
         let a = self.ankle(first(phi)).position_m;
@@ -218,10 +224,12 @@ pub fn com_weights<T: Real>(model: &BodyModel<T>) -> [T; LINKS] {
 
 /// Per-link (u, u') = ((sin φ, cos φ), (cos φ, −sin φ)).
 fn units<T: Real>(phi: &Phi<T>) -> [(Point<T>, Point<T>); LINKS] {
-    phi.map(|x| {
-        let (s, c) = x.sin_cos_fast();
-        ([s, c], [c, -s])
-    })
+    units_at(&Posture::new(phi))
+}
+
+/// [`units`] at a posture whose sines are known.
+fn units_at<T: Real>(posture: &Posture<T>) -> [(Point<T>, Point<T>); LINKS] {
+    posture.sin_cos.map(|(s, c)| ([s, c], [c, -s]))
 }
 
 fn dot<T: Real>(a: Point<T>, b: Point<T>) -> T {
@@ -237,14 +245,26 @@ pub fn inverse_dynamics<T: Real>(
     dphi: &Phi<T>,
     ddphi: &Phi<T>,
 ) -> TPhi<T> {
-    let mut out = dynamics::inverse_dynamics(model, phi, dphi, ddphi);
+    inverse_dynamics_at(model, foot, &Posture::new(phi), dphi, ddphi)
+}
+
+/// [`inverse_dynamics`] at a posture whose sines are known.
+pub fn inverse_dynamics_at<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    posture: &Posture<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> TPhi<T> {
+    let phi = &posture.phi;
+    let mut out = dynamics::inverse_dynamics_at(model, posture, dphi, ddphi);
     if !foot.on_toe(first(phi)) {
         return out;
     }
     let a = foot.ankle(first(phi));
     let mass = model.total_mass_kg();
     let w = com_weights(model);
-    let u = units(phi);
+    let u = units_at(posture);
     let (w1, a1) = (first(dphi), first(ddphi));
     let base_acc = [
         a.d1[0] * a1 + a.d2[0] * w1 * w1,
@@ -343,12 +363,24 @@ pub fn share_load<T: Real>(
     single: &[T; LINKS],
     max_load_n: T,
 ) -> DoubleSupportStatics<T> {
+    share_load_at(model, foot, &Posture::new(phi), single, max_load_n)
+}
+
+/// [`share_load`] at a posture whose sines are known.
+pub fn share_load_at<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    posture: &Posture<T>,
+    single: &[T; LINKS],
+    max_load_n: T,
+) -> DoubleSupportStatics<T> {
+    let phi = &posture.phi;
     let d1 = foot.ankle(first(phi)).d1;
     let [.., phi5] = *phi;
     let lean = crate::kinematics::wrap_pi(phi5 - T::pi());
     // Toe − ankle = toe − a(lean): its φ5-derivative is −a'(lean).
     let a = foot.ankle(lean).d1;
-    dynamics::share_load_with_base(model, phi, single, max_load_n, d1, [-a[0], -a[1]])
+    dynamics::share_load_with_base_at(model, posture, single, max_load_n, d1, [-a[0], -a[1]])
 }
 
 /// [`dynamics::second_foot_torques`] with these feet (see [`share_load`]).

@@ -9,7 +9,7 @@
 
 use crate::dynamics::{self, DynamicsError, TPhi};
 use crate::foot::{self, StanceFoot};
-use crate::kinematics::Phi;
+use crate::kinematics::{Phi, Posture};
 use crate::model::BodyModel;
 use crate::scalar::Real;
 
@@ -24,6 +24,21 @@ pub fn inverse_dynamics<T: Real>(
     match foot {
         Some(f) => foot::inverse_dynamics(model, f, phi, dphi, ddphi),
         None => dynamics::inverse_dynamics(model, phi, dphi, ddphi),
+    }
+}
+
+/// [`inverse_dynamics`] at a posture whose sines are known (the control
+/// tick shares them with the load sharing and the swing foot's position).
+pub fn inverse_dynamics_at<T: Real>(
+    model: &BodyModel<T>,
+    foot: Option<&StanceFoot<T>>,
+    posture: &Posture<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> TPhi<T> {
+    match foot {
+        Some(f) => foot::inverse_dynamics_at(model, f, posture, dphi, ddphi),
+        None => dynamics::inverse_dynamics_at(model, posture, dphi, ddphi),
     }
 }
 

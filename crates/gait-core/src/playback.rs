@@ -22,7 +22,7 @@
 //! start and end at rest).
 
 use crate::foot::{self, StanceFoot};
-use crate::kinematics::{Phi, joint_torques};
+use crate::kinematics::{Phi, Posture, joint_torques};
 use crate::model::{BodyModel, GRAVITY_M_S2, LINKS};
 use crate::scalar::Real;
 
@@ -61,9 +61,18 @@ pub fn swing_ankle<T: Real>(model: &BodyModel<T>, foot: &StanceFoot<T>, phi: &Ph
 /// on its toe, [`crate::foot`]). A planted trailing foot keeps this point
 /// still while its ankle rolls about it.
 pub fn swing_toe<T: Real>(model: &BodyModel<T>, foot: &StanceFoot<T>, phi: &Phi<T>) -> [T; 2] {
-    let [.., phi5] = *phi;
+    swing_toe_at(model, foot, &Posture::new(phi))
+}
+
+/// [`swing_toe`] at a posture whose sines are known.
+pub fn swing_toe_at<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    posture: &Posture<T>,
+) -> [T; 2] {
+    let [.., phi5] = posture.phi;
     let lean = crate::kinematics::wrap_pi(phi5 - T::pi());
-    let p5 = swing_ankle(model, foot, phi);
+    let [.., p5] = foot.points_at(model, posture);
     let toe = foot.toe();
     let a = foot.ankle(lean).position_m;
     [p5[0] + toe[0] - a[0], p5[1] + toe[1] - a[1]]

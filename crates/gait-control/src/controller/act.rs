@@ -3,7 +3,7 @@
 //! on its sensor in double support.
 
 use gait_core::foot::{self, StanceFoot};
-use gait_core::kinematics::joint_torques;
+use gait_core::kinematics::{Posture, joint_torques};
 use gait_core::mechanics;
 use gait_core::model::GRAVITY_M_S2;
 
@@ -201,8 +201,8 @@ impl Controller<'_> {
                 }
             }
         };
-        let (phi, dphi, ddphi) = match r.motion {
-            Some(m) => (m.phi, m.dphi, m.ddphi),
+        let (posture, dphi, ddphi) = match r.motion {
+            Some(m) => (m.posture, m.dphi, m.ddphi),
             None => {
                 let reading = self
                     .last_angle
@@ -211,7 +211,7 @@ impl Controller<'_> {
                     .unwrap_or(0.0);
                 let stance_ankle = self.stance_phi1(reading, r);
                 (
-                    phi_from_joints(&r.angle_rad, stance_ankle, r.stance),
+                    Posture::new(&phi_from_joints(&r.angle_rad, stance_ankle, r.stance)),
                     [0.0; gait_core::LINKS],
                     [0.0; gait_core::LINKS],
                 )
@@ -220,14 +220,14 @@ impl Controller<'_> {
         // The stance heel lifts past the ankle's stop (stair descent): the
         // chain then turns about the toe (gait_core::foot).
         let foot = StanceFoot::for_model(model);
-        let single = joint_torques(&mechanics::inverse_dynamics(
+        let single = joint_torques(&mechanics::inverse_dynamics_at(
             model,
             Some(&foot),
-            &phi,
+            &posture,
             &dphi,
             &ddphi,
         ));
-        let shared = foot::share_load(model, &foot, &phi, &single, other_load_n);
+        let shared = foot::share_load_at(model, &foot, &posture, &single, other_load_n);
         let ff = joint_torques_from_theta_torques(&shared.torques, r.stance);
         let (_, per_newton_up) = shared.per_newton;
         let per_newton = joint_torques_from_theta_torques(&per_newton_up.map(|v| -v), r.stance);

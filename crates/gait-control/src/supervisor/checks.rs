@@ -170,27 +170,21 @@ impl Supervisor {
                 // plan (a hold's start, a reset), not a motion to check
                 // against: the observer restarts from it.
                 if motor.enabled && delta.is_some() && reference_speed <= vmax {
-                    let r = &cfg.response;
+                    let o = &self.observer;
                     let swing = input.swing_leg.is_some_and(|leg| leg.has_joint(i));
-                    let inertia = if swing {
-                        r.swing_inertia_kgm2
-                    } else {
-                        r.stance_inertia_kgm2
-                    };
                     let d = track.residual.update(
+                        o,
                         error,
                         motor.applied_nm,
                         motor.feedforward_nm,
-                        inertia.get(i % 2).copied().unwrap_or(f32::NAN),
-                        2.0 * core::f32::consts::PI * r.bandwidth_hz,
-                        cfg.dt_s,
+                        o.inertia(i, swing),
                     );
-                    if within(d, r.limit_nm) {
+                    if within(d, o.limit_nm) {
                         track.residual.over_ticks = 0;
                     } else {
                         track.residual.over_ticks = track.residual.over_ticks.saturating_add(1);
                     }
-                    if track.residual.over_ticks >= r.ticks {
+                    if track.residual.over_ticks >= o.ticks {
                         latch.raise(t, FaultCode::MotorResponse, ch, d);
                     }
                     if !d.is_finite() {

@@ -66,6 +66,49 @@ impl ResponseCheck {
     }
 }
 
+/// The observer's constants, worked out once from [`ResponseCheck`] (the
+/// tick only multiplies).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Observer {
+    /// ω², 1/s².
+    w2: f32,
+    /// 2ω, 1/s.
+    two_w: f32,
+    dt_s: f32,
+    /// Inertia of each joint (joint order) on a stance leg, then on a swing
+    /// leg, kg·m².
+    inertia_kgm2: [[f32; super::JOINTS]; 2],
+    /// |d̂| limit, N·m.
+    pub(super) limit_nm: f32,
+    /// Ticks over it that make the fault.
+    pub(super) ticks: u32,
+}
+
+impl Observer {
+    pub(super) fn new(cfg: &ResponseCheck, dt_s: f32) -> Self {
+        let w = 2.0 * core::f32::consts::PI * cfg.bandwidth_hz;
+        let [sh, sk] = cfg.stance_inertia_kgm2;
+        let [wh, wk] = cfg.swing_inertia_kgm2;
+        Self {
+            w2: w * w,
+            two_w: 2.0 * w,
+            dt_s,
+            inertia_kgm2: [[sh, sk, sh, sk], [wh, wk, wh, wk]],
+            limit_nm: cfg.limit_nm,
+            ticks: cfg.ticks,
+        }
+    }
+
+    /// Joint `joint`'s inertia, on a swing leg or not.
+    pub(super) fn inertia(&self, joint: usize, swing: bool) -> f32 {
+        self.inertia_kgm2
+            .get(usize::from(swing))
+            .and_then(|row| row.get(joint))
+            .copied()
+            .unwrap_or(f32::NAN)
+    }
+}
+
 /// One joint's observer.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Residual {
@@ -95,12 +138,11 @@ impl Residual {
     /// over the last tick, `feedforward_nm` this tick's. Returns d̂, N·m.
     pub(super) fn update(
         &mut self,
+        o: &Observer,
         error_rad: f32,
         applied_nm: f32,
         feedforward_nm: f32,
         inertia_kgm2: f32,
-        w: f32,
-        dt_s: f32,
     ) -> f32 {
         let correction = applied_nm - self.last_feedforward_nm;
         self.last_feedforward_nm = feedforward_nm;
@@ -109,14 +151,13 @@ impl Residual {
             self.u = [correction, 0.0];
             self.running = true;
         }
-        let w2 = w * w;
-        let e_acc = w2 * (error_rad - self.e[0]) - 2.0 * w * self.e[1];
+        let e_acc = o.w2 * (error_rad - self.e[0]) - o.two_w * self.e[1];
         let residual = inertia_kgm2 * e_acc - self.u[0];
-        let u_acc = w2 * (correction - self.u[0]) - 2.0 * w * self.u[1];
-        self.e[1] += e_acc * dt_s;
-        self.e[0] += self.e[1] * dt_s;
-        self.u[1] += u_acc * dt_s;
-        self.u[0] += self.u[1] * dt_s;
+        let u_acc = o.w2 * (correction - self.u[0]) - o.two_w * self.u[1];
+        self.e[1] += e_acc * o.dt_s;
+        self.e[0] += self.e[1] * o.dt_s;
+        self.u[1] += u_acc * o.dt_s;
+        self.u[0] += self.u[1] * o.dt_s;
         residual
     }
 }
