@@ -211,6 +211,7 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "3 ticks when persistent; at the 3rd bad frame within 100 ms",
         reset_allowed_when: "< 3 bad frames in the last 100 ticks",
+        brakes_joint: true,
     },
     /// Joint encoder: too many bad frames, the last a parity error.
     EncoderParity = 0x0202 {
@@ -218,6 +219,7 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "as 0x0201",
         reset_allowed_when: "as 0x0201",
+        brakes_joint: true,
     },
     /// Joint encoder: too many bad frames, the last with the error flag.
     EncoderErrorFlag = 0x0203 {
@@ -225,6 +227,7 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "as 0x0201",
         reset_allowed_when: "as 0x0201",
+        brakes_joint: true,
     },
     /// Joint encoder: raw counts unchanged while the joint is driven.
     EncoderFrozen = 0x0204 {
@@ -232,6 +235,7 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "100 ticks",
         reset_allowed_when: "the counts change, or the joint is not driven",
+        brakes_joint: true,
     },
     /// Joint encoder: too many bad frames, the last an impossible jump.
     EncoderJump = 0x0205 {

@@ -122,12 +122,15 @@ fn each_doc_row_matches_its_code_row() {
         let at = format!("docs/safety.md line {} (0x{:04x})", row.line, row.code);
         let c = FaultCode::from_code(row.code).unwrap_or_else(|| panic!("{at}: no such FaultCode"));
         assert_eq!(row.name, c.name(), "{at}: name");
-        let label = match c.in_swing() {
+        let mut label = match c.in_swing() {
             gait_control::faults::InSwing::LandFirst => {
                 format!("{} (IN A SWING: LAND FIRST)", doc_label(c.reaction()))
             }
             gait_control::faults::InSwing::HoldNow => doc_label(c.reaction()).to_owned(),
         };
+        if c.brakes_joint() {
+            label.push_str(", THAT JOINT BRAKED");
+        }
         assert_eq!(row.reaction, label, "{at}: reaction");
         assert_eq!(
             row.detection_bound,
