@@ -1,5 +1,6 @@
 //! Board-independent pieces of the firmware: the configuration both boards
-//! run the controller with ([`board_config`]), the power-on self-test
+//! run the controller with ([`board_config`]), the motor board's clock tree
+//! and timers computed when compiling ([`clock_tree`]), the power-on self-test
 //! ([`selftest`]) and the in-memory peripherals of the QEMU control-tick
 //! benchmark ([`qemu_rig`]) and its replay of ticks recorded in the
 //! simulator ([`tick_replay`]).
@@ -10,6 +11,7 @@
 #![forbid(unsafe_code)]
 
 pub mod board_config;
+pub mod clock_tree;
 pub mod qemu_rig;
 pub mod selftest;
 pub mod tick_replay;
