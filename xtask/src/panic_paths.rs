@@ -1,21 +1,23 @@
-//! Finds the panic paths left in a linked firmware image.
+//! Proves that a linked firmware image holds no panic.
 //!
 //! The image is disassembled (`arm-none-eabi-objdump -d -C`) into a call
-//! graph: each function and the functions its direct branches reach. A
-//! *panic entry* is one of core's panic functions (`core::panicking::*`,
-//! unwrap/expect failures, slice and str index failures, `RefCell` borrow
-//! failures). Two rules, checked on both boards' release images:
+//! graph: each function and the functions its calls and jumps reach, and
+//! the functions whose address it loads from its literal pool (taken to be
+//! called). A *panic entry* is one of core's panic functions
+//! (`core::panicking::*`, unwrap/expect failures, slice and str index
+//! failures, `RefCell` borrow failures) or a branch to the panic handler.
+//! Two rules, checked on both boards' release images, with no exception:
 //!
-//! 1. Nothing the control tick (`Controller::tick`) reaches may reach a panic
-//!    entry.
-//! 2. No function of our crates (gait-core, gait-control, the device
-//!    configuration, the firmware's wiring apart from the boot code in `main`)
-//!    may branch into a panic path.
+//! 1. Nothing reachable from the image's entry points — every handler in
+//!    its vector table (Reset and through it `main`, the exceptions, the
+//!    interrupts) — reaches a panic entry. The control tick
+//!    (`Controller::tick`, kept out of line) must be among what is reached,
+//!    or the check would prove nothing.
+//! 2. No panic entry is left in the image at all, and nothing branches to
+//!    the panic handler. This covers what rule 1 cannot follow: calls
+//!    through function pointers (counted and printed).
 //!
-//! What remains is printed: vendor boot code and the log transport, listed in
-//! `docs/safety.md` ("No panic path") with the reason each is still there.
-//! Calls through function pointers are not followed (the drivers are generic,
-//! so the tick's calls are direct; the check prints how many it saw).
+//! `docs/safety.md` ("No panic path") says what was removed for it.
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::path::Path;
@@ -35,30 +37,55 @@ const PANIC_ENTRIES: [&str; 8] = [
     "core::panic::",
 ];
 
-/// Crates whose code must not branch into a panic path anywhere.
-const OURS: [&str; 4] = [
-    "gait_core::",
-    "gait_control::",
-    "exogait_device::",
-    "firmware::",
-];
+/// The panic handler's symbol (`#[panic_handler]`).
+const PANIC_HANDLER: &str = "rust_begin_unwind";
 
-/// The image's call graph: function → functions its direct branches reach.
+/// The control tick, which rule 1 must reach.
+const TICK: &str = "gait_control::controller::Controller>::tick";
+
+/// The image's call graph.
 struct CallGraph {
+    /// Function → the functions its direct branches and literal-pool
+    /// addresses reach.
     edges: BTreeMap<String, BTreeSet<String>>,
-    indirect_calls: usize,
+    /// Function → its indirect calls (`blx rN`).
+    indirect: BTreeMap<String, usize>,
+    /// Entry points: the vector table's handlers.
+    roots: BTreeSet<String>,
 }
 
 fn is_panic_entry(name: &str) -> bool {
     let bare = name.trim_start_matches('<');
-    PANIC_ENTRIES.iter().any(|p| bare.starts_with(p)) || name.ends_with("rust_begin_unwind")
+    PANIC_ENTRIES.iter().any(|p| bare.starts_with(p))
 }
 
-/// Our crates' code, not counting derived `Debug`/`Display` impls: those
-/// only run for the QEMU image's semihosting prints, inside core's
-/// formatting machinery (whose panic paths are core's).
-fn is_ours(name: &str) -> bool {
-    OURS.iter().any(|c| name.contains(c)) && !name.contains(" as core::fmt::")
+fn is_panic_handler(name: &str) -> bool {
+    name.ends_with(PANIC_HANDLER)
+}
+
+/// "08000200 <name>:" → (0x08000200, name).
+fn function_header(line: &str) -> Option<(u32, &str)> {
+    let (addr, rest) = line.split_once(" <")?;
+    let name = rest.strip_suffix(">:")?;
+    Some((u32::from_str_radix(addr, 16).ok()?, name))
+}
+
+/// The 32-bit words of a section from `objdump -s` ("Contents of section
+/// …" then lines "addr w0 w1 w2 w3  ascii"), little-endian.
+fn section_words(dump: &str) -> Vec<u32> {
+    let mut words = Vec::new();
+    for line in dump.lines().filter(|l| l.starts_with(' ')) {
+        for field in line.split_whitespace().skip(1).take(4) {
+            if field.len() != 8 {
+                break;
+            }
+            let Ok(raw) = u32::from_str_radix(field, 16) else {
+                break;
+            };
+            words.push(raw.swap_bytes());
+        }
+    }
+    words
 }
 
 impl CallGraph {
@@ -68,16 +95,16 @@ impl CallGraph {
                 .args(["-d", "--no-show-raw-insn", "-C"])
                 .arg(elf),
         )?;
+        let starts: BTreeMap<u32, String> = text
+            .lines()
+            .filter_map(function_header)
+            .map(|(a, n)| (a, n.to_owned()))
+            .collect();
         let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+        let mut indirect: BTreeMap<String, usize> = BTreeMap::new();
         let mut current: Option<String> = None;
-        let mut indirect_calls = 0;
         for line in text.lines() {
-            // "08000200 <name>:" opens a function.
-            if let Some(name) = line
-                .split_once(" <")
-                .filter(|(addr, _)| addr.chars().all(|c| c.is_ascii_hexdigit()))
-                .and_then(|(_, rest)| rest.strip_suffix(">:"))
-            {
+            if let Some((_, name)) = function_header(line) {
                 current = Some(name.to_owned());
                 edges.entry(name.to_owned()).or_default();
                 continue;
@@ -87,8 +114,23 @@ impl CallGraph {
             let Some(mnemonic) = fields.next() else {
                 continue;
             };
-            if mnemonic.starts_with("blx") {
-                indirect_calls += 1;
+            // A literal-pool word holding a function's address (Thumb bit
+            // set): the function is loaded to be called or stored.
+            if mnemonic == ".word" {
+                let target = fields
+                    .next()
+                    .and_then(|w| u32::from_str_radix(w.trim_start_matches("0x"), 16).ok())
+                    .filter(|w| w & 1 == 1)
+                    .and_then(|w| starts.get(&(w & !1)));
+                if let (Some(t), Some(set)) = (target, edges.get_mut(from)) {
+                    if t != from {
+                        set.insert(t.clone());
+                    }
+                }
+                continue;
+            }
+            if mnemonic.starts_with("blx") && !line.contains(" <") {
+                *indirect.entry(from.clone()).or_default() += 1;
                 continue;
             }
             let branches = mnemonic.starts_with('b') && !mnemonic.starts_with("bic")
@@ -96,11 +138,19 @@ impl CallGraph {
             if !branches {
                 continue;
             }
-            // "... <target+0x12>": the function the branch lands in.
+            // "... <target>" or "... <target+0x12>": the function the branch
+            // lands in. A jump (`b`, `b<cond>`, `cb(n)z`) into the middle of
+            // another function is no call: it is the alignment padding
+            // between functions (0xd4d4) decoded as `bmi.n`. Calls (`bl`)
+            // count wherever they land.
             let Some(target) = line
                 .rsplit_once(" <")
                 .and_then(|(_, t)| t.strip_suffix('>'))
-                .map(|t| t.split_once("+0x").map_or(t, |(f, _)| f))
+                .and_then(|t| match t.split_once("+0x") {
+                    None => Some(t),
+                    Some((f, _)) if mnemonic.starts_with("bl") => Some(f),
+                    Some(_) => None,
+                })
             else {
                 continue;
             };
@@ -110,123 +160,140 @@ impl CallGraph {
                 }
             }
         }
+        // The vector table: word 0 is the initial stack pointer, every
+        // other non-zero word a handler's address with the Thumb bit.
+        let vectors = section_words(&output(
+            Command::new("arm-none-eabi-objdump")
+                .args(["-s", "-j", ".vector_table"])
+                .arg(elf),
+        )?);
+        let mut roots: BTreeSet<String> = BTreeSet::new();
+        for &v in vectors.iter().skip(1).filter(|&&v| v != 0) {
+            let name = starts.get(&(v & !1)).ok_or_else(|| {
+                format!(
+                    "{}: vector 0x{v:08x} is not the start of a function",
+                    elf.display()
+                )
+            })?;
+            roots.insert(name.clone());
+        }
+        if let Some(main) = edges.keys().find(|f| f.as_str() == "main") {
+            roots.insert(main.clone());
+        }
+        if roots.is_empty() {
+            return Err(format!("{}: no vector table found", elf.display()));
+        }
         Ok(Self {
             edges,
-            indirect_calls,
+            indirect,
+            roots,
         })
     }
 
-    /// Every function that can reach a panic entry (panic entries included).
-    fn may_panic(&self) -> BTreeSet<&str> {
-        let mut callers: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
-        for (from, tos) in &self.edges {
-            for to in tos {
-                callers.entry(to.as_str()).or_default().push(from.as_str());
-            }
-        }
-        let mut seen: BTreeSet<&str> = self
-            .edges
-            .keys()
-            .map(String::as_str)
-            .filter(|f| is_panic_entry(f))
-            .collect();
-        let mut queue: VecDeque<&str> = seen.iter().copied().collect();
+    /// Everything the entry points reach, with the edge each was found by
+    /// (for the chain to print).
+    fn reachable(&self) -> BTreeMap<&str, Option<&str>> {
+        let mut prev: BTreeMap<&str, Option<&str>> =
+            self.roots.iter().map(|r| (r.as_str(), None)).collect();
+        let mut queue: VecDeque<&str> = self.roots.iter().map(String::as_str).collect();
         while let Some(f) = queue.pop_front() {
-            for &c in callers.get(f).into_iter().flatten() {
-                if seen.insert(c) {
-                    queue.push_back(c);
-                }
-            }
-        }
-        seen
-    }
-
-    /// A shortest call chain from a function matching `root` to a panic entry.
-    fn panic_chain_from(&self, root: &str) -> Option<Vec<String>> {
-        let mut prev: BTreeMap<&str, &str> = BTreeMap::new();
-        let mut queue: VecDeque<&str> = self
-            .edges
-            .keys()
-            .map(String::as_str)
-            .filter(|f| f.contains(root))
-            .collect();
-        let mut seen: BTreeSet<&str> = queue.iter().copied().collect();
-        while let Some(f) = queue.pop_front() {
-            if is_panic_entry(f) {
-                let mut chain = vec![f.to_owned()];
-                let mut at = f;
-                while let Some(&p) = prev.get(at) {
-                    chain.push(p.to_owned());
-                    at = p;
-                }
-                chain.reverse();
-                return Some(chain);
-            }
             for to in self.edges.get(f).into_iter().flatten() {
-                if seen.insert(to.as_str()) {
-                    prev.insert(to.as_str(), f);
+                if !prev.contains_key(to.as_str()) {
+                    prev.insert(to.as_str(), Some(f));
                     queue.push_back(to.as_str());
                 }
             }
         }
-        None
+        prev
+    }
+
+    /// Functions that branch to `target`.
+    fn callers_of(&self, target: &str) -> Vec<&str> {
+        self.edges
+            .iter()
+            .filter(|(_, tos)| tos.iter().any(|t| t == target))
+            .map(|(f, _)| f.as_str())
+            .collect()
     }
 }
 
-/// Checks the two rules on `elf`; `Err` names the offending call chain. On
-/// success, the functions outside core that still branch into a panic path.
-pub fn check(elf: &Path) -> Result<Vec<String>> {
+fn short(name: &str) -> String {
+    let s: String = name.chars().take(140).collect();
+    if s.len() < name.len() {
+        format!("{s}…")
+    } else {
+        s
+    }
+}
+
+/// Checks the two rules on `elf`; `Err` names what is left and how it is
+/// reached.
+pub fn check(elf: &Path) -> Result {
     let graph = CallGraph::of(elf)?;
-    let ticks = graph
-        .edges
-        .keys()
-        .filter(|f| f.contains("gait_control::controller::Controller>::tick"))
-        .count();
-    if ticks == 0 {
+    let reach = graph.reachable();
+    if !reach.keys().any(|f| f.contains(TICK)) {
         return Err(format!(
-            "{}: no `Controller::tick` in the image (inlined?): the check would prove nothing",
+            "{}: the entry points do not reach `Controller::tick` (inlined, or the \
+             vector table misread): the check would prove nothing",
             elf.display()
         ));
     }
-    if let Some(chain) = graph.panic_chain_from("gait_control::controller::Controller>::tick") {
+    // Rule 1: a shortest chain from an entry point to a panic entry.
+    if let Some(&hit) = reach
+        .keys()
+        .find(|&&f| is_panic_entry(f) || is_panic_handler(f))
+    {
+        let mut chain = vec![hit];
+        let mut at = hit;
+        while let Some(&Some(p)) = reach.get(at) {
+            chain.push(p);
+            at = p;
+        }
+        chain.reverse();
+        let shown: Vec<String> = chain.iter().map(|f| short(f)).collect();
         return Err(format!(
-            "{}: the control tick reaches a panic:\n    {}",
+            "{}: a panic is reachable from the entry points:\n    {}",
             elf.display(),
-            chain.join("\n -> ")
+            shown.join("\n -> ")
         ));
     }
-    let may_panic = graph.may_panic();
-    let frontier: Vec<String> = graph
-        .edges
-        .iter()
-        .filter(|(f, _)| !f.trim_start_matches('<').starts_with("core::") && !is_panic_entry(f))
-        .filter(|(_, tos)| {
-            tos.iter().any(|t| {
-                is_panic_entry(t)
-                    || t.trim_start_matches('<').starts_with("core::")
-                        && may_panic.contains(t.as_str())
-            })
-        })
-        .map(|(f, _)| f.clone())
-        .collect();
-    if let Some(ours) = frontier.iter().find(|f| is_ours(f)) {
-        let chain = graph.panic_chain_from(ours).unwrap_or_default();
+    // Rule 2: nothing of a panic left in the image.
+    let mut left: Vec<String> = Vec::new();
+    for f in graph.edges.keys() {
+        if is_panic_entry(f) {
+            let callers: Vec<String> = graph.callers_of(f).iter().map(|c| short(c)).collect();
+            left.push(format!(
+                "{} (called from: {})",
+                short(f),
+                if callers.is_empty() {
+                    "nothing direct".to_owned()
+                } else {
+                    callers.join(", ")
+                }
+            ));
+        } else if is_panic_handler(f) {
+            for c in graph.callers_of(f) {
+                left.push(format!("{} calls the panic handler", short(c)));
+            }
+        }
+    }
+    if !left.is_empty() {
         return Err(format!(
-            "{}: our code branches into a panic path:\n    {}",
+            "{}: panic code is left in the image (reached through a function \
+             pointer or from code the entry points do not reach):\n    {}",
             elf.display(),
-            chain.join("\n -> ")
+            left.join("\n    ")
         ));
     }
+    let indirect: usize = reach.keys().filter_map(|f| graph.indirect.get(*f)).sum();
     println!(
-        "panic paths: {}: the control tick ({ticks} instance(s)) reaches none; \
-         {} indirect call(s) not followed; left outside our crates ({}):",
+        "panic paths: {}: {} functions reachable from {} entry points (the vector \
+         table), none reaches a panic; no panic entry left in the image; {} indirect \
+         call(s) in reachable code (they cannot reach one: none is left)",
         elf.display(),
-        graph.indirect_calls,
-        frontier.len()
+        reach.len(),
+        graph.roots.len(),
+        indirect
     );
-    for f in &frontier {
-        let short: String = f.chars().take(110).collect();
-        println!("    {short}");
-    }
-    Ok(frontier)
+    Ok(())
 }
