@@ -95,6 +95,17 @@ impl CallGraph {
                 .args(["-d", "--no-show-raw-insn", "-C"])
                 .arg(elf),
         )?;
+        let vectors = output(
+            Command::new("arm-none-eabi-objdump")
+                .args(["-s", "-j", ".vector_table"])
+                .arg(elf),
+        )?;
+        Self::parse(&text, &vectors).map_err(|e| format!("{}: {e}", elf.display()))
+    }
+
+    /// The graph of a disassembly (`objdump -d --no-show-raw-insn -C`) and
+    /// a dump of the vector table (`objdump -s -j .vector_table`).
+    fn parse(text: &str, vector_dump: &str) -> Result<Self> {
         let starts: BTreeMap<u32, String> = text
             .lines()
             .filter_map(function_header)
@@ -162,26 +173,19 @@ impl CallGraph {
         }
         // The vector table: word 0 is the initial stack pointer, every
         // other non-zero word a handler's address with the Thumb bit.
-        let vectors = section_words(&output(
-            Command::new("arm-none-eabi-objdump")
-                .args(["-s", "-j", ".vector_table"])
-                .arg(elf),
-        )?);
+        let vectors = section_words(vector_dump);
         let mut roots: BTreeSet<String> = BTreeSet::new();
         for &v in vectors.iter().skip(1).filter(|&&v| v != 0) {
-            let name = starts.get(&(v & !1)).ok_or_else(|| {
-                format!(
-                    "{}: vector 0x{v:08x} is not the start of a function",
-                    elf.display()
-                )
-            })?;
+            let name = starts
+                .get(&(v & !1))
+                .ok_or_else(|| format!("vector 0x{v:08x} is not the start of a function"))?;
             roots.insert(name.clone());
         }
         if let Some(main) = edges.keys().find(|f| f.as_str() == "main") {
             roots.insert(main.clone());
         }
         if roots.is_empty() {
-            return Err(format!("{}: no vector table found", elf.display()));
+            return Err("no vector table found".into());
         }
         Ok(Self {
             edges,
@@ -230,13 +234,33 @@ fn short(name: &str) -> String {
 /// reached.
 pub fn check(elf: &Path) -> Result {
     let graph = CallGraph::of(elf)?;
+    let reached = check_graph(&graph).map_err(|e| format!("{}: {e}", elf.display()))?;
+    println!(
+        "panic paths: {}: {} functions reachable from {} entry points (the vector \
+         table), none reaches a panic; no panic entry left in the image; {} indirect \
+         call(s) in reachable code (they cannot reach one: none is left)",
+        elf.display(),
+        reached.functions,
+        graph.roots.len(),
+        reached.indirect_calls
+    );
+    Ok(())
+}
+
+/// What the entry points reach, when the rules hold.
+struct Reached {
+    functions: usize,
+    indirect_calls: usize,
+}
+
+fn check_graph(graph: &CallGraph) -> Result<Reached> {
     let reach = graph.reachable();
     if !reach.keys().any(|f| f.contains(TICK)) {
-        return Err(format!(
-            "{}: the entry points do not reach `Controller::tick` (inlined, or the \
-             vector table misread): the check would prove nothing",
-            elf.display()
-        ));
+        return Err(
+            "the entry points do not reach `Controller::tick` (inlined, or the \
+                    vector table misread): the check would prove nothing"
+                .into(),
+        );
     }
     // Rule 1: a shortest chain from an entry point to a panic entry.
     if let Some(&hit) = reach
@@ -252,8 +276,7 @@ pub fn check(elf: &Path) -> Result {
         chain.reverse();
         let shown: Vec<String> = chain.iter().map(|f| short(f)).collect();
         return Err(format!(
-            "{}: a panic is reachable from the entry points:\n    {}",
-            elf.display(),
+            "a panic is reachable from the entry points:\n    {}",
             shown.join("\n -> ")
         ));
     }
@@ -279,21 +302,120 @@ pub fn check(elf: &Path) -> Result {
     }
     if !left.is_empty() {
         return Err(format!(
-            "{}: panic code is left in the image (reached through a function \
+            "panic code is left in the image (reached through a function \
              pointer or from code the entry points do not reach):\n    {}",
-            elf.display(),
             left.join("\n    ")
         ));
     }
-    let indirect: usize = reach.keys().filter_map(|f| graph.indirect.get(*f)).sum();
-    println!(
-        "panic paths: {}: {} functions reachable from {} entry points (the vector \
-         table), none reaches a panic; no panic entry left in the image; {} indirect \
-         call(s) in reachable code (they cannot reach one: none is left)",
-        elf.display(),
-        reach.len(),
-        graph.roots.len(),
-        indirect
-    );
-    Ok(())
+    Ok(Reached {
+        functions: reach.len(),
+        indirect_calls: reach.keys().filter_map(|f| graph.indirect.get(*f)).sum(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A vector table: initial SP, Reset at 0x100, SysTick at 0x140.
+    const VECTORS: &str = "
+x.elf:     file format elf32-littlearm
+
+Contents of section .vector_table:
+ 0000 00000220 01010000 00000000 00000000  ... ............
+ 0010 41010000                             A...
+";
+
+    fn disassembly(systick_body: &str) -> String {
+        format!(
+            "
+00000100 <Reset>:
+     100:\tbl\t120 <main>
+     104:\tb.n\t104 <Reset+0x4>
+     106:\tbmi.n\t1e4 <core::panicking::panic_fmt+0x4>
+
+00000120 <main>:
+     120:\tbl\t180 <<gait_control::controller::Controller>::tick::<X>>
+     124:\tldr\tr0, [pc, #0]
+     126:\tblx\tr0
+     128:\t.word\t0x000001a1
+
+00000140 <SysTick>:
+{systick_body}
+00000180 <<gait_control::controller::Controller>::tick::<X>>:
+     180:\tbx\tlr
+
+000001a0 <helper>:
+     1a0:\tbx\tlr
+
+000001c0 <core::panicking::panic_bounds_check>:
+     1c0:\tbl\t1e0 <core::panicking::panic_fmt>
+
+000001e0 <core::panicking::panic_fmt>:
+     1e0:\tbl\t200 <__rustc::rust_begin_unwind>
+
+00000200 <__rustc::rust_begin_unwind>:
+     200:\tb.n\t200 <__rustc::rust_begin_unwind>
+"
+        )
+    }
+
+    const QUIET: &str = "     140:\tbx\tlr\n";
+
+    #[test]
+    fn the_vector_table_gives_the_roots_and_padding_is_no_call() {
+        let g = CallGraph::parse(&disassembly(QUIET), VECTORS).unwrap();
+        let roots: Vec<&str> = g.roots.iter().map(String::as_str).collect();
+        assert_eq!(roots, ["Reset", "SysTick", "main"]);
+        // `bmi.n` into the middle of panic_fmt is padding, not a call.
+        assert!(!g.edges["Reset"].iter().any(|t| is_panic_entry(t)));
+        // The literal pool's function address is an edge.
+        assert!(g.edges["main"].contains("helper"));
+        assert_eq!(g.indirect["main"], 1);
+    }
+
+    #[test]
+    fn panic_code_nobody_reaches_directly_still_fails() {
+        let g = CallGraph::parse(&disassembly(QUIET), VECTORS).unwrap();
+        let e = check_graph(&g).err().unwrap();
+        assert!(e.contains("panic code is left"), "{e}");
+        assert!(e.contains("panic_bounds_check"), "{e}");
+    }
+
+    #[test]
+    fn a_panic_in_an_exception_handler_is_found_with_its_chain() {
+        let body = "     140:\tbl\t1c0 <core::panicking::panic_bounds_check>\n";
+        let g = CallGraph::parse(&disassembly(body), VECTORS).unwrap();
+        let e = check_graph(&g).err().unwrap();
+        assert!(e.contains("reachable from the entry points"), "{e}");
+        assert!(
+            e.contains("SysTick\n -> core::panicking::panic_bounds_check"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_image_without_panic_code_passes() {
+        let text = disassembly(QUIET);
+        // The same image with the panic functions gone (headers only
+        // matched: Reset's padding still names one).
+        let clean: Vec<&str> = text
+            .split("\n\n")
+            .filter(|f| {
+                let header = f.trim_start().lines().next().unwrap_or_default();
+                !header.contains("core::panicking") && !header.contains(PANIC_HANDLER)
+            })
+            .collect();
+        let g = CallGraph::parse(&clean.join("\n\n"), VECTORS).unwrap();
+        let r = check_graph(&g).unwrap();
+        assert_eq!(r.functions, 5);
+        assert_eq!(r.indirect_calls, 1);
+    }
+
+    #[test]
+    fn a_vector_into_the_middle_of_a_function_is_refused() {
+        let bad = VECTORS.replace("41010000", "45010000");
+        let e = CallGraph::parse(&disassembly(QUIET), &bad).err().unwrap();
+        assert!(e.contains("0x00000145"), "{e}");
+    }
 }
