@@ -32,9 +32,12 @@
 //! right crutch (`board_config::FORCE_CHANNELS`).
 #![no_std]
 #![no_main]
-// Unsafe is confined to the panic handler, which must reach the motor-enable
-// lines after the HAL's ownership of them is gone (see `panic`); cortex-m-rt's
-// attributes also expand to `#[export_name]`, which this lint counts.
+// Unsafe, each block with its reason: the panic mark and `disable_motors`
+// (the motor-enable lines reached whatever owns GPIOB), the register words
+// the PAC takes as raw bits (`clocks`), the PAC's TIM1/SPI register blocks
+// after the peripheral was handed over (`pwm`, `spi`), and the RTT control
+// block the probe shares (`rtt_log`); cortex-m-rt's attributes also expand
+// to `#[export_name]`, which this lint counts.
 #![allow(unsafe_code)]
 
 #[path = "stm32f405/clocks.rs"]
