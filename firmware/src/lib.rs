@@ -1,8 +1,9 @@
 //! Board-independent pieces of the firmware: the configuration both boards
-//! run the controller with ([`board_config`]), the power-on self-test
+//! run the controller with ([`board_config`]), the motor board's clock tree
+//! and timers computed when compiling ([`clock_tree`]), the power-on self-test
 //! ([`selftest`]) and the in-memory peripherals of the QEMU control-tick
-//! benchmark ([`qemu_rig`]) and its replay of ticks recorded in the
-//! simulator ([`tick_replay`]).
+//! benchmark ([`qemu_rig`]), its replay of ticks recorded in the simulator
+//! ([`tick_replay`]) and the text it prints ([`text`]).
 //!
 //! No control logic lives here (that is gait-control's job); this crate only
 //! wires boards to the portable crates.
@@ -10,6 +11,8 @@
 #![forbid(unsafe_code)]
 
 pub mod board_config;
+pub mod clock_tree;
 pub mod qemu_rig;
 pub mod selftest;
+pub mod text;
 pub mod tick_replay;

@@ -39,6 +39,7 @@ use gait_control::position_loop::JointGains;
 use gait_control::posture::JOINTS;
 use gait_control::sequencer::{GaitTables, SequencerConfig};
 use gait_control::supervisor::{self, Supervisor, SupervisorConfig};
+use gait_core::fingerprint::Fingerprint;
 use gait_core::{BodyModel, JointLimits};
 
 use crate::drive::DriveSpec;
@@ -197,16 +198,17 @@ impl DeviceConfig {
         })
     }
 
-    /// CRC-32 (ISO-HDLC) of the configuration's `Debug` text: the same
-    /// values give the same number on the host and on the target (Rust
-    /// prints floats exactly and identically everywhere), and any changed
-    /// value changes it.
+    /// CRC-32 (ISO-HDLC) of the configuration's contents, every field in
+    /// declaration order with floats by their bits
+    /// (`gait_core::fingerprint`): the same values give the same number on
+    /// the host and on the target, and any changed value changes it. No
+    /// `core::fmt`: the QEMU image prints it, and float formatting would
+    /// put panic paths into that image.
     pub fn fingerprint(&self) -> u32 {
         let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
-        let mut digest = CrcWriter(crc.digest());
-        // Writing into a digest cannot fail.
-        let _ = core::fmt::write(&mut digest, format_args!("{self:?}"));
-        digest.0.finalize()
+        let mut digest = crc.digest();
+        self.feed(&mut |bytes: &[u8]| digest.update(bytes));
+        digest.finalize()
     }
 
     /// The supervisor.
@@ -244,14 +246,69 @@ impl DeviceConfig {
     }
 }
 
-struct CrcWriter<'a>(crc::Digest<'a, u32>);
-
-impl core::fmt::Write for CrcWriter<'_> {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        self.0.update(s.as_bytes());
-        Ok(())
-    }
-}
+gait_core::impl_fingerprint!(DeviceConfig {
+    dt_s,
+    body,
+    ankle_spring_nm_per_rad,
+    drives,
+    motors,
+    controller,
+    supervisor,
+    encoders,
+    foot_sensor,
+    crutch_sensor,
+    force_channels,
+    buttons,
+    e_stop_active_high,
+    reset_hold_ticks,
+});
+gait_core::impl_fingerprint!(LoadCellSpec {
+    name,
+    zero_counts,
+    counts_per_n,
+    rated_min_n,
+    rated_max_n,
+    calibration_points_n,
+});
+gait_core::impl_fingerprint!(drive::DriveSpec {
+    motor,
+    gearbox,
+    amplifier,
+    current_limit_a,
+    i2t_warning_share,
+    i2t_fault_share,
+    brake,
+});
+gait_core::impl_fingerprint!(drive::MotorSpec {
+    name,
+    nominal_voltage_v,
+    nominal_torque_mnm,
+    nominal_current_a,
+    torque_constant_mnm_per_a,
+    speed_constant_rpm_per_v,
+    terminal_resistance_ohm,
+    rotor_inertia_gcm2,
+    winding_time_constant_s,
+});
+gait_core::impl_fingerprint!(drive::GearboxSpec {
+    name,
+    ratio,
+    rated_torque_nm,
+    average_torque_nm,
+    repeated_peak_torque_nm,
+    momentary_torque_nm,
+    efficiency,
+});
+gait_core::impl_fingerprint!(drive::AmplifierSpec {
+    name,
+    supply_v,
+    continuous_current_a,
+    peak_current_a,
+});
+gait_core::impl_fingerprint!(drive::DynamicBrake {
+    name,
+    resistance_ohm
+});
 
 /// Encoder zero offsets (*per device*: raw counts with the joint at its
 /// zero pose on the calibration jig) and senses of rotation; the right

@@ -18,6 +18,7 @@ pub mod anthropometry;
 pub mod bezier;
 pub mod clinical;
 pub mod dynamics;
+pub mod fingerprint;
 pub mod flash_tables;
 pub mod foot;
 pub mod gait;

@@ -474,3 +474,5 @@ mod tests {
         }
     }
 }
+
+crate::impl_fingerprint!([T: crate::fingerprint::Fingerprint] BodyModel<T> { links, limits, p, g });

@@ -11,6 +11,10 @@
 //! Instruction counts: run QEMU with `-icount shift=0` so every instruction
 //! advances the virtual clock by 1 ns; SysTick on the core clock (25 MHz on
 //! this machine) then ticks once per 40 instructions.
+//!
+//! Output: semihosting writes of lines built with `firmware::text::Line`,
+//! not `core::fmt` (whose float and `Debug` formatting carry panic paths and
+//! indirect calls; `cargo xtask panics` accepts none in the image).
 #![no_std]
 #![no_main]
 // cortex-m-rt's `#[entry]`/`#[exception]` expand to `#[export_name]`, which
@@ -21,9 +25,12 @@ use core::hint::black_box;
 
 use cortex_m::peripheral::{SYST, syst::SystClkSource};
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::debug;
+use cortex_m_semihosting::hio::{self, HostStream};
+use exogait_device::DeviceError;
+use firmware::text::Line;
 use firmware::{board_config, qemu_rig, selftest, tick_replay};
-use gait_control::faults::Reaction;
+use gait_control::faults::{FaultSet, Reaction};
 use gait_core::BodyModel;
 use gait_core::dynamics::{inverse_dynamics, share_load};
 use gait_core::ik::{IkSolver, IkTarget};
@@ -37,6 +44,80 @@ const SYST_MAX: u32 = 0x00FF_FFFF;
 const CONTROL_TICKS: u32 = 1_000;
 /// Ticks after which the standing rig's motors must be enabled.
 const ENABLE_WITHIN_TICKS: u32 = 5;
+
+/// The host's standard output over semihosting (nothing is printed if QEMU
+/// refuses to open it).
+struct Out(Option<HostStream>);
+
+impl Out {
+    fn open() -> Self {
+        Self(hio::hstdout().ok())
+    }
+
+    /// Prints `line` and a newline.
+    fn put(&mut self, line: &mut Line) {
+        line.str("\n");
+        if let Some(stream) = &mut self.0 {
+            let _ = stream.write_all(line.as_bytes());
+        }
+    }
+}
+
+/// A new line starting with `s`.
+fn line(s: &str) -> Line {
+    let mut l = Line::new();
+    l.str(s);
+    l
+}
+
+/// What a configuration error is, by name (the index where it has one).
+fn device_error(l: &mut Line, e: &DeviceError) {
+    let (name, index) = match e {
+        DeviceError::ForceCalibration(i, _) => ("force calibration", Some(*i)),
+        DeviceError::Motor(i, _) => ("motor", Some(*i)),
+        DeviceError::MotorDisable(i) => ("motor disable", Some(*i)),
+        DeviceError::Operator(_) => ("operator", None),
+        DeviceError::Supervisor(_) => ("supervisor", None),
+        DeviceError::Controller(_) => ("controller", None),
+    };
+    l.str(name);
+    if let Some(i) = index {
+        l.str(" ").usize(i);
+    }
+}
+
+/// A reaction by its name.
+const fn reaction_name(r: Reaction) -> &'static str {
+    match r {
+        Reaction::None => "None",
+        Reaction::FinishStepThenHold => "FinishStepThenHold",
+        Reaction::SafeHold => "SafeHold",
+        Reaction::DisableMotors => "DisableMotors",
+    }
+}
+
+/// A fault set as `[0x0205 name, …]`.
+fn fault_list(l: &mut Line, faults: &FaultSet) {
+    l.str("[");
+    for (i, code) in faults.iter().enumerate() {
+        if i > 0 {
+            l.str(", ");
+        }
+        l.str("0x")
+            .hex(u32::from(code.code()), 4)
+            .str(" ")
+            .str(code.name());
+    }
+    l.str("]");
+}
+
+/// A phase by the name the replay prints it with.
+fn phase_name(phase: &gait_control::sequencer::Phase) -> &'static str {
+    tick_replay::PHASES
+        .get(tick_replay::phase_index(phase))
+        .copied()
+        .unwrap_or("?")
+}
 
 /// Counts instructions with SysTick; intervals must stay below 2^24 ticks.
 struct InstrCounter {
@@ -90,7 +171,8 @@ fn main() -> ! {
 }
 
 fn run() -> usize {
-    hprintln!("exogait self-test (mps2-an386, Cortex-M4F)");
+    let out = &mut Out::open();
+    out.put(&mut line("exogait self-test (mps2-an386, Cortex-M4F)"));
     let checks = selftest::run();
     let mut failed = 0;
     for c in &checks {
@@ -98,29 +180,35 @@ fn run() -> usize {
         if !c.passed() {
             failed += 1;
         }
-        hprintln!(
-            "  {} {:<28} {:.3e} (bound {:.1e})",
-            verdict,
-            c.name,
-            c.value,
-            c.bound
+        out.put(
+            line("  ")
+                .str(verdict)
+                .str(" ")
+                .str_padded(c.name, 28)
+                .str(" ")
+                .sci(c.value, 3)
+                .str(" (bound ")
+                .sci(c.bound, 1)
+                .str(")"),
         );
     }
-    hprintln!(
-        "selftest: {} passed, {} failed",
-        checks.len() - failed,
-        failed
+    out.put(
+        line("selftest: ")
+            .usize(checks.len().saturating_sub(failed))
+            .str(" passed, ")
+            .usize(failed)
+            .str(" failed"),
     );
 
     match cortex_m::Peripherals::take() {
         Some(p) => {
             let mut ctr = InstrCounter::new(p.SYST);
-            bench(&mut ctr);
-            failed += control_tick_bench(&mut ctr);
-            failed += replay_bench(&mut ctr);
+            bench(out, &mut ctr);
+            failed += control_tick_bench(out, &mut ctr);
+            failed += replay_bench(out, &mut ctr);
         }
         None => {
-            hprintln!("bench: SysTick unavailable");
+            out.put(&mut line("bench: SysTick unavailable"));
             failed += 1;
         }
     }
@@ -128,7 +216,7 @@ fn run() -> usize {
 }
 
 /// On-target instruction counts (see README, "Performance").
-fn bench(ctr: &mut InstrCounter) {
+fn bench(out: &mut Out, ctr: &mut InstrCounter) {
     let base = ctr.per_call(1000, |i| {
         black_box(i);
     });
@@ -188,62 +276,71 @@ fn bench(ctr: &mut InstrCounter) {
         let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
         black_box(gait_core::foot::inverse_dynamics(&m, &foot, &phi, &w, &dd));
     });
-    hprintln!("bench: loop_overhead instr={}", base);
-    hprintln!(
-        "bench: toe_rocker_inverse_dynamics_f32 instr={}",
-        toe_id.saturating_sub(base)
-    );
-    hprintln!("bench: share_load_f32 instr={}", share.saturating_sub(base));
-    hprintln!("bench: ik_f32 instr={}", ik_only.saturating_sub(base));
-    hprintln!(
-        "bench: ik_plus_inverse_dynamics_f32 instr={}",
-        ik_id.saturating_sub(base)
-    );
-    hprintln!("bench: libm_sinf instr={}", sinf.saturating_sub(base));
-    hprintln!("bench: sin_cos_f32 instr={}", fast.saturating_sub(base));
-    hprintln!(
-        "bench: inverse_dynamics_f32 instr={}",
-        id.saturating_sub(base)
-    );
+    out.put(line("bench: loop_overhead instr=").u32(base));
+    for (name, instr) in [
+        ("toe_rocker_inverse_dynamics_f32", toe_id),
+        ("share_load_f32", share),
+        ("ik_f32", ik_only),
+        ("ik_plus_inverse_dynamics_f32", ik_id),
+        ("libm_sinf", sinf),
+        ("sin_cos_f32", fast),
+        ("inverse_dynamics_f32", id),
+    ] {
+        out.put(
+            line("bench: ")
+                .str(name)
+                .str(" instr=")
+                .u32(instr.saturating_sub(base)),
+        );
+    }
 }
 
 /// Runs the board's controller on the standing rig: instructions per tick
 /// (average and worst) and a health check. Returns the number of failures.
-fn control_tick_bench(ctr: &mut InstrCounter) -> usize {
+fn control_tick_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
     let device = match board_config::device() {
         Ok(d) => d,
         Err(e) => {
-            hprintln!("FAIL control: device configuration refused: {:?}", e);
+            let mut l = line("FAIL control: device configuration refused: ");
+            device_error(&mut l, &e);
+            out.put(&mut l);
             return 1;
         }
     };
     // xtask compares this with the host's (the simulator's) configuration.
-    hprintln!("device: fingerprint=0x{:08x}", device.fingerprint());
+    out.put(line("device: fingerprint=0x").hex(device.fingerprint(), 8));
     let mut controller = match board_config::build_controller() {
         Ok(c) => c,
         Err(e) => {
-            hprintln!("FAIL control: configuration refused: {:?}", e);
+            let mut l = line("FAIL control: configuration refused: ");
+            device_error(&mut l, &e);
+            out.put(&mut l);
             return 1;
         }
     };
     let mut hw = match board_config::hardware(&device, qemu_rig::standing(&device)) {
         Ok(h) => h,
         Err(e) => {
-            hprintln!("FAIL control: hardware refused: {:?}", e);
+            let mut l = line("FAIL control: hardware refused: ");
+            device_error(&mut l, &e);
+            out.put(&mut l);
             return 1;
         }
     };
     // Every driver must start disabled (`hardware` disables each one).
     let mut failed = 0;
     if hw.motors.iter().any(|m| m.is_enabled()) {
-        hprintln!("FAIL control: a motor is enabled after boot");
+        out.put(&mut line("FAIL control: a motor is enabled after boot"));
         failed += 1;
     }
-    hprintln!(
-        "control: state {} bytes (controller {}, hardware {})",
-        core::mem::size_of_val(&controller) + core::mem::size_of_val(&hw),
-        core::mem::size_of_val(&controller),
-        core::mem::size_of_val(&hw)
+    out.put(
+        line("control: state ")
+            .usize(core::mem::size_of_val(&controller) + core::mem::size_of_val(&hw))
+            .str(" bytes (controller ")
+            .usize(core::mem::size_of_val(&controller))
+            .str(", hardware ")
+            .usize(core::mem::size_of_val(&hw))
+            .str(")"),
     );
     let base = ctr.once(|| black_box(0u32)).0;
     let mut total: u64 = 0;
@@ -269,55 +366,79 @@ fn control_tick_bench(ctr: &mut InstrCounter) -> usize {
         last = Some(report);
     }
     let avg = total / u64::from(CONTROL_TICKS.max(1));
-    hprintln!("bench: control_tick instr={}", avg);
-    hprintln!(
-        "bench: control_tick_worst instr={} (tick {})",
-        worst,
-        worst_at
+    out.put(line("bench: control_tick instr=").u64(avg));
+    out.put(
+        line("bench: control_tick_worst instr=")
+            .u32(worst)
+            .str(" (tick ")
+            .u32(worst_at)
+            .str(")"),
     );
     if let Some(r) = last {
-        hprintln!(
-            "control: standing rig, {} ticks: phase {:?}, motors enabled {}, joints {:?} rad, forces {:?} N, commands {:?} N·m",
-            r.tick,
-            r.phase,
-            r.motors_enabled,
-            r.joints_rad,
-            r.forces_n,
-            r.command_nm
+        out.put(
+            line("control: standing rig, ")
+                .u32(r.tick)
+                .str(" ticks: phase ")
+                .str(phase_name(&r.phase))
+                .str(", motors enabled ")
+                .str(if r.motors_enabled { "true" } else { "false" })
+                .str(", joints ")
+                .fixed_list(&r.joints_rad, 4)
+                .str(" rad, forces ")
+                .fixed_list(&r.forces_n, 1)
+                .str(" N, commands ")
+                .fixed_list(&r.command_nm, 3)
+                .str(" N·m"),
         );
     }
     if let Some(r) = first_bad {
-        hprintln!(
-            "FAIL control: unhealthy while standing at tick {}: reaction {:?}, faults {:?}, motors enabled {}",
-            r.tick,
-            r.reaction,
-            r.faults,
-            r.motors_enabled
-        );
+        let mut l = line("FAIL control: unhealthy while standing at tick ");
+        l.u32(r.tick)
+            .str(": reaction ")
+            .str(reaction_name(r.reaction))
+            .str(", faults ");
+        fault_list(&mut l, &r.faults);
+        l.str(", motors enabled ")
+            .str(if r.motors_enabled { "true" } else { "false" });
+        out.put(&mut l);
         for rec in controller.supervisor().log() {
-            hprintln!(
-                "  fault log: tick {} {:?} channel {} value {}",
-                rec.tick,
-                rec.code,
-                rec.channel,
-                rec.value
+            out.put(
+                line("  fault log: tick ")
+                    .u32(rec.tick)
+                    .str(" 0x")
+                    .hex(u32::from(rec.code.code()), 4)
+                    .str(" ")
+                    .str(rec.code.name())
+                    .str(" channel ")
+                    .u32(u32::from(rec.channel))
+                    .str(" value ")
+                    .exp(rec.value),
             );
         }
         failed += 1;
     } else {
-        hprintln!("control: ok (no fault, motors enabled, commands finite)");
+        out.put(&mut line(
+            "control: ok (no fault, motors enabled, commands finite)",
+        ));
     }
     // The drivers must have spoken the parts' protocols: two 16-bit frames
     // per encoder read, one conversion per force sensor, every tick.
     let frames = hw.encoders.map(|e| e.destroy().frames);
     let conversions = hw.adc.destroy().conversions;
     if frames.iter().any(|&f| f != 2 * CONTROL_TICKS) || conversions != 4 * CONTROL_TICKS {
-        hprintln!(
-            "FAIL control: bus traffic: encoder frames {:?}, ADC conversions {} over {} ticks",
-            frames,
-            conversions,
-            CONTROL_TICKS
-        );
+        let mut l = line("FAIL control: bus traffic: encoder frames [");
+        for (i, f) in frames.iter().enumerate() {
+            if i > 0 {
+                l.str(", ");
+            }
+            l.u32(*f);
+        }
+        l.str("], ADC conversions ")
+            .u32(conversions)
+            .str(" over ")
+            .u32(CONTROL_TICKS)
+            .str(" ticks");
+        out.put(&mut l);
         failed += 1;
     }
     failed
@@ -327,11 +448,13 @@ fn control_tick_bench(ctr: &mut InstrCounter) -> usize {
 /// and prints, per phase, `tick: phase=<name> avg=<instructions>
 /// worst=<instructions> ticks=<n>`, then how far the target's motor
 /// commands are from the host's. xtask checks the budget and the bound.
-fn replay_bench(ctr: &mut InstrCounter) -> usize {
+fn replay_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
     let device = match board_config::device() {
         Ok(d) => d,
         Err(e) => {
-            hprintln!("FAIL replay: device configuration refused: {:?}", e);
+            let mut l = line("FAIL replay: device configuration refused: ");
+            device_error(&mut l, &e);
+            out.put(&mut l);
             return 1;
         }
     };
@@ -342,40 +465,64 @@ fn replay_bench(ctr: &mut InstrCounter) -> usize {
     });
     match result {
         Ok(r) if r.segments == 0 => {
-            hprintln!("tick: no recording built in (cargo xtask qemu records one)");
+            out.put(&mut line(
+                "tick: no recording built in (cargo xtask qemu records one)",
+            ));
             0
         }
         Ok(r) => {
             for (name, p) in tick_replay::PHASES.iter().zip(r.phases) {
                 if p.ticks > 0 {
-                    hprintln!(
-                        "tick: phase={} avg={} worst={} ticks={}",
-                        name,
-                        p.average(),
-                        p.worst,
-                        p.ticks
+                    out.put(
+                        line("tick: phase=")
+                            .str(name)
+                            .str(" avg=")
+                            .u64(p.average())
+                            .str(" worst=")
+                            .u32(p.worst)
+                            .str(" ticks=")
+                            .u32(p.ticks),
                     );
                 }
             }
-            hprintln!(
-                "tick: replayed runs={} ticks={} max_command_diff_nm={:e} differing_ticks={}",
-                r.segments,
-                r.ticks,
-                r.max_command_diff_nm,
-                r.differing_ticks
+            out.put(
+                line("tick: replayed runs=")
+                    .u32(r.segments)
+                    .str(" ticks=")
+                    .u32(r.ticks)
+                    .str(" max_command_diff_nm=")
+                    .exp(r.max_command_diff_nm)
+                    .str(" differing_ticks=")
+                    .u32(r.differing_ticks),
             );
             0
         }
         Err(e) => {
-            hprintln!("FAIL replay: {:?}", e);
+            out.put(&mut line(match e {
+                tick_replay::ReplayError::File(exogait_device::tick_record::FileError::Header) => {
+                    "FAIL replay: the recording's header is bad"
+                }
+                tick_replay::ReplayError::File(exogait_device::tick_record::FileError::Segment) => {
+                    "FAIL replay: a segment of the recording is bad"
+                }
+                tick_replay::ReplayError::Config => {
+                    "FAIL replay: the controller or its drivers were refused"
+                }
+            }));
             1
         }
     }
 }
 
+/// None is reachable (`cargo xtask panics`); if one happens anyway, the run
+/// fails with where it came from (no message: printing it needs `core::fmt`).
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("panic: {}", info);
+    let mut l = line("panic");
+    if let Some(at) = info.location() {
+        l.str(" at ").str(at.file()).str(":").u32(at.line());
+    }
+    Out::open().put(&mut l);
     debug::exit(debug::EXIT_FAILURE);
     #[allow(clippy::empty_loop)]
     loop {}

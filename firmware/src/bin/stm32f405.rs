@@ -32,10 +32,24 @@
 //! right crutch (`board_config::FORCE_CHANNELS`).
 #![no_std]
 #![no_main]
-// Unsafe is confined to the panic handler, which must reach the motor-enable
-// lines after the HAL's ownership of them is gone (see `panic`); cortex-m-rt's
-// attributes also expand to `#[export_name]`, which this lint counts.
+// Unsafe, each block with its reason: the panic mark and `disable_motors`
+// (the motor-enable lines reached whatever owns GPIOB), the register words
+// the PAC takes as raw bits (`clocks`), the PAC's TIM1/SPI register blocks
+// after the peripheral was handed over (`pwm`, `spi`), and the RTT control
+// block the probe shares (`rtt_log`); cortex-m-rt's attributes also expand
+// to `#[export_name]`, which this lint counts.
 #![allow(unsafe_code)]
+
+#[path = "stm32f405/clocks.rs"]
+mod clocks;
+#[path = "stm32f405/pwm.rs"]
+mod pwm;
+#[path = "stm32f405/rtt_log.rs"]
+mod rtt_log;
+#[path = "stm32f405/spi.rs"]
+mod spi;
+#[path = "stm32f405/tick.rs"]
+mod tick;
 
 use core::convert::Infallible;
 use core::mem::MaybeUninit;
@@ -43,22 +57,23 @@ use core::ptr::addr_of_mut;
 
 use cortex_m::peripheral::DWT;
 use cortex_m_rt::entry;
-use defmt_rtt as _;
+use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
-use embedded_hal_bus::spi::{AtomicDevice, ExclusiveDevice, NoDelay};
+use embedded_hal::spi::{Mode, Phase, Polarity};
+use embedded_hal_bus::spi::{AtomicDevice, ExclusiveDevice};
 use embedded_hal_bus::util::AtomicCell;
 use firmware::board_config::{self, BoardIo, TICK_HZ};
+use firmware::clock_tree::{ADC_SPI_BR, ENCODER_SPI_BR};
 use firmware::selftest;
 use gait_control::controller::TickReport;
 use gait_control::faults::{FaultSet, Reaction};
 use stm32f4xx_hal::gpio::{ErasedPin, Output};
-use stm32f4xx_hal::spi::{Mode, Phase, Polarity};
 use stm32f4xx_hal::{pac, prelude::*, watchdog::IndependentWatchdog};
 
 /// Motor-enable pins on GPIOB (see the pin map above).
 const MOTOR_ENABLE_PINS_B: [u8; 4] = [12, 13, 14, 15];
-/// Core clock, Hz.
-const SYSCLK_HZ: u32 = 168_000_000;
+/// Core clock, Hz (`firmware::clock_tree`).
+const SYSCLK_HZ: u32 = firmware::clock_tree::SYSCLK_HZ;
 /// Core cycles in one control period.
 const CYCLES_PER_TICK: u32 = SYSCLK_HZ / TICK_HZ;
 /// Watchdog window: a stalled loop resets the board (motors disabled by reset).
@@ -70,15 +85,6 @@ const ENCODER_CS_CYCLES: u32 = 64;
 /// MCP3208: CS high at least 500 ns between conversions (tCSH): 96 cycles
 /// is 571 ns.
 const ADC_CS_CYCLES: u32 = 96;
-/// Encoder bus clock asked for: the HAL picks the fastest prescaler of
-/// APB2's 84 MHz not above 2× this, /16 = 5.25 MHz (/8 would be 10.5 MHz,
-/// above the AS5048A's 10 MHz).
-const ENCODER_SPI_HZ: u32 = 5_250_000;
-/// ADC bus clock asked for: APB1's 42 MHz / 64 = 656 kHz (the MCP3208 is
-/// rated 1 MHz at 2.7 V; /32 would be 1.31 MHz).
-const ADC_SPI_HZ: u32 = 656_250;
-/// PWM frequency of the H-bridges (above hearing).
-const PWM_HZ: u32 = 20_000;
 
 /// A chip-select line that holds its new level for the part's set-up /
 /// hold time after every change (busy-wait of `CYCLES` core cycles), so two
@@ -103,6 +109,20 @@ impl<const CYCLES: u32> OutputPin for ChipSelect<CYCLES> {
     }
 }
 
+/// A busy-wait delay in core cycles for the SPI devices' `DelayNs`
+/// operations. The drivers use none; embedded-hal-bus's `NoDelay` would
+/// panic on one, and that branch stayed in the image where the optimiser
+/// could not prove it dead.
+struct CycleDelay;
+
+impl DelayNs for CycleDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        // 168 cycles per µs = 21 / 125 per ns, rounded up.
+        let cycles = u64::from(ns) * u64::from(SYSCLK_HZ / 8_000_000) / 125 + 1;
+        cortex_m::asm::delay(u32::try_from(cycles).unwrap_or(u32::MAX));
+    }
+}
+
 #[entry]
 fn main() -> ! {
     let Some(dp) = pac::Peripherals::take() else {
@@ -124,19 +144,16 @@ fn main() -> ! {
     let gpioa = dp.GPIOA.split();
     let gpioc = dp.GPIOC.split();
 
-    // 2. Clocks: 8 MHz crystal → 168 MHz (APB1 42 MHz, APB2 84 MHz).
-    let rcc = dp.RCC.constrain();
-    let clocks = rcc
-        .cfgr
-        .use_hse(8.MHz())
-        .sysclk(SYSCLK_HZ.Hz())
-        .pclk1(42.MHz())
-        .pclk2(84.MHz())
-        .freeze();
-    defmt::info!(
-        "exogait motor board up, sysclk {} Hz",
-        clocks.sysclk().raw()
-    );
+    // 2. Clocks: 8 MHz crystal → 168 MHz (APB1 42 MHz, APB2 84 MHz),
+    //    register values computed when compiling (`firmware::clock_tree`).
+    let clocks = match clocks::setup(&dp.RCC, &dp.FLASH, &dp.PWR) {
+        Ok(c) => c,
+        Err(e) => {
+            defmt::error!("clock set-up failed: {}", e);
+            halt("no clock: motors stay disabled");
+        }
+    };
+    defmt::info!("exogait motor board up, sysclk {} Hz", clocks.sysclk_hz());
 
     // 3. Self-test: the model code in this image must agree with itself.
     let checks = selftest::run();
@@ -168,20 +185,20 @@ fn main() -> ! {
         polarity: Polarity::IdleLow,
         phase: Phase::CaptureOnFirstTransition,
     };
-    let encoder_bus = AtomicCell::new(dp.SPI1.spi(
-        (gpioa.pa5, gpioa.pa6, gpioa.pa7),
-        mode_1,
-        ENCODER_SPI_HZ.Hz(),
-        &clocks,
-    ));
-    let adc_bus = dp.SPI2.spi(
-        (gpiob.pb10, gpioc.pc2, gpioc.pc3),
-        mode_0,
-        ADC_SPI_HZ.Hz(),
-        &clocks,
+    let _encoder_bus_pins = (
+        gpioa.pa5.into_alternate::<5>(),
+        gpioa.pa6.into_alternate::<5>(),
+        gpioa.pa7.into_alternate::<5>(),
     );
+    let encoder_bus = AtomicCell::new(spi::Bus::spi1(dp.SPI1, &dp.RCC, mode_1, ENCODER_SPI_BR));
+    let _adc_bus_pins = (
+        gpiob.pb10.into_alternate::<5>(),
+        gpioc.pc2.into_alternate::<5>(),
+        gpioc.pc3.into_alternate::<5>(),
+    );
+    let adc_bus = spi::Bus::spi2(dp.SPI2, &dp.RCC, mode_0, ADC_SPI_BR);
     let cs = |pin: ErasedPin<Output>| ChipSelect::<ENCODER_CS_CYCLES>(pin);
-    let encoder = |pin| match AtomicDevice::new_no_delay(&encoder_bus, cs(pin)) {
+    let encoder = |pin| match AtomicDevice::new(&encoder_bus, cs(pin), CycleDelay) {
         Ok(d) => d,
         Err(e) => match e {},
     };
@@ -194,21 +211,18 @@ fn main() -> ! {
         encoder(gpioc.pc6.into_push_pull_output().erase()),
     ];
     let adc_cs = ChipSelect::<ADC_CS_CYCLES>(gpioc.pc7.into_push_pull_output().erase());
-    let adc = match ExclusiveDevice::new(adc_bus, adc_cs, NoDelay) {
+    let adc = match ExclusiveDevice::new(adc_bus, adc_cs, CycleDelay) {
         Ok(d) => d,
         Err(e) => match e {},
     };
-    let (_pwm_timer, (ch1, ch2, ch3, ch4)) = dp.TIM1.pwm_hz(PWM_HZ.Hz(), &clocks);
-    let mut pwm = [
-        ch1.with(gpioa.pa8).erase(),
-        ch2.with(gpioa.pa9).erase(),
-        ch3.with(gpioa.pa10).erase(),
-        ch4.with(gpioa.pa11).erase(),
-    ];
-    for ch in pwm.iter_mut() {
-        ch.set_duty(0);
-        ch.enable();
-    }
+    // TIM1 CH1–CH4 at 20 kHz, every duty 0 (`pwm::setup`).
+    let _pwm_pins = (
+        gpioa.pa8.into_alternate::<1>(),
+        gpioa.pa9.into_alternate::<1>(),
+        gpioa.pa10.into_alternate::<1>(),
+        gpioa.pa11.into_alternate::<1>(),
+    );
+    let pwm = pwm::setup(dp.TIM1, &dp.RCC);
     let dir = [
         gpioc.pc8.into_push_pull_output().erase(),
         gpioc.pc9.into_push_pull_output().erase(),
@@ -252,21 +266,18 @@ fn main() -> ! {
     //    measures each tick's work for the log.
     cp.DCB.enable_trace();
     cp.DWT.enable_cycle_counter();
-    let mut tick = dp.TIM2.counter_hz(&clocks);
     let mut dog = IndependentWatchdog::new(dp.IWDG);
     dog.start(WATCHDOG_MS.millis());
-    if tick.start(TICK_HZ.Hz()).is_err() {
-        halt("cannot start the tick timer");
-    }
+    let mut tick = tick::Tick::start(dp.TIM2, &dp.RCC);
     let mut log = LoopLog::new();
     let mut first = true;
     loop {
         // The update flag already set when we come to wait means the
         // previous tick's work ran past the period boundary: a missed
         // deadline (the supervisor decides what a run of them means).
-        let overran = tick.wait().is_ok() && !first;
+        let overran = tick.elapsed() && !first;
         if !overran {
-            while tick.wait().is_err() {}
+            while !tick.elapsed() {}
         }
         first = false;
         let start = DWT::cycle_count();

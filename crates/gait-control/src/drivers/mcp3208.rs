@@ -284,3 +284,12 @@ pub struct ForceChannels {
     /// Right crutch tip.
     pub right_crutch: Channel,
 }
+
+gait_core::impl_fingerprint!([const N: usize] ForceCalibration<N> {
+    counts,
+    newtons,
+    open_below_counts,
+    short_above_counts,
+    min_newtons,
+    max_newtons,
+});

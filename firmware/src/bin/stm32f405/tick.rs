@@ -1,0 +1,45 @@
+//! The 1 kHz control tick on TIM2 through the PAC, as stm32f4xx-hal's
+//! `CounterHz::start(1 kHz)` set it (without its run-time prescaler search):
+//! PSC and ARR from `firmware::clock_tree::TICK_TIMER`, computed when
+//! compiling.
+
+use firmware::clock_tree::TICK_TIMER;
+use stm32f4xx_hal::pac::{RCC, TIM2};
+
+/// TIM2 counting control periods.
+pub struct Tick {
+    tim: TIM2,
+}
+
+impl Tick {
+    /// Clock on and the timer reset (RM0090 §7.3.13 / §7.3.5); PSC and ARR
+    /// (§18.4.11–12, "General-purpose timers (TIM2 to TIM5)"), loaded by an
+    /// update event with URS set so that it raises no update flag (§18.4.1,
+    /// §18.4.6); the counter started (CEN).
+    pub fn start(tim: TIM2, rcc: &RCC) -> Self {
+        rcc.apb1enr().modify(|_, w| w.tim2en().set_bit());
+        let _ = rcc.apb1enr().read();
+        rcc.apb1rstr().modify(|_, w| w.tim2rst().set_bit());
+        rcc.apb1rstr().modify(|_, w| w.tim2rst().clear_bit());
+        tim.psc().write(|w| w.psc().set(TICK_TIMER.psc));
+        tim.arr().write(|w| w.arr().set(u32::from(TICK_TIMER.arr)));
+        tim.cr1().modify(|_, w| w.urs().set_bit());
+        tim.egr().write(|w| w.ug().set_bit());
+        tim.cr1().modify(|_, w| w.urs().clear_bit());
+        tim.sr().write(|w| w.uif().clear_bit());
+        tim.cr1().modify(|_, w| w.cen().set_bit());
+        Self { tim }
+    }
+
+    /// Whether a period ended since the last call (the update flag, SR
+    /// UIF, §18.4.5), clearing it.
+    pub fn elapsed(&mut self) -> bool {
+        if self.tim.sr().read().uif().bit_is_set() {
+            // UIF is rc_w0: the write clears only it.
+            self.tim.sr().write(|w| w.uif().clear_bit());
+            true
+        } else {
+            false
+        }
+    }
+}
