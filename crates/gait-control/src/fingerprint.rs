@@ -11,7 +11,7 @@ use crate::drivers::mcp3208::{Channel, ForceChannels};
 use crate::drivers::motor::MotorConfig;
 use crate::position_loop::JointGains;
 use crate::sequencer::SequencerConfig;
-use crate::supervisor::{AngleRange, Debounce, SupervisorConfig};
+use crate::supervisor::{AngleRange, Debounce, ResponseCheck, SupervisorConfig};
 
 impl_fingerprint_enum!(Direction, ActiveLevel, Channel);
 
@@ -102,4 +102,12 @@ impl_fingerprint!(SupervisorConfig {
     heel_off_ticks,
     deadline_miss_count,
     deadline_window_ticks,
+    response,
+});
+impl_fingerprint!(ResponseCheck {
+    stance_inertia_kgm2,
+    swing_inertia_kgm2,
+    bandwidth_hz,
+    limit_nm,
+    ticks,
 });
