@@ -31,7 +31,7 @@ pub enum Reaction {
     /// (motors stay powered: a limp exoskeleton drops its pilot); in a
     /// swing, first to the landing where the faults allow ([`InSwing`]).
     SafeHold,
-    /// Only for the emergency stop and motor output-stage faults: disable
+    /// Only for the emergency stop (pressed, or its input lost): disable
     /// every motor output now.
     DisableMotors,
 }
@@ -173,7 +173,8 @@ pub enum InSwing {
 //
 // Reactions: the passive ankles, sensors needed only to start a swing, and
 // the buttons are not needed to hold, so the step finishes first; the
-// e-stop and the motor output stage disable the motors; the rest hold.
+// e-stop disables the motors; the rest hold, with the joint braked where
+// its own drive or encoder is lost (`brakes_joint`).
 fault_table! {
     /// An actuated joint's angle is outside the supervisor's envelope
     /// (Table I limits with margins).
@@ -303,12 +304,16 @@ fault_table! {
         reset_allowed_when: "the driver's flag is clear \
             (`Motor::reset_fault` accepted: cooled below warning)",
     },
-    /// A motor output stage write failed (PWM or pin).
+    /// A motor output stage write failed (PWM or pin): that drive alone is
+    /// disabled (its brake holds the joint), the others hold the posture.
+    /// Measured on the campaign's PWM and direction-pin runs (seed 1, 186):
+    /// falls 3 → 2 and stops crossed 30 → 19 against disabling every drive.
     MotorOutputStage = 0x0403 {
         name: "motor output stage fault",
-        reaction: Reaction::DisableMotors,
+        reaction: Reaction::SafeHold,
         detection_bound: "same tick (1)",
         reset_allowed_when: "the driver's flag is clear",
+        brakes_joint: true,
     },
     /// The emergency-stop input is pressed.
     EStopPressed = 0x0501 {

@@ -424,7 +424,8 @@ fn row_motor_thermal() {
 #[test]
 fn row_motor_output_stage() {
     let (_, v) = inject(3, |_, input| input.motors[2].output_fault = true);
-    assert_row(&v, FaultCode::MotorOutputStage, Reaction::DisableMotors, 1);
+    assert_row(&v, FaultCode::MotorOutputStage, Reaction::SafeHold, 1);
+    assert_eq!(v[0].braked_joints, [false, false, true, false]);
 }
 
 #[test]
