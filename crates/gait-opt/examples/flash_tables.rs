@@ -24,7 +24,7 @@ fn main() -> ExitCode {
             eprintln!("flash_tables: no refinement recorded in {path}");
             return ExitCode::FAILURE;
         };
-        RefineSource::Recorded(record)
+        RefineSource::Recorded(Box::new(record))
     } else {
         RefineSource::Search
     };

@@ -207,14 +207,14 @@ pub fn clinical_start(
 }
 
 /// Where the closed-loop refinement's result comes from.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum RefineSource {
     /// Run the search (`cargo xtask tables`; minutes).
     Search,
     /// Recompute the figures of a recorded refinement without the search,
     /// after checking that the clinical search still gives its start (the
     /// CI test; seconds).
-    Recorded(RefineRecord),
+    Recorded(Box<RefineRecord>),
 }
 
 /// What the generated file records of a refinement: enough to check and
@@ -308,8 +308,9 @@ pub fn clinical_table(
              point on the balance part of {} closed-loop steps, first step {}, {START_X}{:?}, \
              {SEARCH_EVALS}{}): search objective {:.1} → {:.1} N·s; {TABLE_X}{:?}; closed loop \
              (strong pilot, device as shipped) balance part {:.1} N·s over 4 steps (clinical \
-             search's point {:.1}; human-data gait {:.1}, {:.1} % below it), {:.1} N·s over 20, \
-             highest crutch peak {:.0} N (human {:.0} N), near the drive's peak {:.3} s a step",
+             search's point {:.1}; human-data gait at that point's geometry {:.1}, {:.1} % below \
+             it), {:.1} N·s over 20, highest crutch peak {:.0} N over 4 and 20 steps (human {:.0} N \
+             over 4), near the drive's peak {:.3} s a step",
             rc.search_steps,
             rc.initial_step,
             f.start,

@@ -20,7 +20,8 @@ const COMMITTED: &str = include_str!("../../gait-core/src/flash_tables.rs");
 fn flash_tables_match_the_generator() {
     let record = RefineRecord::from_flash_module(COMMITTED, "STAIR_UP")
         .expect("the stair-ascent table records its refinement");
-    let fresh = flash_module_source_with(&RefineSource::Recorded(record), &mut |_, _| {}).unwrap();
+    let fresh = flash_module_source_with(&RefineSource::Recorded(Box::new(record)), &mut |_, _| {})
+        .unwrap();
     assert!(
         COMMITTED == fresh,
         "crates/gait-core/src/flash_tables.rs is stale: run `cargo xtask tables`"
