@@ -66,7 +66,7 @@ fn main() -> ExitCode {
         "size" => Toolchain::detect().and_then(|tc| size_all(&tc)),
         "panics" => Toolchain::detect().and_then(|tc| panic_paths_all(&tc)),
         "clippy" => Toolchain::detect().and_then(|tc| clippy(&tc)),
-        "tables" => regenerate_tables(),
+        "tables" => regenerate_tables(rest),
         "faults" => fault_campaign(rest),
         "help" | "--help" | "-h" => {
             println!("{}", HELP);
@@ -105,7 +105,10 @@ usage: cargo xtask <task>
   faults    the randomised fault campaign in the closed loop: `cargo xtask faults
             --runs N [--seed S] [--json]` (progress bar; tally per fault kind)
   tables    regenerate the flash gait tables (crates/gait-core/src/flash_tables.rs)
-            from the optimiser (deterministic; a test checks they are current)
+            from the optimiser (deterministic; minutes: the stair-ascent table's
+            closed-loop refinement); `--check`: regenerate in memory and compare
+            with the committed file (CI's test checks all but the refinement's
+            search)
   setup     install missing system packages for cross-building";
 
 pub(crate) fn root() -> PathBuf {
@@ -157,7 +160,24 @@ fn fault_campaign(args: &[String]) -> Result {
     }
 }
 
-fn regenerate_tables() -> Result {
+/// `cargo xtask tables`: regenerates the flash tables (the stair-ascent
+/// refinement searches in the closed loop for minutes). `--check`: instead,
+/// regenerates them in memory, search included, and compares with the
+/// committed file (the `#[ignore]`d full test; CI runs the fast one).
+fn regenerate_tables(args: &[String]) -> Result {
+    if args.iter().any(|a| a == "--check") {
+        return run(cargo().args([
+            "test",
+            "--release",
+            "-p",
+            "gait-opt",
+            "--test",
+            "flash_tables",
+            "--",
+            "--ignored",
+            "--nocapture",
+        ]));
+    }
     run(cargo().args([
         "run",
         "--release",

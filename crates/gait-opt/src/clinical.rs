@@ -26,6 +26,7 @@
 //! byte. `docs/optimiser.md` ("Clinical mode") gives each choice and its
 //! reason.
 
+pub mod closed_loop;
 mod evaluate;
 mod search;
 

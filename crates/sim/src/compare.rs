@@ -21,7 +21,7 @@ use gait_core::tables::{GaitKind, GaitTable};
 
 use crate::closed_loop::{Rig, RigError};
 use crate::pilot::PilotConfig;
-use crate::scenario::{GO_AT_TICK, GO_TICKS, run_steps, table_geometry, table_rig};
+use crate::scenario::{GO_AT_TICK, GO_TICKS, run_steps_then, table_geometry, table_rig};
 
 /// One step's crutch load.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -120,12 +120,38 @@ pub fn play<'t>(
     max_s: f64,
     prepare: impl FnOnce(&mut Rig<'t>),
 ) -> Result<(GaitRun, Rig<'t>), RigError> {
+    play_then(device, table, pilot, steps, max_s, 1.5, prepare)
+}
+
+/// [`play`] without preparation, the run ending `tail_s` after the last
+/// landing asked for (a search that needs only the steps' windows stops at
+/// the end of the last weight transfer: the sequencer's `transfer_s`).
+pub fn play_steps<'t>(
+    device: &DeviceConfig,
+    table: GaitTable<'t>,
+    pilot: PilotConfig,
+    steps: usize,
+    max_s: f64,
+    tail_s: f64,
+) -> Result<(GaitRun, Rig<'t>), RigError> {
+    play_then(device, table, pilot, steps, max_s, tail_s, |_| {})
+}
+
+fn play_then<'t>(
+    device: &DeviceConfig,
+    table: GaitTable<'t>,
+    pilot: PilotConfig,
+    steps: usize,
+    max_s: f64,
+    tail_s: f64,
+    prepare: impl FnOnce(&mut Rig<'t>),
+) -> Result<(GaitRun, Rig<'t>), RigError> {
     let gait = gait_of(table.kind());
     let geometry = table_geometry(&table, &device.body);
     let mut rig = table_rig(device, gait, pilot, tables_of(table))?;
     Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
     prepare(&mut rig);
-    let ended_by = run_steps(&mut rig, steps, max_s)
+    let ended_by = run_steps_then(&mut rig, steps, max_s, tail_s)
         .err()
         .map(|e| e.to_string());
     let mut run = measure(&rig, device, &pilot, geometry.landing_m, ended_by);

@@ -200,7 +200,20 @@ pub fn run_gait_with(
 /// Ticks `rig` until `steps` landings have happened and 1.5 s more, a safe
 /// hold has lasted 1 s, the plant fails (its error), or `max_s` in all.
 pub fn run_steps(rig: &mut Rig<'_>, steps: usize, max_s: f64) -> Result<(), SimError> {
-    let max_ticks = (max_s / rig.plant.config().dt_s) as u64;
+    run_steps_then(rig, steps, max_s, 1.5)
+}
+
+/// [`run_steps`], going on for `tail_s` after the last landing asked for
+/// instead of 1.5 s.
+pub fn run_steps_then(
+    rig: &mut Rig<'_>,
+    steps: usize,
+    max_s: f64,
+    tail_s: f64,
+) -> Result<(), SimError> {
+    let dt = rig.plant.config().dt_s;
+    let max_ticks = (max_s / dt) as u64;
+    let tail = (tail_s / dt).round() as usize;
     let mut landed_at: Option<usize> = None;
     let mut held_since: Option<usize> = None;
     for _ in 0..max_ticks {
@@ -208,7 +221,7 @@ pub fn run_steps(rig: &mut Rig<'_>, steps: usize, max_s: f64) -> Result<(), SimE
         if landed_at.is_none() && rig.plant.landings().len() >= steps.max(1) {
             landed_at = Some(rig.trace.len());
         }
-        if landed_at.is_some_and(|k| rig.trace.len() > k + 1500) {
+        if landed_at.is_some_and(|k| rig.trace.len() > k + tail) {
             break;
         }
         // From when the hold begins (a swing may land first) or the motors
