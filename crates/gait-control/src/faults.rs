@@ -380,7 +380,7 @@ fault_table! {
         name: "motor not following its command",
         reaction: Reaction::SafeHold,
         detection_bound: "10 ticks over the limit; the residual's 3 Hz low-pass: a sudden torque \
-            error of 100 N·m in about 170 ticks, 200 N·m in about 85",
+            error of 125 N·m in about 170 ticks, 200 N·m in about 100",
         reset_allowed_when: "the residual is under the limit",
         brakes_joint: true,
     },

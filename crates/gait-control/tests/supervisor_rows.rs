@@ -343,7 +343,7 @@ fn row_motor_saturated() {
     assert_row(&v, FaultCode::MotorSaturated, Reaction::SafeHold, 200);
 }
 
-/// A drive stuck on its old set value: the position loop asks 100 N·m
+/// A drive stuck on its old set value: the position loop asks 125 N·m
 /// more than the model's torque, the joint does not move. The residual's
 /// 3 Hz critically damped low-pass passes 80 % of a step after about 160
 /// ticks, and the fault latches 10 ticks later; the joint's drive is to be
@@ -351,8 +351,8 @@ fn row_motor_saturated() {
 #[test]
 fn row_motor_response() {
     let (_, v) = inject(200, |_, input| {
-        input.motors[1].commanded_nm = 105.0;
-        input.motors[1].applied_nm = 105.0;
+        input.motors[1].commanded_nm = 130.0;
+        input.motors[1].applied_nm = 130.0;
         input.motors[1].limit_nm = 150.0;
     });
     let at = detected_at(&v, FaultCode::MotorResponse).unwrap();
@@ -369,10 +369,10 @@ fn row_motor_response() {
 fn motor_response_follows_the_model_and_only_full_authority_drives() {
     let inertia = SupervisorConfig::paper().response.stance_inertia_kgm2[1];
     // Until the tracking error's bound: the error reaches 0.15 rad after
-    // 155 ticks.
-    let (_, v) = inject(250, |k, input| {
+    // 136 ticks.
+    let (_, v) = inject(230, |k, input| {
         let t = (k - 1) as f32 * 0.001;
-        let push = 100.0;
+        let push = 130.0;
         input.joints[1] = encoder(STAND_JOINTS[1] + 0.5 * push / inertia * t * t);
         input.motors[1].commanded_nm = 5.0 + push;
         input.motors[1].applied_nm = 5.0 + push;
@@ -381,8 +381,8 @@ fn motor_response_follows_the_model_and_only_full_authority_drives() {
     assert_eq!(detected_at(&v, FaultCode::MotorResponse), None);
     assert!(v.last().unwrap().latched.is_empty());
     let (_, v) = inject(200, |_, input| {
-        input.motors[1].commanded_nm = 105.0;
-        input.motors[1].applied_nm = 105.0;
+        input.motors[1].commanded_nm = 130.0;
+        input.motors[1].applied_nm = 130.0;
         input.motors[1].limit_nm = 150.0;
         input.motors[1].enabled = false;
     });
@@ -394,8 +394,8 @@ fn motor_response_follows_the_model_and_only_full_authority_drives() {
 #[test]
 fn a_braked_joint_is_released_by_a_reset() {
     let (mut sup, v) = inject(300, |_, input| {
-        input.motors[3].commanded_nm = -115.0;
-        input.motors[3].applied_nm = -115.0;
+        input.motors[3].commanded_nm = -135.0;
+        input.motors[3].applied_nm = -135.0;
         input.motors[3].limit_nm = 150.0;
     });
     assert!(v.last().unwrap().braked_joints[3]);
