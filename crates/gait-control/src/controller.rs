@@ -144,7 +144,9 @@ pub struct Controller<'t> {
     rate: [f32; JOINTS],
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
-    /// Joints whose drive the supervisor has disabled (0x0404).
+    /// Joints whose drive the supervisor has disabled, braked
+    /// (`FaultCode::brakes_joint`: a lost encoder, an output-stage fault,
+    /// 0x0404), until a reset.
     braked: [bool; JOINTS],
     primed: bool,
     /// A clinician reset waiting for the supervisor.
