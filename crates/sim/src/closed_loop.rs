@@ -353,11 +353,12 @@ impl<'t> Rig<'t> {
     fn publish(&self) {
         let s = self.plant.state();
         self.wiring.publish(&s);
-        // The swing ankle is not modelled: its spring holds it near rest (0)
-        // in the air, and at foot-flat it turns to the stance angle within a
-        // few tens of milliseconds. Both ankle readings follow their targets
-        // (stance: φ1; swing: rest) through a 30 ms first-order lag, so the
-        // swap at landing reads as a fast but physical rotation, not a jump.
+        // The swing ankle in the air is not modelled: its spring holds it
+        // near rest (0), and at foot-flat it turns to the stance angle within
+        // a few tens of milliseconds. Both ankle readings follow their
+        // targets (on the ground: the shank's lean; in the air: rest)
+        // through a 30 ms first-order lag, so the swap at landing reads as a
+        // fast but physical rotation, not a jump.
         const TAU_S: f64 = 0.03;
         let alpha = (self.plant.config().dt_s / TAU_S).min(1.0);
         for (cell, a) in self.ankle_cells.iter().zip(s.ankle_dorsiflexion_rad) {

@@ -16,6 +16,31 @@ pub(super) struct SwingSole {
     pub(super) d5: [f64; 2],
     /// Whether the foot stands on its toe.
     pub(super) on_toe: bool,
+    /// The ground the sole meets, in the same convention, m: below the
+    /// contact point, or for a foot on its toe [`toe_ground`].
+    pub(super) ground_m: f64,
+}
+
+/// How far the shoe's sole reaches past the toe pivot (the metatarsal
+/// heads), m.
+pub(super) const SHOE_PAST_TOE_M: f64 = 0.02;
+
+/// The ground under a foot standing on its toe (ankle at `ankle_x`, toe
+/// at `toe_x`), m. A toe a few millimetres past a stair's nosing still
+/// rests on it: the shoe's sole reaches [`SHOE_PAST_TOE_M`] further (the
+/// lower tread under the toe had a trailing foot hang in the air, and the
+/// plant declare it lifted). A toe under the next riser up is blocked by
+/// the riser, which this vertical contact does not model: the foot stays
+/// on its own tread (the upper tread's height there pushed the foot up
+/// through the step).
+fn toe_ground(terrain: &crate::terrain::Terrain, ankle_x: f64, toe_x: f64) -> f64 {
+    let own = terrain.height_m(ankle_x);
+    let under_toe = terrain.height_m(toe_x);
+    if under_toe > own {
+        own
+    } else {
+        under_toe.max(terrain.height_m(toe_x - SHOE_PAST_TOE_M))
+    }
 }
 
 /// The generalised forces at one state.
@@ -69,6 +94,7 @@ impl Plant {
     pub(super) fn swing_sole(&self, phi: &Phi<f64>, dphi: &Phi<f64>) -> SwingSole {
         let (ankle, v) = self.swing_foot_at(phi, dphi);
         let lean = gait_core::kinematics::wrap_pi(phi[4] - PI);
+        let terrain = &self.cfg.terrain;
         match self.cfg.foot.filter(|f| !self.lifted && f.on_toe(lean)) {
             Some(f) => {
                 let a = f.ankle(lean);
@@ -76,13 +102,15 @@ impl Plant {
                 // Toe − ankle in the world, and its φ5-derivative.
                 let r = [toe[0] - a.position_m[0], toe[1] - a.position_m[1]];
                 let d5 = [-a.d1[0], -a.d1[1]];
+                let x = ankle[0] + r[0];
                 SwingSole {
                     // Heights in the ankle-level convention of the terrain:
                     // the sole is `rise` below the raised ankle.
-                    point_m: [ankle[0] + r[0], ankle[1] - a.position_m[1]],
+                    point_m: [x, ankle[1] - a.position_m[1]],
                     velocity_m_s: [v[0] + d5[0] * dphi[4], v[1] + d5[1] * dphi[4]],
                     d5,
                     on_toe: true,
+                    ground_m: toe_ground(terrain, ankle[0], x),
                 }
             }
             None => SwingSole {
@@ -90,6 +118,7 @@ impl Plant {
                 velocity_m_s: v,
                 d5: [0.0; 2],
                 on_toe: false,
+                ground_m: terrain.height_m(ankle[0]),
             },
         }
     }
@@ -237,7 +266,7 @@ impl Plant {
         };
         let sole = self.swing_sole(phi, dphi);
         let (p, v) = (sole.point_m, sole.velocity_m_s);
-        let depth = self.cfg.terrain.height_m(p[0]) - p[1];
+        let depth = sole.ground_m - p[1];
         if depth <= 0.0 {
             return [0.0; 2];
         }
@@ -249,5 +278,35 @@ impl Plant {
         let limit = c.friction * fy;
         let fx = (stick - c.tangential_damping_n_s_per_m * v[0]).clamp(-limit, limit);
         [fx, fy]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::terrain::Terrain;
+
+    #[test]
+    fn a_toe_just_past_a_nosing_rests_on_it_and_a_toe_under_a_riser_stays_on_its_tread() {
+        // Descending: treads at 0 up to x = 0.3, then 0.1 lower.
+        let down = Terrain::Stairs {
+            start_x_m: 0.3,
+            rise_m: -0.1,
+            tread_m: 0.3,
+            steps: 4,
+        };
+        assert_eq!(toe_ground(&down, 0.15, 0.28), 0.0);
+        assert_eq!(toe_ground(&down, 0.15, 0.3 + 0.5 * SHOE_PAST_TOE_M), 0.0);
+        assert_eq!(toe_ground(&down, 0.15, 0.3 + 1.5 * SHOE_PAST_TOE_M), -0.1);
+        // Ascending: the next tread 0.1 higher from x = 0.3.
+        let up = Terrain::Stairs {
+            start_x_m: 0.3,
+            rise_m: 0.1,
+            tread_m: 0.3,
+            steps: 4,
+        };
+        assert_eq!(toe_ground(&up, 0.15, 0.31), 0.0);
+        assert_eq!(toe_ground(&up, 0.35, 0.45), 0.1);
+        assert_eq!(toe_ground(&Terrain::Level, 0.0, 0.5), 0.0);
     }
 }

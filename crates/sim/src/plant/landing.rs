@@ -40,7 +40,7 @@ impl Plant {
     pub(super) fn update_contact_anchor(&mut self) {
         let sole = self.swing_sole(&self.phi, &self.dphi);
         let p = sole.point_m;
-        let depth = self.cfg.terrain.height_m(p[0]) - p[1];
+        let depth = sole.ground_m - p[1];
         let same = self
             .contact_anchor_x
             .is_some_and(|(_, toe)| toe == sole.on_toe);
@@ -61,8 +61,8 @@ impl Plant {
     /// The swing foot's sole above the ground (the toe, for a foot whose
     /// heel is up), m.
     pub(super) fn swing_height_above_ground_m(&self) -> f64 {
-        let p = self.swing_sole(&self.phi, &self.dphi).point_m;
-        p[1] - self.cfg.terrain.height_m(p[0])
+        let sole = self.swing_sole(&self.phi, &self.dphi);
+        sole.point_m[1] - sole.ground_m
     }
 
     /// Swing-ankle velocity, m/s: Σ l_i φ̇_i (cos φ_i, −sin φ_i) over links

@@ -20,7 +20,8 @@ pub struct TrueState {
     /// Their rates, rad/s.
     pub joint_rates_rad_s: [f64; 4],
     /// Ankle dorsiflexion per side (left, right), rad: the stance ankle's is
-    /// φ1; the swing ankle is not modelled (`None`).
+    /// φ1, a swing foot still on the ground reads its shank's lean the same
+    /// way; a swing ankle in the air is not modelled (`None`).
     pub ankle_dorsiflexion_rad: [Option<f64>; 2],
     /// Ankle positions per side (left, right), world frame, m.
     pub feet_m: [[f64; 2]; 2],
@@ -79,11 +80,20 @@ impl Plant {
         let mut ankle = [None; 2];
         // The encoder reads the shank–foot angle: φ1, or the stop once the
         // heel is up.
-        ankle[self.stance.index()] = Some(
-            self.cfg
-                .foot
-                .map_or(self.phi[0], |f| f.dorsiflexion(self.phi[0])),
-        );
+        let on_ground = |lean: f64| self.cfg.foot.map_or(lean, |f| f.dorsiflexion(lean));
+        ankle[self.stance.index()] = Some(on_ground(self.phi[0]));
+        // A swing foot not yet lifted (the trailing foot after a landing,
+        // until its toe-off clears the ground) is planted like a stance
+        // foot: its encoder reads its shank's lean the same way, on the toe
+        // the stop. (Its contact force is no test: it is 0 at the swap's
+        // tick, and the reading then dipped off the stop — enough to flip
+        // the controller's heel-up estimate of φ1 in a noisy stair descent
+        // whose foot set down unloaded.) In the air the ankle is not
+        // modelled (`None`).
+        if !self.lifted {
+            let lean = gait_core::kinematics::wrap_pi(self.phi[4] - PI);
+            ankle[self.stance.other().index()] = Some(on_ground(lean));
+        }
         let mut feet_m = [[0.0; 2]; 2];
         feet_m[self.stance.index()] = o;
         feet_m[self.stance.other().index()] = points_m[5];
