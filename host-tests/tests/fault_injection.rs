@@ -43,14 +43,14 @@ fn run(
 
 #[test]
 fn healthy_runs_with_sensor_noise_never_trip() {
-    for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
-        for seed in 1..=4 {
-            let o = run(gait, 3, 25.0, Some(seed), &[]);
-            assert!(
-                o.faults.is_empty() && o.fell.is_none() && o.landings >= 3,
-                "{gait:?}, noise seed {seed}: {o:?}"
-            );
-        }
+    // The campaign's healthy runs (`exogait faults --healthy N`), a few per
+    // gait: three steps with noise, nothing latched, every step landed.
+    let device = DeviceConfig::exogait().unwrap();
+    let runs = sim::campaign::healthy_plan(2026, 5);
+    let results = sim::campaign::play_all_healthy(&runs, &device, &|| {});
+    assert_eq!(results.len(), 15);
+    for r in &results {
+        assert!(!r.bad(), "{:?}: {:?}", r.run, r.outcome);
     }
 }
 

@@ -1,16 +1,20 @@
 //! `exogait faults`: the seeded randomised fault campaign (`sim::campaign`)
 //! — many closed-loop runs, each with sensor noise and one random fault —
 //! with a progress bar on a terminal, and its tally per kind: falls, joints
-//! past a stop, missed detections, false trips. Exit 0 only when the
-//! campaign meets its goal (none of them), 1 otherwise, 2 for unusable
-//! options.
+//! past a stop, missed detections, false trips; then healthy runs of each
+//! gait with the same noise and no fault, and theirs. Exit 0 only when both
+//! meet their goal (none of them), 1 otherwise, 2 for unusable options.
 
 use std::io::IsTerminal;
 
 use clap::Args;
+use gait_control::operator::Gait;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
-use sim::campaign::{Tally, plan, play_all, tally};
+use sim::campaign::{
+    HEALTHY_STEPS, HealthyTally, Tally, healthy_plan, healthy_tally, plan, play_all,
+    play_all_healthy, tally,
+};
 
 /// Options of `exogait faults`.
 #[derive(Debug, Args)]
@@ -21,6 +25,11 @@ pub struct FaultsArgs {
     /// The campaign's seed (the same seed gives the same runs).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Healthy runs of each gait beside the fault runs (0 … 10,000):
+    /// sensor noise, no fault, three steps; anything latched is a false
+    /// trip.
+    #[arg(long, default_value_t = 100)]
+    pub healthy: usize,
     /// Print the tally as JSON, with every run that fell, crossed a stop,
     /// missed a detection or tripped falsely.
     #[arg(long)]
@@ -54,6 +63,7 @@ impl From<&Tally> for TallyJson {
 struct BadRunJson {
     gait: String,
     fault: String,
+    noise_seed: u64,
     fell: Option<String>,
     worst_limit_margin_rad: f64,
     missed: bool,
@@ -67,12 +77,80 @@ struct CampaignJson {
     all: TallyJson,
     by_kind: Vec<(String, TallyJson)>,
     bad_runs: Vec<BadRunJson>,
+    healthy: HealthyJson,
 }
 
-/// Runs the campaign on two threads (this machine's cores).
+/// A healthy run's tally in JSON.
+#[derive(Debug, Serialize)]
+struct HealthyTallyJson {
+    runs: usize,
+    falls: usize,
+    past_a_stop: usize,
+    false_trips: usize,
+    short: usize,
+    errors: usize,
+}
+
+impl From<&HealthyTally> for HealthyTallyJson {
+    fn from(t: &HealthyTally) -> Self {
+        Self {
+            runs: t.runs,
+            falls: t.falls,
+            past_a_stop: t.past_a_stop,
+            false_trips: t.false_trips,
+            short: t.short,
+            errors: t.errors,
+        }
+    }
+}
+
+#[derive(Debug, Serialize)]
+struct BadHealthyRunJson {
+    gait: &'static str,
+    noise_seed: u64,
+    landings: usize,
+    fell: Option<String>,
+    worst_limit_margin_rad: f64,
+    faults: Vec<String>,
+    error: Option<String>,
+}
+
+#[derive(Debug, Serialize)]
+struct HealthyJson {
+    all: HealthyTallyJson,
+    by_gait: Vec<(&'static str, HealthyTallyJson)>,
+    bad_runs: Vec<BadHealthyRunJson>,
+}
+
+/// The gait's name as `--gait` takes it.
+fn gait_name(g: Gait) -> &'static str {
+    match g {
+        Gait::Walk => "walk",
+        Gait::StairUp => "stair-up",
+        Gait::StairDown => "stair-down",
+    }
+}
+
+/// A progress bar over `n` runs on a terminal, hidden otherwise.
+fn progress(n: usize) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(n as u64);
+    if let Ok(style) = ProgressStyle::with_template(
+        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs, eta {eta}",
+    ) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// Runs the campaign and the healthy runs on the machine's cores.
 pub fn run(args: &FaultsArgs) -> u8 {
-    if args.runs == 0 || args.runs > 100_000 {
-        eprintln!("exogait faults: --runs must be in 1..=100000");
+    if args.runs > 100_000 || args.healthy > 10_000 || args.runs + args.healthy == 0 {
+        eprintln!(
+            "exogait faults: --runs must be in 0..=100000 and --healthy in 0..=10000, not both 0"
+        );
         return 2;
     }
     let device = match exogait_device::DeviceConfig::exogait() {
@@ -83,28 +161,21 @@ pub fn run(args: &FaultsArgs) -> u8 {
         }
     };
     let runs = plan(args.seed, args.runs);
-    let bar = if std::io::stderr().is_terminal() {
-        let bar = ProgressBar::new(runs.len() as u64);
-        if let Ok(style) = ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs, eta {eta}",
-        ) {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let healthy_runs = healthy_plan(args.seed, args.healthy);
+    let bar = progress(runs.len() + healthy_runs.len());
     let results = play_all(&runs, &device, &|| bar.inc(1));
+    let healthy = play_all_healthy(&healthy_runs, &device, &|| bar.inc(1));
     bar.finish_and_clear();
-    if results.len() != runs.len() {
+    if results.len() != runs.len() || healthy.len() != healthy_runs.len() {
         eprintln!(
             "exogait faults: only {} of {} runs finished",
-            results.len(),
-            runs.len()
+            results.len() + healthy.len(),
+            runs.len() + healthy_runs.len()
         );
         return 2;
     }
     let (by_kind, all) = tally(&results);
+    let (by_gait, all_healthy) = healthy_tally(&healthy);
     if args.json {
         let answer = CampaignJson {
             seed: args.seed,
@@ -123,8 +194,9 @@ pub fn run(args: &FaultsArgs) -> u8 {
                         || r.error.is_some()
                 })
                 .map(|r| BadRunJson {
-                    gait: format!("{:?}", r.run.gait),
+                    gait: gait_name(r.run.gait).to_string(),
                     fault: r.run.fault.to_string(),
+                    noise_seed: r.run.noise_seed,
                     fell: r.outcome.fell.clone(),
                     worst_limit_margin_rad: r.outcome.worst_limit_margin_rad,
                     missed: r.missed(),
@@ -132,6 +204,31 @@ pub fn run(args: &FaultsArgs) -> u8 {
                     error: r.error.clone(),
                 })
                 .collect(),
+            healthy: HealthyJson {
+                all: HealthyTallyJson::from(&all_healthy),
+                by_gait: by_gait
+                    .iter()
+                    .map(|(g, t)| (gait_name(*g), HealthyTallyJson::from(t)))
+                    .collect(),
+                bad_runs: healthy
+                    .iter()
+                    .filter(|r| r.bad())
+                    .map(|r| BadHealthyRunJson {
+                        gait: gait_name(r.run.gait),
+                        noise_seed: r.run.noise_seed,
+                        landings: r.outcome.landings,
+                        fell: r.outcome.fell.clone(),
+                        worst_limit_margin_rad: r.outcome.worst_limit_margin_rad,
+                        faults: r
+                            .outcome
+                            .faults
+                            .iter()
+                            .map(|f| format!("0x{:04x}", f.code.code()))
+                            .collect(),
+                        error: r.error.clone(),
+                    })
+                    .collect(),
+            },
         };
         match serde_json::to_string_pretty(&answer) {
             Ok(t) => println!("{t}"),
@@ -141,29 +238,75 @@ pub fn run(args: &FaultsArgs) -> u8 {
             }
         }
     } else {
-        println!(
-            "exogait faults: {} runs, seed {}, one random fault each, sensor noise ±3/±10 counts",
-            all.runs, args.seed
-        );
-        println!(
-            "{:<24} {:>5} {:>6} {:>11} {:>7} {:>12} {:>7}",
-            "kind", "runs", "falls", "past a stop", "missed", "false trips", "errors"
-        );
-        let row = |name: &str, t: &Tally| {
+        if !runs.is_empty() {
+            println!(
+                "exogait faults: {} runs, seed {}, one random fault each, sensor noise ±3/±10 counts",
+                all.runs, args.seed
+            );
             println!(
                 "{:<24} {:>5} {:>6} {:>11} {:>7} {:>12} {:>7}",
-                name, t.runs, t.falls, t.past_a_stop, t.missed, t.false_trips, t.errors
+                "kind", "runs", "falls", "past a stop", "missed", "false trips", "errors"
             );
-        };
-        for (k, t) in &by_kind {
-            row(k, t);
+            let row = |name: &str, t: &Tally| {
+                println!(
+                    "{:<24} {:>5} {:>6} {:>11} {:>7} {:>12} {:>7}",
+                    name, t.runs, t.falls, t.past_a_stop, t.missed, t.false_trips, t.errors
+                );
+            };
+            for (k, t) in &by_kind {
+                row(k, t);
+            }
+            row("all", &all);
         }
-        row("all", &all);
+        if !healthy_runs.is_empty() {
+            println!(
+                "healthy runs: {} per gait, {} steps, no fault, sensor noise ±3/±10 counts",
+                args.healthy, HEALTHY_STEPS
+            );
+            println!(
+                "{:<24} {:>5} {:>6} {:>11} {:>12} {:>6} {:>7}",
+                "gait", "runs", "falls", "past a stop", "false trips", "short", "errors"
+            );
+            let row = |name: &str, t: &HealthyTally| {
+                println!(
+                    "{:<24} {:>5} {:>6} {:>11} {:>12} {:>6} {:>7}",
+                    name, t.runs, t.falls, t.past_a_stop, t.false_trips, t.short, t.errors
+                );
+            };
+            for (g, t) in &by_gait {
+                row(gait_name(*g), t);
+            }
+            row("all", &all_healthy);
+            for r in healthy.iter().filter(|r| r.bad()) {
+                let codes: Vec<String> = r
+                    .outcome
+                    .faults
+                    .iter()
+                    .map(|f| format!("0x{:04x} at {:.3} s", f.code.code(), f.detected_s))
+                    .collect();
+                println!(
+                    "  {} noise seed {}: {} landings, faults [{}]{}",
+                    gait_name(r.run.gait),
+                    r.run.noise_seed,
+                    r.outcome.landings,
+                    codes.join(", "),
+                    r.outcome
+                        .fell
+                        .as_ref()
+                        .map_or(String::new(), |f| format!(", fell: {f}"))
+                );
+            }
+        }
     }
     let goal = all.falls == 0
         && all.past_a_stop == 0
         && all.missed == 0
         && all.false_trips == 0
         && all.errors == 0;
-    u8::from(!goal)
+    let healthy_goal = all_healthy.falls == 0
+        && all_healthy.past_a_stop == 0
+        && all_healthy.false_trips == 0
+        && all_healthy.short == 0
+        && all_healthy.errors == 0;
+    u8::from(!(goal && healthy_goal))
 }

@@ -127,7 +127,16 @@ fn bad_injections_are_refused_with_exit_2_and_say_why() {
 fn faults_runs_a_seeded_campaign_and_tallies_it() {
     let run = |seed: &str| {
         let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-            .args(["faults", "--runs", "6", "--seed", seed, "--json"])
+            .args([
+                "faults",
+                "--runs",
+                "6",
+                "--healthy",
+                "1",
+                "--seed",
+                seed,
+                "--json",
+            ])
             .output()
             .unwrap();
         let v: serde_json::Value =
@@ -143,17 +152,30 @@ fn faults_runs_a_seeded_campaign_and_tallies_it() {
         .map(|k| k[1]["runs"].as_u64().unwrap())
         .sum();
     assert_eq!(by_kind, 6);
-    // Exit 0 only when the campaign's goal is met.
+    // One healthy run of each gait beside them.
+    assert_eq!(v["healthy"]["all"]["runs"], 3);
+    assert_eq!(v["healthy"]["by_gait"].as_array().unwrap().len(), 3);
+    // Exit 0 only when the campaign's goal and the healthy runs' are met.
     let bad = ["falls", "past_a_stop", "missed", "false_trips", "errors"]
         .iter()
         .map(|k| v["all"][*k].as_u64().unwrap())
-        .sum::<u64>();
+        .sum::<u64>()
+        + ["falls", "past_a_stop", "false_trips", "short", "errors"]
+            .iter()
+            .map(|k| v["healthy"]["all"][*k].as_u64().unwrap())
+            .sum::<u64>();
     assert_eq!(code, Some(if bad == 0 { 0 } else { 1 }), "{v:#}");
     // The same seed, the same campaign.
     assert_eq!(run("3").0, v);
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(["faults", "--runs", "0"])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
+    for args in [
+        ["--runs", "0", "--healthy", "0"],
+        ["--runs", "100001", "--healthy", "0"],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+            .arg("faults")
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+    }
 }

@@ -1,8 +1,10 @@
 //! A seeded randomised fault campaign: each run walks, climbs or descends
 //! with sensor noise and one fault of a random kind, target, value and time
 //! (standing, in a swing or in a weight transfer), and is judged by
-//! [`crate::outcome`]. The same seed gives the same runs. `exogait faults`
-//! and the campaign test run it; docs/safety.md has the figures.
+//! [`crate::outcome`]. Beside it, healthy runs of each gait with sensor
+//! noise and no fault, in which anything latched is a false trip. The same
+//! seed gives the same runs. `exogait faults` and the campaign tests run
+//! them; docs/safety.md has the figures.
 
 use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
@@ -189,15 +191,7 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
         }
         Err(e) => RunResult {
             run: *run,
-            outcome: Outcome {
-                landings: 0,
-                tracking_rms_rad: [0.0; 4],
-                tracking_peak_rad: [0.0; 4],
-                worst_limit_margin_rad: 0.0,
-                worst_limit_joint: 0,
-                fell: None,
-                faults: Vec::new(),
-            },
+            outcome: no_outcome(),
             false_trip: false,
             detected: false,
             error: Some(e.to_string()),
@@ -212,18 +206,32 @@ pub fn play_all(
     device: &DeviceConfig,
     done: &(dyn Fn() + Sync),
 ) -> Vec<RunResult> {
+    on_every_core(runs, |r| play(r, device), done)
+}
+
+/// `each` over `items` on the machine's cores (at most 8 threads), calling
+/// `done` after each; the results in the items' order. A worker that
+/// panicked loses its items; the result is then shorter than `items`,
+/// which the callers check.
+fn on_every_core<T: Sync, R: Send>(
+    items: &[T],
+    each: impl Fn(&T) -> R + Sync,
+    done: &(dyn Fn() + Sync),
+) -> Vec<R> {
     let workers = std::thread::available_parallelism().map_or(2, |n| n.get().clamp(1, 8));
-    let mut parts: Vec<Vec<(usize, RunResult)>> = Vec::new();
+    let each = &each;
+    let mut parts: Vec<Vec<(usize, R)>> = Vec::new();
     std::thread::scope(|s| {
         let handles: Vec<_> = (0..workers)
             .map(|w| {
                 s.spawn(move || {
-                    runs.iter()
+                    items
+                        .iter()
                         .enumerate()
                         .skip(w)
                         .step_by(workers)
-                        .map(|(i, r)| {
-                            let result = play(r, device);
+                        .map(|(i, item)| {
+                            let result = each(item);
                             done();
                             (i, result)
                         })
@@ -232,16 +240,131 @@ pub fn play_all(
             })
             .collect();
         for h in handles {
-            // A worker that panicked loses its runs; the tally then has
-            // fewer runs than asked, which the callers check.
             if let Ok(part) = h.join() {
                 parts.push(part);
             }
         }
     });
-    let mut all: Vec<(usize, RunResult)> = parts.into_iter().flatten().collect();
+    let mut all: Vec<(usize, R)> = parts.into_iter().flatten().collect();
     all.sort_by_key(|(i, _)| *i);
     all.into_iter().map(|(_, r)| r).collect()
+}
+
+/// Steps a healthy run asks for: the third is the first taken from a
+/// steady stance (the first two start and follow the start from standing).
+pub const HEALTHY_STEPS: usize = 3;
+
+/// One healthy run: a gait with sensor noise and no fault.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HealthyRun {
+    /// The gait.
+    pub gait: Gait,
+    /// Seed of the sensor noise (±3 encoder, ±10 ADC counts).
+    pub noise_seed: u64,
+}
+
+/// What a healthy run gave.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HealthyResult {
+    /// The plan.
+    pub run: HealthyRun,
+    /// Its outcome (any fault in it is a false trip).
+    pub outcome: Outcome,
+    /// Why the simulation stopped early, if it did (other than a fall).
+    pub error: Option<String>,
+}
+
+impl HealthyResult {
+    /// Something latched although nothing was wrong.
+    pub fn false_trip(&self) -> bool {
+        !self.outcome.faults.is_empty()
+    }
+
+    /// Fewer landings than steps asked.
+    pub fn short(&self) -> bool {
+        self.outcome.landings < HEALTHY_STEPS
+    }
+
+    /// Fell, crossed a stop, tripped, stopped short or could not finish.
+    pub fn bad(&self) -> bool {
+        self.outcome.fell.is_some()
+            || self.outcome.worst_limit_margin_rad < 0.0
+            || self.false_trip()
+            || self.short()
+            || self.error.is_some()
+    }
+}
+
+/// `per_gait` healthy runs of each gait, the noise seeds drawn from
+/// `seed` (the same seed gives the same runs; none is a fault run's).
+pub fn healthy_plan(seed: u64, per_gait: usize) -> Vec<HealthyRun> {
+    let mut d = Draw(seed.wrapping_mul(0xD1B5_4A32_D192_ED03) | 1);
+    for _ in 0..8 {
+        d.next();
+    }
+    [Gait::Walk, Gait::StairUp, Gait::StairDown]
+        .into_iter()
+        .flat_map(|gait| (0..per_gait).map(move |_| gait))
+        .map(|gait| HealthyRun {
+            gait,
+            noise_seed: d.next() % 1_000_000,
+        })
+        .collect()
+}
+
+/// Plays one healthy run: [`HEALTHY_STEPS`] steps and 1.5 s standing.
+pub fn play_healthy(run: &HealthyRun, device: &DeviceConfig) -> HealthyResult {
+    let seed = run.noise_seed;
+    let played = run_tables_with(
+        device,
+        flash_tables(),
+        run.gait,
+        strong_pilot(),
+        25.0,
+        HEALTHY_STEPS,
+        |rig| rig.set_sensor_noise(3, 10, seed),
+    );
+    match played {
+        Ok(r) => {
+            let o = outcome(&r.rig, r.ended_by.as_ref());
+            let error = match (&r.ended_by, &o.fell) {
+                (Some(e), None) => Some(e.to_string()),
+                _ => None,
+            };
+            HealthyResult {
+                run: *run,
+                outcome: o,
+                error,
+            }
+        }
+        Err(e) => HealthyResult {
+            run: *run,
+            outcome: no_outcome(),
+            error: Some(e.to_string()),
+        },
+    }
+}
+
+/// [`play_healthy`] over `runs` on the machine's cores.
+pub fn play_all_healthy(
+    runs: &[HealthyRun],
+    device: &DeviceConfig,
+    done: &(dyn Fn() + Sync),
+) -> Vec<HealthyResult> {
+    on_every_core(runs, |r| play_healthy(r, device), done)
+}
+
+/// The outcome of a run that could not start.
+fn no_outcome() -> Outcome {
+    Outcome {
+        landings: 0,
+        tracking_rms_rad: [0.0; 4],
+        tracking_peak_rad: [0.0; 4],
+        worst_limit_margin_rad: 0.0,
+        worst_limit_joint: 0,
+        fell: None,
+        faults: Vec::new(),
+    }
 }
 
 /// Counts over a campaign, per kind and in all.
@@ -293,6 +416,54 @@ pub fn tally(results: &[RunResult]) -> (Vec<(&'static str, Tally)>, Tally) {
     (by_kind, all)
 }
 
+/// Counts over healthy runs, per gait and in all.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HealthyTally {
+    /// Runs.
+    pub runs: usize,
+    /// Runs in which the pilot fell.
+    pub falls: usize,
+    /// Runs in which a hip or knee went past its Table I stop.
+    pub past_a_stop: usize,
+    /// Runs in which anything latched.
+    pub false_trips: usize,
+    /// Runs with fewer landings than steps asked.
+    pub short: usize,
+    /// Runs the simulation could not finish (not a fall).
+    pub errors: usize,
+}
+
+impl HealthyTally {
+    /// Adds one run.
+    pub fn add(&mut self, r: &HealthyResult) {
+        self.runs += 1;
+        self.falls += usize::from(r.outcome.fell.is_some());
+        self.past_a_stop += usize::from(r.outcome.worst_limit_margin_rad < 0.0);
+        self.false_trips += usize::from(r.false_trip());
+        self.short += usize::from(r.short());
+        self.errors += usize::from(r.error.is_some());
+    }
+}
+
+/// The tally of healthy `results` per gait, in the order gaits first
+/// appear, and over all.
+pub fn healthy_tally(results: &[HealthyResult]) -> (Vec<(Gait, HealthyTally)>, HealthyTally) {
+    let mut by_gait: Vec<(Gait, HealthyTally)> = Vec::new();
+    let mut all = HealthyTally::default();
+    for r in results {
+        match by_gait.iter_mut().find(|(g, _)| *g == r.run.gait) {
+            Some((_, t)) => t.add(r),
+            None => {
+                let mut t = HealthyTally::default();
+                t.add(r);
+                by_gait.push((r.run.gait, t));
+            }
+        }
+        all.add(r);
+    }
+    (by_gait, all)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -318,6 +489,21 @@ mod tests {
             "pilot-stops-balancing",
         ] {
             assert!(a.iter().any(|r| r.fault.kind.name() == name), "{name}");
+        }
+    }
+
+    #[test]
+    fn the_healthy_plan_is_seeded_and_gives_each_gait_its_runs() {
+        let a = healthy_plan(3, 50);
+        assert_eq!(a, healthy_plan(3, 50));
+        assert_ne!(a, healthy_plan(4, 50));
+        for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
+            let seeds: std::collections::BTreeSet<u64> = a
+                .iter()
+                .filter(|r| r.gait == gait)
+                .map(|r| r.noise_seed)
+                .collect();
+            assert_eq!(seeds.len(), 50, "{gait:?}: distinct noise seeds");
         }
     }
 }
