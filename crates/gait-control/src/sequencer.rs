@@ -9,6 +9,10 @@
 //! the posture measured when a fatal fault struck and stays there until a
 //! clinician reset.
 //!
+//! A swing whose table has ended without a landing goes on lowering the
+//! foot (the ground search, [`SequencerConfig::ground_search_depth_m`])
+//! until the foot's sensor feels the ground or the landing times out.
+//!
 //! Rules enforced here: a gait starts only from the standing posture it was
 //! planned from (within a tolerance), only with a verified table, never while
 //! a step is in progress; a stop takes effect at the end of the current step.
@@ -29,6 +33,10 @@ pub use crate::reference::Reference;
 use crate::reference::{ankles_in_start_posture, ankles_in_swing, table_motion};
 pub use config::SequencerConfig;
 use transfer::TransferPlan;
+
+/// The ground search stops where the swing knee would straighten past this
+/// flexion, rad (6°): a leg locked straight takes the landing on its stop.
+const SEARCH_MIN_KNEE_FLEXION_RAD: f32 = 0.1;
 
 /// The verified tables the device carries (a gait without one cannot start).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -217,6 +225,37 @@ impl<'t> Sequencer<'t> {
         Some(gait_core::playback::swing_toe_at(model, &foot, posture))
     }
 
+    /// The ground search: `phi` (the table's last posture) with the swing
+    /// ankle lowered by how far the search has gone `since_end_s` after the
+    /// table's end (from [`SequencerConfig::ground_search_after_s`] on,
+    /// eased in and out over [`SequencerConfig::ground_search_s`] to the
+    /// full [`SequencerConfig::ground_search_depth_m`]); `phi` itself before
+    /// then or without a model. A tread a few millimetres lower
+    /// than planned, or a foot tracking a little high, left the foot
+    /// hovering until the landing timed out, and the step stood on one leg
+    /// (measured in noisy stair descents, docs/safety.md).
+    fn searching_for_ground(
+        &self,
+        phi: &[f32; gait_core::LINKS],
+        since_end_s: f32,
+    ) -> [f32; gait_core::LINKS] {
+        let Some(model) = self.model.as_ref() else {
+            return *phi;
+        };
+        let c = self.cfg;
+        let searching_s = since_end_s - c.ground_search_after_s;
+        if !(searching_s > 0.0) {
+            return *phi;
+        }
+        let frac = if c.ground_search_s > 0.0 {
+            searching_s / c.ground_search_s
+        } else {
+            1.0
+        };
+        let depth = c.ground_search_depth_m * smoothstep(frac);
+        gait_core::reach::lower_swing_ankle(model, phi, depth, SEARCH_MIN_KNEE_FLEXION_RAD)
+    }
+
     /// The other foot's share at the table's posture in the present swing
     /// (0 without a model: the foot is taken as lifted from the start, and
     /// the landing window counts from the swing's start).
@@ -403,7 +442,12 @@ impl<'t> Sequencer<'t> {
                     .get(stance.other().foot())
                     .copied()
                     .unwrap_or(f32::NAN);
-                let phi_t = self.tables.get(self.gait).map(|tb| tb.at_time(t));
+                // Past the table's end without a landing, the foot goes on
+                // down looking for the ground.
+                let phi_t = self
+                    .tables
+                    .get(self.gait)
+                    .map(|tb| self.searching_for_ground(&tb.at_time(t), t - duration));
                 let posture_t = phi_t.map(|p| Posture::new(&p));
                 let share = self.swing_share(posture_t.as_ref());
                 if self.lifted_at_s.is_none() && share <= 0.0 {

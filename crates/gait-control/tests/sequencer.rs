@@ -304,7 +304,8 @@ fn landing_timeout_holds_the_posture() {
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
     rig.seq.request_start(Gait::Walk, &s);
-    let steps = ((rig.table.duration_s() + 1.2) / DT) as usize;
+    let steps =
+        ((rig.table.duration_s() + SequencerConfig::DEFAULT.landing_timeout_s + 0.2) / DT) as usize;
     for _ in 0..steps {
         rig.step(&s); // the swing foot never reports contact
     }
@@ -337,7 +338,11 @@ fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
     let mut last = before;
     let mut max_step = 0.0f32;
     let mut phases = Vec::new();
-    for _ in 0..3000 {
+    // The swing plays on, times out its landing (no contact here), stands,
+    // then holds.
+    let ticks =
+        ((rig.table.duration_s() + SequencerConfig::DEFAULT.landing_timeout_s) / DT) as usize;
+    for _ in 0..ticks {
         rig.seq.enter_safe_hold(&measured, InSwing::LandFirst);
         let r = rig.step(&sensed(measured, READY_FEET, READY_CRUTCHES));
         for i in 0..JOINTS {
@@ -525,6 +530,94 @@ fn the_transfer_is_planned_with_the_ik_options_the_table_carries() {
                 end[i],
                 start[i]
             );
+        }
+    }
+}
+
+/// The swing ankle's height above the stance ankle for joint angles `j`
+/// (stance left, the table's stance shank `phi1`), m.
+fn swing_ankle_height(model: &gait_core::BodyModel<f32>, j: &[f32; JOINTS], phi1: f32) -> f32 {
+    let phi = gait_control::posture::phi_from_joints(j, phi1, Side::Left);
+    gait_core::kinematics::forward_kinematics(model, &phi)[4][1]
+}
+
+#[test]
+fn a_swing_that_ends_without_contact_lowers_the_foot_until_it_lands() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let model: gait_core::BodyModel<f32> = gait_core::BodyModel::<f64>::paper_table_iii().cast();
+    rig.seq = rig.seq.with_model(model);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    let end_phi1 = rig.table.at_time(rig.table.duration_s())[0];
+    let cfg = SequencerConfig::DEFAULT;
+    // Play to the table's end with no contact: the table's last posture.
+    let mut at_end = None;
+    let mut heights = Vec::new();
+    for _ in 0..20_000 {
+        let r = rig.step(&s);
+        if let Phase::Swing { t_s, .. } = rig.seq.phase() {
+            if t_s <= rig.table.duration_s() {
+                at_end = Some(r);
+            } else {
+                heights.push(swing_ankle_height(&model, &r, end_phi1));
+            }
+            if t_s > rig.table.duration_s() + cfg.ground_search_after_s + cfg.ground_search_s + 0.1
+            {
+                break;
+            }
+        }
+    }
+    let end = swing_ankle_height(&model, &at_end.unwrap(), end_phi1);
+    // Down, never up, smoothly, by the configured depth at most.
+    let lowest = heights.iter().copied().fold(f32::INFINITY, f32::min);
+    assert!(heights.windows(2).all(|w| w[1] <= w[0] + 1e-6));
+    assert!(
+        heights
+            .windows(2)
+            .all(|w| (w[0] - w[1]) / DT <= 1.6 * cfg.ground_search_depth_m / cfg.ground_search_s),
+        "faster than the search's eased speed"
+    );
+    // As deep as configured, or until the swing knee (right) is nearly
+    // straight (this table lands with its knee nearly straight).
+    let depth = end - lowest;
+    let knee = rig.seq.reference()[3];
+    assert!(
+        depth > 0.005 && depth <= cfg.ground_search_depth_m + 1e-4,
+        "{depth}"
+    );
+    assert!(
+        depth >= cfg.ground_search_depth_m - 1e-4 || (knee - 0.1).abs() < 0.005,
+        "stopped at {depth} m with the knee at {knee} rad"
+    );
+    assert!(rig.events.iter().all(|e| *e != SeqEvent::LandingTimeout));
+    // The ground felt: the step lands where the foot has got to.
+    let before = rig.events.len();
+    rig.step(&sensed(pose, [500.0, 200.0], READY_CRUTCHES));
+    assert!(
+        rig.events[before..].contains(&SeqEvent::Landed),
+        "{:?}",
+        rig.events
+    );
+    assert!(matches!(rig.seq.phase(), Phase::Transfer { .. }));
+}
+
+#[test]
+fn without_a_model_a_swing_holds_the_tables_end_until_the_timeout() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    let end = joints_from_phi(&rig.table.at_time(rig.table.duration_s()), Side::Left);
+    for _ in 0..20_000 {
+        let r = rig.step(&s);
+        if let Phase::Swing { t_s, .. } = rig.seq.phase() {
+            if t_s > rig.table.duration_s() + 0.5 {
+                assert_eq!(r, end);
+                break;
+            }
         }
     }
 }

@@ -28,6 +28,7 @@ pub mod mechanics;
 pub mod model;
 pub mod playback;
 pub mod problem;
+pub mod reach;
 pub mod scalar;
 pub mod tables;
 

@@ -111,11 +111,28 @@ pub fn table_rig<'t>(
         .copied()
         .ok_or(RigError::Config("no verified table for the gait"))?;
     let geometry = table_geometry(&table, &device.body);
+    table_rig_on(device, gait, pilot, tables, geometry.terrain)
+}
+
+/// [`table_rig`] on `terrain` instead of the ground the table was planned
+/// for (a tread lower or higher than planned, a curb), the stance foot on
+/// it.
+pub fn table_rig_on<'t>(
+    device: &DeviceConfig,
+    gait: Gait,
+    pilot: PilotConfig,
+    tables: GaitTables<'t>,
+    terrain: Terrain,
+) -> Result<Rig<'t>, RigError> {
+    let table = tables
+        .get(gait)
+        .copied()
+        .ok_or(RigError::Config("no verified table for the gait"))?;
     let setup = RigSetup {
         device: *device,
         plant: PlantConfig {
             pilot,
-            terrain: geometry.terrain,
+            terrain,
             // After an impact the trailing foot lifts off by a centimetre or
             // two and hovers through the weight transfer; with the default
             // 1 cm its settling back onto a stair tread counted as a landing
@@ -125,7 +142,7 @@ pub fn table_rig<'t>(
         },
         phi: table.first().map(f64::from),
         stance: Side::Left,
-        stance_foot_m: geometry.stance_foot_m,
+        stance_foot_m: [0.0, terrain.height_m(0.0)],
         pilot: PilotBehaviour::FollowsTable,
         gait,
         support_ticks: 60,

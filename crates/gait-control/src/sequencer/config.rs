@@ -19,6 +19,19 @@ pub struct SequencerConfig {
     /// After the table ends, how long to wait for contact before giving up
     /// and holding the posture, s.
     pub landing_timeout_s: f32,
+    /// After the table ends without a landing, the swing foot is left this
+    /// long to settle onto the ground by itself (a foot that ends a
+    /// millimetre above the tread, still moving, drifts back onto its
+    /// planned point as the stance leg rolls on; set down at once, it
+    /// landed 9 mm long on every stair-descent step and crept towards the
+    /// nosing), s …
+    pub ground_search_after_s: f32,
+    /// … then goes on down looking for the ground by up to this (less
+    /// where the knee would straighten), m …
+    pub ground_search_depth_m: f32,
+    /// … over this time (eased in and out), s; then it waits there for the
+    /// rest of the landing timeout.
+    pub ground_search_s: f32,
     /// Largest joint-angle difference from a table's start posture that
     /// still counts as "in the start posture", rad.
     pub start_tolerance_rad: f32,
@@ -37,7 +50,9 @@ pub struct SequencerConfig {
 impl SequencerConfig {
     /// Defaults for a 93 kg system: 60 N per crutch and 300 N on the stance
     /// foot to be "ready", 80 N of swing-foot force for contact, landing
-    /// accepted after 60 % of the step, 1 s timeout, 0.15 rad start
+    /// accepted after 60 % of the step, 1.5 s timeout, a ground search from
+    /// 0.5 s after the table's end of up to 5 cm over 0.8 s (at most 9.4
+    /// cm/s, slower the nearer the ground is), 0.15 rad start
     /// tolerance, 0.4 s transfer, stance ankle within 0.05 rad (2.9°) of
     /// the table's start, 0.3 s hold ramp.
     pub const DEFAULT: Self = Self {
@@ -45,7 +60,10 @@ impl SequencerConfig {
         feet_ready_n: 400.0,
         landing_contact_n: 80.0,
         landing_window_fraction: 0.6,
-        landing_timeout_s: 1.0,
+        landing_timeout_s: 1.5,
+        ground_search_after_s: 0.5,
+        ground_search_depth_m: 0.05,
+        ground_search_s: 0.8,
         start_tolerance_rad: 0.15,
         transfer_s: 0.4,
         start_ankle_tolerance_rad: 0.05,
