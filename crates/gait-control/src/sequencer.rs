@@ -244,7 +244,7 @@ impl<'t> Sequencer<'t> {
         };
         let c = self.cfg;
         let searching_s = since_end_s - c.ground_search_after_s;
-        if !(searching_s > 0.0) {
+        if !(searching_s.is_finite() && searching_s > 0.0) {
             return *phi;
         }
         let frac = if c.ground_search_s > 0.0 {

@@ -38,18 +38,18 @@ pub fn lower_swing_ankle<T: Real>(
     let reach_sq = l4 * l4 + l5 * l5 + T::lit(2.0) * l4 * l5 * min_knee_flexion_rad.cos();
     let dx = ankle[0] - hip[0];
     let room_sq = reach_sq - dx * dx;
-    if !(room_sq > zero) {
+    if !(room_sq.finite() && room_sq > zero) {
         return *phi;
     }
     let lowest_y = hip[1] - room_sq.sqrt();
     let depth = depth_m.min(ankle[1] - lowest_y);
-    if !(depth > zero) {
+    if !(depth.finite() && depth > zero) {
         return *phi;
     }
     let target = [ankle[0], ankle[1] - depth];
     let r = [target[0] - hip[0], target[1] - hip[1]];
     let d = (r[0] * r[0] + r[1] * r[1]).sqrt();
-    if !(d > zero) {
+    if !(d.finite() && d > zero) {
         return *phi;
     }
     // Direction angles in the model's convention: a link at φ points along

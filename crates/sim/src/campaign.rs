@@ -170,32 +170,34 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
             rig.schedule(fault);
         },
     );
+    let (outcome, injected, error) = judged(played);
+    let before = |t: f64| injected.is_none_or(|i| t < i - 1e-9);
+    RunResult {
+        run: *run,
+        false_trip: outcome.faults.iter().any(|f| before(f.detected_s)),
+        detected: outcome.faults.iter().any(|f| !before(f.detected_s)),
+        outcome,
+        error,
+    }
+}
+
+/// A played run's outcome, when its first injection struck (s), and why
+/// the simulation stopped early other than by a fall; a run that could not
+/// start has no outcome to speak of and its error.
+fn judged(
+    played: Result<crate::scenario::StepRun<'_>, crate::closed_loop::RigError>,
+) -> (Outcome, Option<f64>, Option<String>) {
     match played {
         Ok(r) => {
             let o = outcome(&r.rig, r.ended_by.as_ref());
             let injected = r.rig.injected().first().map(|&(_, t)| t);
-            let before = |t: f64| injected.is_none_or(|i| t < i - 1e-9);
-            let false_trip = o.faults.iter().any(|f| before(f.detected_s));
-            let detected = o.faults.iter().any(|f| !before(f.detected_s));
             let error = match (&r.ended_by, &o.fell) {
                 (Some(e), None) => Some(e.to_string()),
                 _ => None,
             };
-            RunResult {
-                run: *run,
-                outcome: o,
-                false_trip,
-                detected,
-                error,
-            }
+            (o, injected, error)
         }
-        Err(e) => RunResult {
-            run: *run,
-            outcome: no_outcome(),
-            false_trip: false,
-            detected: false,
-            error: Some(e.to_string()),
-        },
+        Err(e) => (no_outcome(), None, Some(e.to_string())),
     }
 }
 
@@ -324,24 +326,11 @@ pub fn play_healthy(run: &HealthyRun, device: &DeviceConfig) -> HealthyResult {
         HEALTHY_STEPS,
         |rig| rig.set_sensor_noise(3, 10, seed),
     );
-    match played {
-        Ok(r) => {
-            let o = outcome(&r.rig, r.ended_by.as_ref());
-            let error = match (&r.ended_by, &o.fell) {
-                (Some(e), None) => Some(e.to_string()),
-                _ => None,
-            };
-            HealthyResult {
-                run: *run,
-                outcome: o,
-                error,
-            }
-        }
-        Err(e) => HealthyResult {
-            run: *run,
-            outcome: no_outcome(),
-            error: Some(e.to_string()),
-        },
+    let (outcome, _, error) = judged(played);
+    HealthyResult {
+        run: *run,
+        outcome,
+        error,
     }
 }
 
@@ -399,21 +388,31 @@ impl Tally {
 /// The tally of `results` per kind name, in the order kinds first appear,
 /// and over all.
 pub fn tally(results: &[RunResult]) -> (Vec<(&'static str, Tally)>, Tally) {
-    let mut by_kind: Vec<(&'static str, Tally)> = Vec::new();
-    let mut all = Tally::default();
+    grouped(results, |r| r.run.fault.kind.name(), Tally::add)
+}
+
+/// `results` added up per `key`, in the order keys first appear, and over
+/// all.
+fn grouped<R, K: PartialEq, T: Default>(
+    results: &[R],
+    key: impl Fn(&R) -> K,
+    add: impl Fn(&mut T, &R),
+) -> (Vec<(K, T)>, T) {
+    let mut by: Vec<(K, T)> = Vec::new();
+    let mut all = T::default();
     for r in results {
-        let name = r.run.fault.kind.name();
-        match by_kind.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, t)) => t.add(r),
+        let k = key(r);
+        match by.iter_mut().find(|(n, _)| *n == k) {
+            Some((_, t)) => add(t, r),
             None => {
-                let mut t = Tally::default();
-                t.add(r);
-                by_kind.push((name, t));
+                let mut t = T::default();
+                add(&mut t, r);
+                by.push((k, t));
             }
         }
-        all.add(r);
+        add(&mut all, r);
     }
-    (by_kind, all)
+    (by, all)
 }
 
 /// Counts over healthy runs, per gait and in all.
@@ -448,20 +447,7 @@ impl HealthyTally {
 /// The tally of healthy `results` per gait, in the order gaits first
 /// appear, and over all.
 pub fn healthy_tally(results: &[HealthyResult]) -> (Vec<(Gait, HealthyTally)>, HealthyTally) {
-    let mut by_gait: Vec<(Gait, HealthyTally)> = Vec::new();
-    let mut all = HealthyTally::default();
-    for r in results {
-        match by_gait.iter_mut().find(|(g, _)| *g == r.run.gait) {
-            Some((_, t)) => t.add(r),
-            None => {
-                let mut t = HealthyTally::default();
-                t.add(r);
-                by_gait.push((r.run.gait, t));
-            }
-        }
-        all.add(r);
-    }
-    (by_gait, all)
+    grouped(results, |r| r.run.gait, HealthyTally::add)
 }
 
 #[cfg(test)]
