@@ -16,7 +16,8 @@
 //! Rules enforced here: a gait starts only from the standing posture it was
 //! planned from (within a tolerance), only with a verified table, never while
 //! a step is in progress; a stop takes effect at the end of the current step.
-//! Work per tick is constant: one table interpolation, no search, no loop
+//! Work per tick is constant: one table interpolation (and after a table's
+//! end one closed-form two-link IK), no iteration, no loop
 //! whose length depends on data.
 
 mod config;
