@@ -47,6 +47,8 @@ pub struct PhaseCost {
     pub total: u64,
     /// The costliest one.
     pub worst: u32,
+    /// Where it is: run and tick within it (0-based).
+    pub worst_at: (u32, u32),
 }
 
 impl PhaseCost {
@@ -70,6 +72,9 @@ pub struct Replay {
     pub max_command_diff_nm: f32,
     /// Ticks whose commands differ from the host's at all.
     pub differing_ticks: u32,
+    /// The first of them: run and tick within it (0-based), the target's
+    /// and the host's commands there (N·m).
+    pub first_differing: Option<(u32, u32, [f32; 4], [f32; 4])>,
 }
 
 /// Why a replay could not run.
@@ -95,14 +100,17 @@ pub fn replay(
         let mut hw = board_config::hardware(device, qemu_rig::peripherals())
             .map_err(|_| ReplayError::Config)?;
         out.segments += 1;
-        for record in segment.ticks() {
+        for (k, record) in (0u32..).zip(segment.ticks()) {
             qemu_rig::replay(device, &record);
             let (instr, report) = time(&mut || controller.tick(&mut hw, record.deadline_missed));
             out.ticks += 1;
             if let Some(p) = out.phases.get_mut(phase_index(&report.phase)) {
                 p.ticks += 1;
                 p.total += u64::from(instr);
-                p.worst = p.worst.max(instr);
+                if instr > p.worst {
+                    p.worst = instr;
+                    p.worst_at = (out.segments - 1, k);
+                }
             }
             let diff = report
                 .command_nm
@@ -118,6 +126,14 @@ pub fn replay(
                 .fold(0.0f32, |m, d| if d.is_nan() || d > m { d } else { m });
             if diff != 0.0 {
                 out.differing_ticks += 1;
+                if out.first_differing.is_none() {
+                    out.first_differing = Some((
+                        out.segments - 1,
+                        k,
+                        report.command_nm,
+                        record.host_command_nm,
+                    ));
+                }
             }
             if diff.is_nan() || diff > out.max_command_diff_nm {
                 out.max_command_diff_nm = diff;

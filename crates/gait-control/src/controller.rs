@@ -371,10 +371,7 @@ impl<'t> Controller<'t> {
             m.feedforward_nm = f;
             m.limit_nm = g.torque_limit_nm;
         }
-        let swing_leg = match self.seq.phase() {
-            Phase::Swing { stance, .. } => Some(stance.other()),
-            _ => None,
-        };
+        let swing_leg = self.seq.swing_leg();
         let input = SupervisorInput {
             tick: self.tick,
             joints: [0, 1, 2, 3].map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),

@@ -65,6 +65,8 @@ impl_fingerprint!(SequencerConfig {
     transfer_s,
     start_ankle_tolerance_rad,
     hold_ramp_s,
+    set_down_depth_m,
+    set_down_s,
 });
 impl_fingerprint!(ControllerConfig {
     dt_s,

@@ -165,6 +165,31 @@ pub struct Sequencer<'t> {
     lifted_at_s: Option<f32>,
     /// The ankle plan of the last reference (kept through a safe hold).
     ankle_plan: [f32; 2],
+    /// The table's stance-shank angle φ1 at the last tick of a swing, rad.
+    swing_phi1: f32,
+    /// A safe hold's set-down of the swing foot, when it struck in a swing.
+    set_down: Option<SetDown>,
+}
+
+/// A swing foot being set down in a safe hold: from where its ankle was
+/// when the hold struck, straight down, a point fixed in the world that
+/// the swing leg's IK reaches from wherever the measured stance leg and
+/// torso are, until the foot's sensor feels the ground.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SetDown {
+    /// The leg that carries the body.
+    stance: Side,
+    /// The posture held (Φ, the stance shank as the table planned it).
+    from: [f32; gait_core::LINKS],
+    /// The hip and the swing ankle of `from` (stance foot's frame), m:
+    /// worked out on the hold's first tick (the tick the fault struck has
+    /// played a swing already, and has no room left for it).
+    hip_and_ankle_m: Option<([f32; 2], [f32; 2])>,
+    /// The swing hip and knee references (joint angles), rad: the IK's
+    /// last answer, kept once the foot has found the ground.
+    swing_rad: [f32; 2],
+    /// The foot has found the ground (or its sensor cannot tell).
+    done: bool,
 }
 
 impl<'t> Sequencer<'t> {
@@ -189,6 +214,8 @@ impl<'t> Sequencer<'t> {
             swing_start_m: [0.0; 2],
             lifted_at_s: None,
             ankle_plan: [f32::NAN; 2],
+            swing_phi1: f32::NAN,
+            set_down: None,
         }
     }
 
@@ -289,6 +316,19 @@ impl<'t> Sequencer<'t> {
         matches!(self.phase, Phase::Swing { .. } | Phase::Transfer { .. })
     }
 
+    /// The leg whose foot is in the air and moved by the sequencer: the
+    /// swing leg in a swing, and in a safe hold that struck in one until
+    /// the set-down has found the ground (its joints move a leg, not the
+    /// body: the supervisor's response check takes its swing inertias).
+    #[must_use]
+    pub fn swing_leg(&self) -> Option<Side> {
+        match (self.phase, self.set_down) {
+            (Phase::Swing { stance, .. }, _) => Some(stance.other()),
+            (Phase::SafeHold { .. }, Some(sd)) if !sd.done => Some(sd.stance.other()),
+            _ => None,
+        }
+    }
+
     /// `true` while a gait is running (waiting, swinging or transferring).
     pub fn walking(&self) -> bool {
         matches!(
@@ -346,12 +386,18 @@ impl<'t> Sequencer<'t> {
     }
 
     /// The supervisor's fatal reaction: ramp to `measured` and hold; in a
-    /// swing, first play the step to its landing if `in_swing` says so.
+    /// swing, first play the step to its landing if `in_swing` says so,
+    /// otherwise set the swing foot down where it is while holding the
+    /// rest ([`SequencerConfig::set_down_depth_m`]).
     pub fn enter_safe_hold(&mut self, measured: &[f32; JOINTS], in_swing: InSwing) {
         if matches!(self.phase, Phase::SafeHold { .. }) {
             return;
         }
-        if matches!(self.phase, Phase::Swing { .. }) && in_swing == InSwing::LandFirst {
+        let swinging = match self.phase {
+            Phase::Swing { stance, .. } => Some(stance),
+            _ => None,
+        };
+        if swinging.is_some() && in_swing == InSwing::LandFirst {
             // A foot in the air is not a posture to hold: the step goes on
             // to its landing (sensed, or on the table's own timing when the
             // foot's sensor is lost), the sequencer stands there, and the
@@ -363,6 +409,76 @@ impl<'t> Sequencer<'t> {
         self.blend_from = self.reference;
         self.blend_to = target;
         self.phase = Phase::SafeHold { t_s: 0.0 };
+        self.set_down = swinging
+            .filter(|_| self.model.is_some())
+            .and_then(|stance| {
+                let w = stance.other().hip();
+                Some(SetDown {
+                    stance,
+                    from: crate::posture::phi_from_joints(&target, self.swing_phi1, stance),
+                    hip_and_ankle_m: None,
+                    swing_rad: [target.get(w).copied()?, target.get(w + 1).copied()?],
+                    done: false,
+                })
+            });
+    }
+
+    /// The set-down `t_s` into the hold: `held` (the hold's ramp) with the
+    /// swing hip and knee placing the ankle the eased depth below where it
+    /// was in the posture held, while the swing foot's sensor reads less
+    /// than a contact; from the first contact (or a sensor that cannot
+    /// tell) on, where they were then. `held` itself without a set-down.
+    fn set_down(&mut self, sensed: &Sensed, t_s: f32, held: &mut [f32; JOINTS]) {
+        let cfg = self.cfg;
+        let (Some(mut sd), Some(model)) = (self.set_down, self.model.as_ref()) else {
+            return;
+        };
+        let foot = sensed
+            .feet_n
+            .get(sd.stance.other().foot())
+            .copied()
+            .unwrap_or(f32::NAN);
+        if foot >= cfg.landing_contact_n || !foot.is_finite() {
+            sd.done = true;
+        }
+        if !sd.done && sd.hip_and_ankle_m.is_none() {
+            let [_, hip, _, _, ankle] = gait_core::kinematics::forward_kinematics(model, &sd.from);
+            if hip.iter().chain(&ankle).all(|v| v.is_finite()) {
+                sd.hip_and_ankle_m = Some((hip, ankle));
+            } else {
+                sd.done = true;
+            }
+        } else if let (false, Some((hip_m, start_m))) = (sd.done, sd.hip_and_ankle_m) {
+            let frac = if cfg.set_down_s > 0.0 {
+                t_s / cfg.set_down_s
+            } else {
+                1.0
+            };
+            let depth = cfg.set_down_depth_m * smoothstep(frac);
+            let target = [start_m[0], start_m[1] - depth];
+            let placed = gait_core::reach::place_swing_ankle_from(
+                model,
+                &sd.from,
+                hip_m,
+                target,
+                SEARCH_MIN_KNEE_FLEXION_RAD,
+            );
+            let joints = joints_from_phi(&placed, sd.stance);
+            let w = sd.stance.other().hip();
+            if let (Some(&hip), Some(&knee)) = (joints.get(w), joints.get(w + 1)) {
+                if hip.is_finite() && knee.is_finite() {
+                    sd.swing_rad = [hip, knee];
+                }
+            }
+        }
+        let w = sd.stance.other().hip();
+        if let Some(h) = held.get_mut(w) {
+            *h = sd.swing_rad[0];
+        }
+        if let Some(k) = held.get_mut(w + 1) {
+            *k = sd.swing_rad[1];
+        }
+        self.set_down = Some(sd);
     }
 
     /// While the motors are disabled the joints move freely: the reference
@@ -373,6 +489,7 @@ impl<'t> Sequencer<'t> {
         self.reference = target;
         self.blend_from = target;
         self.blend_to = target;
+        self.set_down = None;
         self.phase = Phase::SafeHold {
             t_s: self.cfg.hold_ramp_s.max(0.0),
         };
@@ -384,6 +501,7 @@ impl<'t> Sequencer<'t> {
         self.stop_requested = false;
         self.blend_to = self.reference;
         self.blend_from = self.reference;
+        self.set_down = None;
         self.phase = Phase::Standing;
     }
 
@@ -450,6 +568,7 @@ impl<'t> Sequencer<'t> {
                     .get(self.gait)
                     .map(|tb| self.searching_for_ground(&tb.at_time(t), t - duration));
                 let posture_t = phi_t.map(|p| Posture::new(&p));
+                self.swing_phi1 = phi_t.map_or(f32::NAN, |p| p[0]);
                 let share = self.swing_share(posture_t.as_ref());
                 if self.lifted_at_s.is_none() && share <= 0.0 {
                     self.lifted_at_s = Some(t);
@@ -531,9 +650,11 @@ impl<'t> Sequencer<'t> {
                     1.0
                 };
                 self.phase = Phase::SafeHold {
-                    t_s: t.min(cfg.hold_ramp_s.max(0.0) + 1.0),
+                    t_s: t.min(cfg.hold_ramp_s.max(cfg.set_down_s).max(0.0) + 1.0),
                 };
-                self.blended(frac.min(1.0))
+                let mut held = self.blended(frac.min(1.0));
+                self.set_down(sensed, t, &mut held);
+                held
             }
         };
         let mut rate = [0.0; JOINTS];

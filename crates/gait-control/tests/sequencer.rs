@@ -621,3 +621,100 @@ fn without_a_model_a_swing_holds_the_tables_end_until_the_timeout() {
         }
     }
 }
+
+/// The swing ankle's position in the stance foot's frame for joint angles
+/// `j` (stance left, the stance shank `phi1`), m.
+fn swing_ankle(model: &gait_core::BodyModel<f32>, j: &[f32; JOINTS], phi1: f32) -> [f32; 2] {
+    let phi = gait_control::posture::phi_from_joints(j, phi1, Side::Left);
+    gait_core::kinematics::forward_kinematics(model, &phi)[4]
+}
+
+#[test]
+fn a_safe_hold_in_a_swing_sets_the_foot_down_until_it_feels_the_ground() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let model: gait_core::BodyModel<f32> = gait_core::BodyModel::<f64>::paper_table_iii().cast();
+    rig.seq = rig.seq.with_model(model);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    // Into the middle of the swing.
+    let mut held = pose;
+    let mut phi1 = f32::NAN;
+    for _ in 0..20_000 {
+        held = rig.step(&s);
+        if let Phase::Swing { t_s, .. } = rig.seq.phase() {
+            if t_s >= 0.5 * rig.table.duration_s() {
+                phi1 = rig.table.at_time(t_s)[0];
+                break;
+            }
+        }
+    }
+    assert!(phi1.is_finite());
+    rig.seq.enter_safe_hold(&held, InSwing::HoldNow);
+    assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
+    assert_eq!(
+        rig.seq.swing_leg(),
+        Some(Side::Right),
+        "moved as a swing leg"
+    );
+    let cfg = SequencerConfig::DEFAULT;
+    let start = swing_ankle(&model, &held, phi1);
+    let in_air = sensed(held, READY_FEET, READY_CRUTCHES);
+    let mut heights = Vec::new();
+    for _ in 0..(0.5 * cfg.set_down_s / DT) as usize {
+        let last = rig.step(&in_air);
+        let a = swing_ankle(&model, &last, phi1);
+        // Straight down while the leg reaches.
+        assert!((a[0] - start[0]).abs() < 1e-4, "{a:?} from {start:?}");
+        heights.push(a[1]);
+        // The stance leg holds what was measured.
+        assert!((last[0] - held[0]).abs() < 1e-5 && (last[1] - held[1]).abs() < 1e-5);
+    }
+    assert!(
+        heights.windows(2).all(|w| w[1] <= w[0] + 1e-6),
+        "down, never up"
+    );
+    let speed = heights
+        .windows(2)
+        .map(|w| (w[0] - w[1]) / DT)
+        .fold(0.0, f32::max);
+    assert!(
+        speed <= 1.5 * cfg.set_down_depth_m / cfg.set_down_s + 1e-3,
+        "{speed} m/s"
+    );
+    let depth = start[1] - heights.last().copied().unwrap_or(start[1]);
+    assert!(depth > 0.03, "went down {depth} m");
+    // The ground felt: the foot stays where it is, a stance leg's again.
+    let contact = sensed(held, [500.0, 150.0], READY_CRUTCHES);
+    let at_contact = rig.step(&contact);
+    assert_eq!(rig.seq.swing_leg(), None);
+    for _ in 0..2_000 {
+        assert_eq!(rig.step(&contact), at_contact);
+        // Lifting off again does not restart it.
+        assert_eq!(rig.step(&in_air), at_contact);
+    }
+    assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
+}
+
+#[test]
+fn a_safe_hold_standing_or_without_a_model_moves_no_foot() {
+    let img = walk_image();
+    // Without a model: the swing's joints hold what was measured.
+    let (mut rig, s) = walking_in_a_swing(&img);
+    let measured = rig.seq.reference();
+    rig.seq.enter_safe_hold(&measured, InSwing::HoldNow);
+    assert_eq!(rig.seq.swing_leg(), None);
+    for _ in 0..2_000 {
+        assert_eq!(rig.step(&s), measured);
+    }
+    // Standing, with a model: nothing to set down.
+    let mut rig = Rig::new(&img);
+    let model: gait_core::BodyModel<f32> = gait_core::BodyModel::<f64>::paper_table_iii().cast();
+    rig.seq = rig.seq.with_model(model);
+    let pose = rig.start_pose(Side::Left);
+    rig.seq.enter_safe_hold(&pose, InSwing::HoldNow);
+    for _ in 0..2_000 {
+        assert_eq!(rig.step(&sensed(pose, READY_FEET, READY_CRUTCHES)), pose);
+    }
+}

@@ -1,12 +1,14 @@
 //! Reaching down with the swing foot: the swing leg's two links (thigh φ4,
 //! shank φ5) set so that its ankle is a given depth below where a posture
-//! has it, the hip and the stance leg unchanged.
+//! has it, or at a given point, the hip and the stance leg unchanged.
 //!
 //! The controller's sequencer uses it when a step's table has ended and the
 //! foot has not found the ground — a tread a few millimetres lower than
 //! planned, a foot tracking a little high, a landing the foot's sensor has
 //! not confirmed: the foot goes on down, slowly, until the ground is felt,
-//! instead of hovering until the landing times out.
+//! instead of hovering until the landing times out. And when a safe hold
+//! strikes in a swing: the foot goes down to the ground below it, so the
+//! hold stands on two feet.
 //!
 //! Two-link inverse kinematics by the law of cosines. The knee stays on the
 //! posture's branch (of the two solutions, the one whose thigh angle is
@@ -32,12 +34,9 @@ pub fn lower_swing_ankle<T: Real>(
     if !(depth_m.finite() && depth_m > zero) {
         return *phi;
     }
-    let [_, _, _, l4, l5] = model.lengths();
     let [_, hip, _, _, ankle] = forward_kinematics(model, phi);
-    // The longest reach with the knee flexed by the minimum.
-    let reach_sq = l4 * l4 + l5 * l5 + T::lit(2.0) * l4 * l5 * min_knee_flexion_rad.cos();
     let dx = ankle[0] - hip[0];
-    let room_sq = reach_sq - dx * dx;
+    let room_sq = longest_reach_sq(model, min_knee_flexion_rad) - dx * dx;
     if !(room_sq.finite() && room_sq > zero) {
         return *phi;
     }
@@ -46,18 +45,90 @@ pub fn lower_swing_ankle<T: Real>(
     if !(depth.finite() && depth > zero) {
         return *phi;
     }
-    let target = [ankle[0], ankle[1] - depth];
+    swing_leg_to(model, phi, hip, [ankle[0], ankle[1] - depth])
+}
+
+/// `phi` with the swing ankle at `target_m` (the stance foot's frame of
+/// [`forward_kinematics`], m), the hip and the stance leg as `phi` has
+/// them; a target beyond the leg's reach with the knee flexed by
+/// `min_knee_flexion_rad` is taken at that reach on the line from the hip
+/// towards it. `phi` itself for a target that is not finite or lies
+/// nearer the hip than the folded leg.
+///
+/// A swing foot set down in a safe hold goes to a point fixed in the
+/// world this way: the hip's IK follows the torso wherever the stance leg
+/// lets it go.
+pub fn place_swing_ankle<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    target_m: [T; 2],
+    min_knee_flexion_rad: T,
+) -> Phi<T> {
+    let [_, hip, _, _, _] = forward_kinematics(model, phi);
+    place_swing_ankle_from(model, phi, hip, target_m, min_knee_flexion_rad)
+}
+
+/// [`place_swing_ankle`] with `phi`'s hip given (`hip_m`, as
+/// [`forward_kinematics`] has it): a caller that places the ankle of one
+/// posture tick after tick works the hip out once.
+pub fn place_swing_ankle_from<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    hip_m: [T; 2],
+    target_m: [T; 2],
+    min_knee_flexion_rad: T,
+) -> Phi<T> {
+    let hip = hip_m;
+    let r = [target_m[0] - hip[0], target_m[1] - hip[1]];
+    let d = (r[0] * r[0] + r[1] * r[1]).sqrt();
+    let reach = longest_reach_sq(model, min_knee_flexion_rad).sqrt();
+    if !(d.finite() && d > T::zero() && reach.finite()) {
+        return *phi;
+    }
+    let scale = if d > reach { reach / d } else { T::one() };
+    swing_leg_to(
+        model,
+        phi,
+        hip,
+        [hip[0] + r[0] * scale, hip[1] + r[1] * scale],
+    )
+}
+
+/// The square of the hip-to-ankle distance with the knee flexed by
+/// `min_knee_flexion_rad`, m².
+fn longest_reach_sq<T: Real>(model: &BodyModel<T>, min_knee_flexion_rad: T) -> T {
+    let [_, _, _, l4, l5] = model.lengths();
+    let (_, cos_min) = min_knee_flexion_rad.sin_cos_fast();
+    l4 * l4 + l5 * l5 + T::lit(2.0) * l4 * l5 * cos_min
+}
+
+/// The two-link IK: `phi`'s swing thigh and shank set so that the ankle is
+/// at `target` from `hip`, on `phi`'s knee branch; `phi` where no such
+/// posture exists.
+fn swing_leg_to<T: Real>(
+    model: &BodyModel<T>,
+    phi: &Phi<T>,
+    hip: [T; 2],
+    target: [T; 2],
+) -> Phi<T> {
+    let [_, _, _, l4, l5] = model.lengths();
+    let zero = T::zero();
     let r = [target[0] - hip[0], target[1] - hip[1]];
     let d = (r[0] * r[0] + r[1] * r[1]).sqrt();
-    if !(d.finite() && d > zero) {
+    if !(d.finite() && d > zero && d >= (l4 - l5).abs()) {
         return *phi;
     }
     // Direction angles in the model's convention: a link at φ points along
     // (sin φ, cos φ), so the angle of a vector (x, y) is atan2(x, y).
-    let alpha = r[0].atan2(r[1]);
+    let alpha = r[0].atan2_portable(r[1]);
     let cos_beta =
         ((l4 * l4 + d * d - l5 * l5) / (T::lit(2.0) * l4 * d)).clamp(-T::one(), T::one());
-    let beta = cos_beta.acos();
+    // acos by atan2 and a square root, all by the `libm` crate
+    // (`Real::atan2_portable`): the same bits on the host and the target.
+    let beta = (T::one() - cos_beta * cos_beta)
+        .max(zero)
+        .sqrt()
+        .atan2_portable(cos_beta);
     let near = |angle: T, to: T| to + wrap_pi(angle - to);
     let (a, b) = (near(alpha + beta, phi[3]), near(alpha - beta, phi[3]));
     let phi4 = if (a - phi[3]).abs() <= (b - phi[3]).abs() {
@@ -67,7 +138,10 @@ pub fn lower_swing_ankle<T: Real>(
     };
     let (s4, c4) = phi4.sin_cos_fast();
     let knee = [hip[0] + l4 * s4, hip[1] + l4 * c4];
-    let phi5 = near((target[0] - knee[0]).atan2(target[1] - knee[1]), phi[4]);
+    let phi5 = near(
+        (target[0] - knee[0]).atan2_portable(target[1] - knee[1]),
+        phi[4],
+    );
     [phi[0], phi[1], phi[2], phi4, phi5]
 }
 
@@ -158,5 +232,52 @@ mod tests {
         for (a, b) in low.iter().zip(&low32) {
             assert!((a - f64::from(*b)).abs() < 1e-5, "{low:?} {low32:?}");
         }
+    }
+
+    #[test]
+    fn a_placed_ankle_is_where_it_was_asked_and_the_rest_stays() {
+        let model = BodyModel::<f64>::paper_table_iii();
+        let phi = landing();
+        let before = forward_kinematics(&model, &phi);
+        for (dx, dy) in [
+            (0.0, -0.02),
+            (-0.05, 0.03),
+            (-0.08, 0.02),
+            (0.02, 0.05),
+            (0.0, 0.0),
+        ] {
+            let target = [before[4][0] + dx, before[4][1] + dy];
+            let placed = place_swing_ankle(&model, &phi, target, 0.05);
+            let after = forward_kinematics(&model, &placed);
+            assert!((after[4][0] - target[0]).abs() < 1e-12, "{dx} {dy}");
+            assert!((after[4][1] - target[1]).abs() < 1e-12, "{dx} {dy}");
+            assert_eq!(&placed[..3], &phi[..3]);
+            assert!(knee_flexion(&placed) > 0.0, "same branch");
+        }
+        // Straight below, it agrees with lowering by the same depth.
+        let placed = place_swing_ankle(&model, &phi, [before[4][0], before[4][1] - 0.02], 0.05);
+        let lowered = lower_swing_ankle(&model, &phi, 0.02, 0.05);
+        for (a, b) in placed.iter().zip(&lowered) {
+            assert!((a - b).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_target_out_of_reach_is_taken_at_the_reach_towards_it() {
+        let model = BodyModel::<f64>::paper_table_iii();
+        let phi = landing();
+        let [_, hip, _, _, ankle] = forward_kinematics(&model, &phi);
+        let min = 0.1;
+        let target = [ankle[0], ankle[1] - 1.0];
+        let placed = place_swing_ankle(&model, &phi, target, min);
+        let after = forward_kinematics(&model, &placed)[4];
+        assert!((knee_flexion(&placed) - min).abs() < 1e-9);
+        // On the line from the hip to the target.
+        let cross =
+            (after[0] - hip[0]) * (target[1] - hip[1]) - (after[1] - hip[1]) * (target[0] - hip[0]);
+        assert!(cross.abs() < 1e-9, "{cross}");
+        // Unusable targets give the posture back.
+        assert_eq!(place_swing_ankle(&model, &phi, [f64::NAN, 0.0], min), phi);
+        assert_eq!(place_swing_ankle(&model, &phi, hip, min), phi);
     }
 }

@@ -23,6 +23,12 @@ pub trait Real: RealField + Copy + core::fmt::Debug + PartialOrd {
 
     /// `true` when the value is neither NaN nor infinite.
     fn finite(self) -> bool;
+
+    /// atan2(self, x) by the `libm` crate on every platform: the host's std
+    /// links the system's libm, which rounds some results differently from
+    /// the target's, and the firmware's commands must equal the host's bit
+    /// for bit (`cargo xtask qemu`).
+    fn atan2_portable(self, x: Self) -> Self;
 }
 
 impl Real for f64 {
@@ -42,6 +48,10 @@ impl Real for f64 {
     fn finite(self) -> bool {
         self.is_finite()
     }
+    #[inline]
+    fn atan2_portable(self, x: Self) -> Self {
+        libm::atan2(self, x)
+    }
 }
 
 impl Real for f32 {
@@ -60,6 +70,10 @@ impl Real for f32 {
     #[inline]
     fn finite(self) -> bool {
         self.is_finite()
+    }
+    #[inline]
+    fn atan2_portable(self, x: Self) -> Self {
+        libm::atan2f(self, x)
     }
 }
 

@@ -27,13 +27,18 @@ pub struct Recording {
 }
 
 /// The runs [`record_gaits`] makes: gait, steps, longest run (s), fault.
-const RUNS: [(Gait, usize, f64, Option<&str>); 4] = [
+const RUNS: [(Gait, usize, f64, Option<&str>); 5] = [
     (Gait::Walk, 2, 12.0, None),
     (Gait::StairUp, 2, 12.0, None),
     (Gait::StairDown, 2, 12.0, None),
     // Mid first swing (1.36–3.54 s): a jump on the right knee, then a
     // safe hold for the second it lasts.
     (Gait::Walk, 2, 4.5, Some("encoder-jump=300:right-knee@2.4")),
+    // Mid first swing of a stair ascent: the stance hip's encoder jumps,
+    // the hold sets the swing foot down onto the tread (an IK a tick). (A
+    // record carries counts, not a frame's errors: a parity or bus fault
+    // would replay as good frames.)
+    (Gait::StairUp, 1, 4.0, Some("encoder-jump=300:left-hip@2.4")),
 ];
 
 /// Records the runs above on `device` with the flash tables.

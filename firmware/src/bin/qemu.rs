@@ -481,7 +481,11 @@ fn replay_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
                             .str(" worst=")
                             .u32(p.worst)
                             .str(" ticks=")
-                            .u32(p.ticks),
+                            .u32(p.ticks)
+                            .str(" worst_at=")
+                            .u32(p.worst_at.0)
+                            .str(":")
+                            .u32(p.worst_at.1),
                     );
                 }
             }
@@ -495,6 +499,14 @@ fn replay_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
                     .str(" differing_ticks=")
                     .u32(r.differing_ticks),
             );
+            if let Some((run, tick, target, host)) = r.first_differing {
+                let mut l = line("tick: first differing: run=");
+                l.u32(run).str(" tick=").u32(tick).str(" target/host N·m:");
+                for (t, h) in target.iter().zip(&host) {
+                    l.str(" ").exp(*t).str("/").exp(*h);
+                }
+                out.put(&mut l);
+            }
             0
         }
         Err(e) => {

@@ -45,6 +45,14 @@ pub struct SequencerConfig {
     pub start_ankle_tolerance_rad: f32,
     /// Duration of the ramp into a safe hold, s.
     pub hold_ramp_s: f32,
+    /// A safe hold that strikes in a swing sets the swing foot down
+    /// straight below where it is, by up to this (less where the knee
+    /// would straighten), until its sensor feels the ground, m …
+    pub set_down_depth_m: f32,
+    /// … over this time (eased in and out), s: held in the air, a foot
+    /// leaves the whole body on the stance leg, whose hip alone then
+    /// carries the torso (docs/safety.md).
+    pub set_down_s: f32,
 }
 
 impl SequencerConfig {
@@ -54,7 +62,8 @@ impl SequencerConfig {
     /// 0.5 s after the table's end of up to 5 cm over 0.8 s (at most 9.4
     /// cm/s, slower the nearer the ground is), 0.15 rad start
     /// tolerance, 0.4 s transfer, stance ankle within 0.05 rad (2.9°) of
-    /// the table's start, 0.3 s hold ramp.
+    /// the table's start, 0.3 s hold ramp, a set-down of up to 20 cm over
+    /// 0.8 s (at most 0.375 m/s).
     pub const DEFAULT: Self = Self {
         crutch_ready_n: 60.0,
         feet_ready_n: 400.0,
@@ -68,5 +77,7 @@ impl SequencerConfig {
         transfer_s: 0.4,
         start_ankle_tolerance_rad: 0.05,
         hold_ramp_s: 0.3,
+        set_down_depth_m: 0.2,
+        set_down_s: 0.8,
     };
 }

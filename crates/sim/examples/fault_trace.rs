@@ -1,0 +1,101 @@
+//! Prints a coarse trace of one campaign run (every EVERY ms): phase, hip
+//! height, the true joints, reference − true, commands, motor torques, foot
+//! and crutch forces, faults. For diagnosing a run `exogait faults --json`
+//! lists: `cargo run --release -p sim --example fault_trace -- GAIT FAULT NOISE_SEED [EVERY_MS]`.
+
+use std::str::FromStr;
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let gait = match args.next().as_deref() {
+        Some("stair-up") => gait_control::operator::Gait::StairUp,
+        Some("stair-down") => gait_control::operator::Gait::StairDown,
+        _ => gait_control::operator::Gait::Walk,
+    };
+    let Some(Ok(fault)) = args.next().map(|s| sim::inject::Injection::from_str(&s)) else {
+        eprintln!("fault_trace: GAIT FAULT NOISE_SEED [EVERY_MS]");
+        return;
+    };
+    let seed: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(1);
+    let every: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(50);
+    let Ok(device) = exogait_device::DeviceConfig::exogait() else {
+        return;
+    };
+    let run = sim::campaign::CampaignRun {
+        gait,
+        fault,
+        noise_seed: seed,
+    };
+    let played = sim::scenario::run_tables_with(
+        &device,
+        sim::scenario::flash_tables(),
+        gait,
+        sim::scenario::strong_pilot(),
+        fault.at_s + 4.0,
+        2,
+        |rig| {
+            rig.set_sensor_noise(3, 10, seed);
+            rig.schedule(fault);
+        },
+    );
+    let r = match played {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("fault_trace: {e}");
+            return;
+        }
+    };
+    println!("{:?}", run);
+    println!(
+        "t phase | hipY | joints(4) | ref-true(4) | cmd(4) | motor(4) | feet | crutches | faults"
+    );
+    for (k, s) in r.rig.trace.iter().enumerate() {
+        if k % every != 0 {
+            continue;
+        }
+        let rep = &s.report;
+        let st = &s.state;
+        let f4 = |v: [f64; 4]| {
+            v.iter()
+                .map(|x| format!("{x:+.3}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let phase = format!("{:?}", rep.phase);
+        println!(
+            "{:.3} {:<28} | {:.3} | {} | {} | {} | {} | {:5.0} {:5.0} | {:4.0} {:4.0} | {:?} {:?} en={}",
+            st.time_s,
+            &phase[..phase.len().min(28)],
+            st.points_m[1][1],
+            f4(st.joint_angles_rad),
+            f4(core::array::from_fn(
+                |j| f64::from(rep.reference_rad[j]) - st.joint_angles_rad[j]
+            )),
+            rep.command_nm
+                .iter()
+                .map(|v| format!("{v:+6.1}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+            st.motor_torques_nm
+                .iter()
+                .map(|v| format!("{v:+6.1}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+            st.foot_forces_n[0],
+            st.foot_forces_n[1],
+            st.crutch_forces_n[0],
+            st.crutch_forces_n[1],
+            rep.reaction,
+            rep.faults,
+            rep.motors_enabled,
+        );
+    }
+    let o = sim::outcome::outcome(&r.rig, r.ended_by.as_ref());
+    println!(
+        "fell: {:?}; margin {:.3} (joint {})",
+        o.fell, o.worst_limit_margin_rad, o.worst_limit_joint
+    );
+    for f in &o.faults {
+        println!("{f:?}");
+    }
+}
