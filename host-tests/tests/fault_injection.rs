@@ -221,13 +221,14 @@ fn a_seeded_campaign_detects_every_fault_it_must_and_never_trips_falsely() {
 
 #[test]
 fn a_panic_resets_the_board_into_a_hold_of_the_posture_it_finds() {
-    // Standing, in the weight transfer, early and in mid-swing (the walk's
-    // first swing runs 1.36–3.54 s): the board is off for the boot (motors
-    // limp), then holds with 0x0603 latched, and nobody falls. Late in a
-    // swing a hold of the posture found is not enough (walk at 3.2 s, stair
-    // descent at 2.8 s fall): the open case `docs/safety.md` names.
+    // Standing, in the weight transfer, early, mid and late in the swing
+    // (the walk's first swing runs 1.36–3.54 s): the board is off for the
+    // boot (motors limp), then holds with 0x0603 latched, and nobody falls.
+    // Late in a swing the foot found in the air is set down first (walk at
+    // 3.2 s and stair descent at 2.8 s fell with a hold of the posture
+    // found alone).
     for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
-        for at in [0.5, 1.2, 1.6, 2.0, 2.4] {
+        for at in [0.5, 1.2, 1.6, 2.0, 2.4, 2.8, 3.2] {
             let o = run(gait, 3, at + 3.0, None, &[&format!("panic@{at}")]);
             assert!(o.fell.is_none(), "{gait:?}, panic at {at} s: {o:?}");
             let restart = o

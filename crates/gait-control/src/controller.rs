@@ -30,7 +30,7 @@ use crate::drivers::buttons::Button;
 use crate::drivers::mcp3208::{ForceCalibration, ForceChannels, Mcp3208};
 use crate::drivers::motor::{self, Motor};
 use crate::drivers::status::Indicator;
-use crate::faults::{FaultSet, Reaction};
+use crate::faults::{FaultCode, FaultSet, Reaction};
 use crate::operator::{self, ControllerStatus, Input, Operator, OperatorConfig, Request};
 use crate::position_loop::{JointGains, JointLoop};
 use crate::posture::JOINTS;
@@ -391,6 +391,9 @@ impl<'t> Controller<'t> {
         match verdict.reaction {
             Reaction::None => {}
             Reaction::FinishStepThenHold => self.seq.block_new_steps(),
+            Reaction::SafeHold if verdict.latched.contains(FaultCode::RestartedAfterPanic) => {
+                self.seq.enter_safe_hold_after_restart(&s.joints, &s.sensed);
+            }
             Reaction::SafeHold => self
                 .seq
                 .enter_safe_hold(&s.joints, verdict.latched.in_swing()),

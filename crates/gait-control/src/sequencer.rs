@@ -423,6 +423,51 @@ impl<'t> Sequencer<'t> {
             });
     }
 
+    /// The hold after a restart (0x0603): the step the board was playing is
+    /// lost, so which foot is up is read from the feet's sensors. With one
+    /// foot carrying a contact and the other not, the loaded one is the
+    /// stance leg (the feed-forward's model, too) and the other is set down
+    /// as after a fault in a swing, the stance shank from its ankle's
+    /// reading; otherwise a hold of `measured` as [`Sequencer::enter_safe_hold`].
+    pub fn enter_safe_hold_after_restart(&mut self, measured: &[f32; JOINTS], sensed: &Sensed) {
+        if matches!(self.phase, Phase::SafeHold { .. }) {
+            return;
+        }
+        self.enter_safe_hold(measured, InSwing::HoldNow);
+        let contact = self.cfg.landing_contact_n;
+        let [left, right] = sensed.feet_n;
+        let carries = |f: f32| f >= contact;
+        let lifted = |f: f32| f.is_finite() && f < contact;
+        let stance = if carries(left) && lifted(right) {
+            Side::Left
+        } else if carries(right) && lifted(left) {
+            Side::Right
+        } else {
+            return;
+        };
+        let phi1 = sensed
+            .ankles_rad
+            .get(stance.ankle())
+            .copied()
+            .unwrap_or(f32::NAN);
+        if self.model.is_none() || !phi1.is_finite() {
+            return;
+        }
+        let target = self.blend_to;
+        let w = stance.other().hip();
+        let (Some(&hip), Some(&knee)) = (target.get(w), target.get(w + 1)) else {
+            return;
+        };
+        self.stance = stance;
+        self.set_down = Some(SetDown {
+            stance,
+            from: crate::posture::phi_from_joints(&target, phi1, stance),
+            hip_and_ankle_m: None,
+            swing_rad: [hip, knee],
+            done: false,
+        });
+    }
+
     /// The set-down `t_s` into the hold: `held` (the hold's ramp) with the
     /// swing hip and knee placing the ankle the eased depth below where it
     /// was in the posture held, while the swing foot's sensor reads less

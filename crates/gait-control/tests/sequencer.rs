@@ -718,3 +718,53 @@ fn a_safe_hold_standing_or_without_a_model_moves_no_foot() {
         assert_eq!(rig.step(&sensed(pose, READY_FEET, READY_CRUTCHES)), pose);
     }
 }
+
+#[test]
+fn after_a_restart_the_foot_found_unloaded_is_set_down() {
+    let img = walk_image();
+    let model: gait_core::BodyModel<f32> = gait_core::BodyModel::<f64>::paper_table_iii().cast();
+    let found = [0.4, 0.3, 0.1, 0.6];
+    let cases = [
+        // Right foot carrying, left unloaded: the left is set down.
+        ([0.0, 600.0], Some(Side::Left)),
+        ([600.0, 10.0], Some(Side::Right)),
+        // Both carrying, or a foot that cannot tell: a plain hold.
+        ([400.0, 300.0], None),
+        ([f32::NAN, 600.0], None),
+        ([0.0, 0.0], None),
+    ];
+    for (feet, lifted) in cases {
+        let mut rig = Rig::new(&img);
+        rig.seq = rig.seq.with_model(model).restarted_at(found);
+        let s = Sensed {
+            joints_rad: found,
+            feet_n: feet,
+            crutches_n: READY_CRUTCHES,
+            ankles_rad: [0.05, 0.05],
+        };
+        rig.seq.enter_safe_hold_after_restart(&found, &s);
+        assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
+        assert_eq!(rig.seq.swing_leg(), lifted, "{feet:?}");
+        let mut last = found;
+        let mut stance_fed_forward = Side::Left;
+        for _ in 0..300 {
+            let r = rig.seq.update(&s, Gait::Walk, DT, &mut |_| {});
+            last = r.angle_rad;
+            stance_fed_forward = r.stance;
+        }
+        match lifted {
+            Some(leg) => {
+                let stance = leg.other();
+                assert_eq!(stance_fed_forward, stance, "{feet:?}");
+                // The stance leg holds; the lifted leg's joints have moved.
+                let (sh, lh) = (stance.hip(), leg.hip());
+                assert_eq!(&last[sh..sh + 2], &found[sh..sh + 2], "{feet:?}");
+                assert!(
+                    (last[lh + 1] - found[lh + 1]).abs() > 0.01,
+                    "{feet:?}: {last:?}"
+                );
+            }
+            None => assert_eq!(last, found, "{feet:?}"),
+        }
+    }
+}
