@@ -537,19 +537,32 @@ fn the_transfer_is_planned_with_the_ik_options_the_table_carries() {
 /// The swing ankle's height above the stance ankle for joint angles `j`
 /// (stance left, the table's stance shank `phi1`), m.
 fn swing_ankle_height(model: &gait_core::BodyModel<f32>, j: &[f32; JOINTS], phi1: f32) -> f32 {
-    let phi = gait_control::posture::phi_from_joints(j, phi1, Side::Left);
-    gait_core::kinematics::forward_kinematics(model, &phi)[4][1]
+    swing_ankle(model, j, phi1)[1]
 }
 
-#[test]
-fn a_swing_that_ends_without_contact_lowers_the_foot_until_it_lands() {
-    let img = walk_image();
-    let mut rig = Rig::new(&img);
+/// The swing ankle's position in the stance foot's frame for joint angles
+/// `j` (stance left, the stance shank `phi1`), m.
+fn swing_ankle(model: &gait_core::BodyModel<f32>, j: &[f32; JOINTS], phi1: f32) -> [f32; 2] {
+    let phi = gait_control::posture::phi_from_joints(j, phi1, Side::Left);
+    gait_core::kinematics::forward_kinematics(model, &phi)[4]
+}
+
+/// A sequencer with the paper's body model, asked to start walking from
+/// its start posture: the rig, the model, what it senses, the posture.
+fn started_with_a_model(img: &[u8]) -> (Rig<'_>, gait_core::BodyModel<f32>, Sensed, [f32; JOINTS]) {
+    let mut rig = Rig::new(img);
     let model: gait_core::BodyModel<f32> = gait_core::BodyModel::<f64>::paper_table_iii().cast();
     rig.seq = rig.seq.with_model(model);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
     rig.seq.request_start(Gait::Walk, &s);
+    (rig, model, s, pose)
+}
+
+#[test]
+fn a_swing_that_ends_without_contact_lowers_the_foot_until_it_lands() {
+    let img = walk_image();
+    let (mut rig, model, s, pose) = started_with_a_model(&img);
     let end_phi1 = rig.table.at_time(rig.table.duration_s())[0];
     let cfg = SequencerConfig::DEFAULT;
     // Play to the table's end with no contact: the table's last posture.
@@ -622,22 +635,10 @@ fn without_a_model_a_swing_holds_the_tables_end_until_the_timeout() {
     }
 }
 
-/// The swing ankle's position in the stance foot's frame for joint angles
-/// `j` (stance left, the stance shank `phi1`), m.
-fn swing_ankle(model: &gait_core::BodyModel<f32>, j: &[f32; JOINTS], phi1: f32) -> [f32; 2] {
-    let phi = gait_control::posture::phi_from_joints(j, phi1, Side::Left);
-    gait_core::kinematics::forward_kinematics(model, &phi)[4]
-}
-
 #[test]
 fn a_safe_hold_in_a_swing_sets_the_foot_down_until_it_feels_the_ground() {
     let img = walk_image();
-    let mut rig = Rig::new(&img);
-    let model: gait_core::BodyModel<f32> = gait_core::BodyModel::<f64>::paper_table_iii().cast();
-    rig.seq = rig.seq.with_model(model);
-    let pose = rig.start_pose(Side::Left);
-    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
+    let (mut rig, model, s, pose) = started_with_a_model(&img);
     // Into the middle of the swing.
     let mut held = pose;
     let mut phi1 = f32::NAN;
