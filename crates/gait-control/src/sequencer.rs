@@ -410,7 +410,7 @@ impl<'t> Sequencer<'t> {
         self.blend_to = target;
         self.phase = Phase::SafeHold { t_s: 0.0 };
         self.set_down = swinging
-            .filter(|_| self.model.is_some())
+            .filter(|_| self.model.is_some() && in_swing == InSwing::HoldNow)
             .and_then(|stance| {
                 let w = stance.other().hip();
                 Some(SetDown {

@@ -769,3 +769,18 @@ fn after_a_restart_the_foot_found_unloaded_is_set_down() {
         }
     }
 }
+
+#[test]
+fn a_hold_for_a_saturated_drive_leaves_the_foot_in_the_air() {
+    let img = walk_image();
+    let (mut rig, _, s, _) = started_with_a_model(&img);
+    let mut held = [0.0; JOINTS];
+    while !matches!(rig.seq.phase(), Phase::Swing { t_s, .. } if t_s > 0.3) {
+        held = rig.step(&s);
+    }
+    rig.seq.enter_safe_hold(&held, InSwing::HoldInAir);
+    assert_eq!(rig.seq.swing_leg(), None);
+    for _ in 0..2_000 {
+        assert_eq!(rig.step(&s), held);
+    }
+}
