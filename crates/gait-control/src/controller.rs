@@ -137,10 +137,11 @@ pub struct Controller<'t> {
     crutch: CrutchLoad,
     last_raw: [u16; ENCODERS],
     last_angle: [f32; ENCODERS],
-    /// Consecutive frames of each joint's encoder that control could not
-    /// take (bad or dropped): from [`BLIND_AFTER_FRAMES`] on the joint is
-    /// blind, and runs on its feed-forward alone.
-    untaken: [u8; JOINTS],
+    /// Consecutive frames of each encoder (joints, then ankles) that
+    /// control could not take (bad or dropped): from [`BLIND_AFTER_FRAMES`]
+    /// on, a joint is blind and runs on its feed-forward alone, and a
+    /// stance ankle's lean is estimated instead of read.
+    untaken: [u8; ENCODERS],
     rate: [f32; JOINTS],
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
@@ -193,7 +194,7 @@ impl<'t> Controller<'t> {
             crutch: CrutchLoad::new(),
             last_raw: [0; ENCODERS],
             last_angle: [0.0; ENCODERS],
-            untaken: [0; JOINTS],
+            untaken: [0; ENCODERS],
             rate: [0.0; JOINTS],
             motor_sense: [idle; JOINTS],
             motors_enabled: false,

@@ -69,6 +69,23 @@ pub fn phi_from_joints(joints: &[f32; JOINTS], stance_ankle_rad: f32, stance: Si
     [phi1, phi2, phi3, phi4, phi5]
 }
 
+/// The stance shank's angle φ1 through the closed chain of double
+/// support, from the other ankle's reading (its foot flat on the ground)
+/// and the four joint angles: the other shank's φ5 = π + `other_ankle_rad`
+/// (legs parallel, both ankles read the same lean), and [`phi_from_joints`]
+/// carried back from it. Why: a stance ankle whose encoder is lost leaves
+/// the posture's lean unknown, and a stale reading sets the feed-forward
+/// for a posture the body has left.
+pub fn stance_phi1_through_other_leg(
+    joints: &[f32; JOINTS],
+    other_ankle_rad: f32,
+    stance: Side,
+) -> f32 {
+    let get = |i: usize| joints.get(i).copied().unwrap_or(f32::NAN);
+    let (s, w) = (stance.hip(), stance.other().hip());
+    other_ankle_rad + get(s + 1) - get(s) + get(w) - get(w + 1)
+}
+
 /// The stance shank's angle φ1 from the ankle encoder's `reading`: the
 /// reading itself while the foot is flat; once the reading is at the
 /// dorsiflexion `stop` (within 0.5°), the heel may be up (toe rocker,
@@ -98,6 +115,26 @@ mod tests {
         // NaN stays NaN; a NaN plan is ignored.
         assert!(stance_phi1_estimate(f32::NAN, stop, 0.7).is_nan());
         assert_eq!(stance_phi1_estimate(stop, stop, f32::NAN), stop);
+    }
+
+    #[test]
+    fn the_closed_chain_gives_the_stance_lean_the_other_ankle_reads() {
+        // A double-support posture: stance shank leaning 0.15 rad, the
+        // other foot flat with its shank at 0.32 rad (φ5 = π + 0.32).
+        for side in [Side::Left, Side::Right] {
+            let (phi1, other) = (0.15f32, 0.32f32);
+            let phi = [phi1, -0.25, 0.1, 2.9, core::f32::consts::PI + other];
+            let joints = joints_from_phi(&phi, side);
+            let est = stance_phi1_through_other_leg(&joints, other, side);
+            assert!((est - phi1).abs() < 1e-5, "{side:?}: {est}");
+            // Forward kinematics: with that φ1 both feet are flat, the
+            // other shank's direction (knee to ankle) is π + its lean.
+            let back = phi_from_joints(&joints, est, side);
+            assert!((back[4] - core::f32::consts::PI - other).abs() < 1e-5);
+            // A different other-ankle reading moves the estimate by as much.
+            let moved = stance_phi1_through_other_leg(&joints, other + 0.1, side);
+            assert!((moved - phi1 - 0.1).abs() < 1e-5);
+        }
     }
 
     #[test]

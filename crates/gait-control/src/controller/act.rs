@@ -204,12 +204,7 @@ impl Controller<'_> {
         let (posture, dphi, ddphi) = match r.motion {
             Some(m) => (m.posture, m.dphi, m.ddphi),
             None => {
-                let reading = self
-                    .last_angle
-                    .get(JOINTS + r.stance.ankle())
-                    .copied()
-                    .unwrap_or(0.0);
-                let stance_ankle = self.stance_phi1(reading, r);
+                let stance_ankle = self.static_stance_phi1(s, r);
                 (
                     Posture::new(&phi_from_joints(&r.angle_rad, stance_ankle, r.stance)),
                     [0.0; gait_core::LINKS],
@@ -239,17 +234,49 @@ impl Controller<'_> {
         }
     }
 
-    /// The stance shank's angle φ1 for a static posture: the ankle
-    /// encoder's reading, or, when it reads the dorsiflexion stop (within
-    /// 0.5°: the heel may be up and φ1 beyond what the encoder can see), the
-    /// larger of it and the planned φ1.
-    fn stance_phi1(&self, ankle_reading: f32, r: &Reference) -> f32 {
+    /// The stance shank's angle φ1 for a static posture.
+    ///
+    /// While control takes the stance ankle's frames: its reading, or, when
+    /// it reads the dorsiflexion stop (within 0.5°: the heel may be up and
+    /// φ1 beyond what the encoder can see), the larger of it and the
+    /// planned φ1. Once that encoder is blind (lost, 0x0207), its last
+    /// reading is stale: held from a swing, it set a stair descent's
+    /// landing posture 0.3 rad off, the stance knee's feed-forward wrong by
+    /// some 60 N·m, the torque residual (0x0404) braked the knee and the
+    /// body sank. Then the closed chain gives it, when the other foot
+    /// carries load flat on the ground (its ankle off the stop); else the
+    /// plan.
+    fn static_stance_phi1(&self, s: &Senses, r: &Reference) -> f32 {
         let stop = StanceFoot::for_model(&self.cfg.model).heel_off_rad;
+        let on_stop = stop - 0.5f32.to_radians();
+        let stance = JOINTS + r.stance.ankle();
+        let other = JOINTS + r.stance.other().ankle();
+        let blind = |i: usize| {
+            self.untaken
+                .get(i)
+                .is_none_or(|&n| n >= super::BLIND_AFTER_FRAMES)
+        };
+        let reading = |i: usize| self.last_angle.get(i).copied().unwrap_or(f32::NAN);
         let planned = r
             .ankle_plan_rad
             .get(r.stance.ankle())
             .copied()
             .unwrap_or(f32::NAN);
-        crate::posture::stance_phi1_estimate(ankle_reading, stop, planned)
+        if !blind(stance) {
+            return crate::posture::stance_phi1_estimate(reading(stance), stop, planned);
+        }
+        let other_load = s
+            .forces_n
+            .get(r.stance.other().foot())
+            .copied()
+            .unwrap_or(f32::NAN);
+        let other_flat = reading(other) < on_stop;
+        if !blind(other) && other_flat && other_load >= self.cfg.sequencer.landing_contact_n {
+            crate::posture::stance_phi1_through_other_leg(&s.joints, reading(other), r.stance)
+        } else if planned.is_finite() {
+            planned
+        } else {
+            reading(stance)
+        }
     }
 }
