@@ -56,6 +56,7 @@ impl_fingerprint!(SequencerConfig {
     crutch_ready_n,
     feet_ready_n,
     landing_contact_n,
+    landing_confirm_s,
     landing_window_fraction,
     landing_timeout_s,
     ground_search_after_s,

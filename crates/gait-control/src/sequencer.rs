@@ -163,6 +163,9 @@ pub struct Sequencer<'t> {
     /// When the table's swing foot was planned fully lifted in the present
     /// swing, s (landing is looked for only after that).
     lifted_at_s: Option<f32>,
+    /// How long the swing foot has felt the ground in the landing window
+    /// without a break, s (`SequencerConfig::landing_confirm_s`).
+    contact_s: f32,
     /// The ankle plan of the last reference (kept through a safe hold).
     ankle_plan: [f32; 2],
     /// The table's stance-shank angle φ1 at the last tick of a swing, rad.
@@ -213,6 +216,7 @@ impl<'t> Sequencer<'t> {
             transfer_targets: [None; 3],
             swing_start_m: [0.0; 2],
             lifted_at_s: None,
+            contact_s: 0.0,
             ankle_plan: [f32::NAN; 2],
             swing_phi1: f32::NAN,
             set_down: None,
@@ -592,6 +596,7 @@ impl<'t> Sequencer<'t> {
                         .planned_swing_toe(start.map(|p| Posture::new(&p)).as_ref())
                         .unwrap_or([0.0; 2]);
                     self.lifted_at_s = None;
+                    self.contact_s = 0.0;
                     events(SeqEvent::SwingStarted(self.gait, stance));
                     start.map_or(self.reference, |p| joints_from_phi(&p, stance))
                 } else {
@@ -628,8 +633,16 @@ impl<'t> Sequencer<'t> {
                 // contact: the step ends on the table's own timing, where
                 // the table has put the foot down.
                 let blind = !swing_foot.is_finite();
-                let landed =
-                    in_window && (swing_foot >= cfg.landing_contact_n || (blind && t >= duration));
+                // Contact counts once it has held `landing_confirm_s`: a
+                // spike of a few ticks is not the ground.
+                self.contact_s = if in_window && swing_foot >= cfg.landing_contact_n {
+                    self.contact_s + dt_s
+                } else {
+                    0.0
+                };
+                let touched =
+                    self.contact_s > 0.0 && self.contact_s >= cfg.landing_confirm_s - 0.5 * dt_s;
+                let landed = in_window && (touched || (blind && t >= duration));
                 other_share = Some(share);
                 let reference = phi_t.map_or(self.reference, |p| joints_from_phi(&p, stance));
                 if landed {

@@ -605,15 +605,54 @@ fn a_swing_that_ends_without_contact_lowers_the_foot_until_it_lands() {
         "stopped at {depth} m with the knee at {knee} rad"
     );
     assert!(rig.events.iter().all(|e| *e != SeqEvent::LandingTimeout));
-    // The ground felt: the step lands where the foot has got to.
+    // The ground felt, and held for the landing's confirmation: the step
+    // lands where the foot has got to.
     let before = rig.events.len();
-    rig.step(&sensed(pose, [500.0, 200.0], READY_CRUTCHES));
-    assert!(
-        rig.events[before..].contains(&SeqEvent::Landed),
-        "{:?}",
-        rig.events
-    );
+    let confirm_ticks = (cfg.landing_confirm_s / DT).round() as usize;
+    for tick in 1..=confirm_ticks {
+        rig.step(&sensed(pose, [500.0, 200.0], READY_CRUTCHES));
+        assert_eq!(
+            rig.events[before..].contains(&SeqEvent::Landed),
+            tick == confirm_ticks,
+            "tick {tick} of {confirm_ticks}: {:?}",
+            rig.events
+        );
+    }
     assert!(matches!(rig.seq.phase(), Phase::Transfer { .. }));
+}
+
+#[test]
+fn a_force_spike_late_in_the_swing_is_not_a_landing() {
+    let img = walk_image();
+    let (mut rig, _model, s, pose) = started_with_a_model(&img);
+    let cfg = SequencerConfig::DEFAULT;
+    let confirm_ticks = (cfg.landing_confirm_s / DT).round() as usize;
+    assert!(confirm_ticks > 3, "the campaign's spikes last 3 ms");
+    // Into the landing window: 90 % of the table.
+    for _ in 0..20_000 {
+        if matches!(rig.seq.phase(), Phase::Swing { t_s, .. } if t_s > 0.9 * rig.table.duration_s())
+        {
+            break;
+        }
+        rig.step(&s);
+    }
+    assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
+    // The swing foot's sensor (right) reads 400 N for 3 ticks, and again
+    // for one tick short of the confirmation after a gap of one tick.
+    let spike = sensed(pose, [500.0, 400.0], READY_CRUTCHES);
+    for n in [3, confirm_ticks - 1] {
+        for _ in 0..n {
+            rig.step(&spike);
+        }
+        rig.step(&s);
+    }
+    assert!(!rig.events.contains(&SeqEvent::Landed), "{:?}", rig.events);
+    assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
+    // Held contact lands.
+    for _ in 0..confirm_ticks {
+        rig.step(&spike);
+    }
+    assert!(rig.events.contains(&SeqEvent::Landed), "{:?}", rig.events);
 }
 
 #[test]

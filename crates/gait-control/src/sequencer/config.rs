@@ -13,6 +13,12 @@ pub struct SequencerConfig {
     pub feet_ready_n: f32,
     /// Swing-foot force that counts as ground contact, N.
     pub landing_contact_n: f32,
+    /// A landing is the contact held this long, s: a force sensor's spike
+    /// of a few milliseconds late in a swing (a connector's glitch, a
+    /// brush against the riser) is not the ground. Taken for a landing,
+    /// it swapped the legs with the foot still in the air, and on stairs
+    /// the torso tipped over the stance leg it had just left.
+    pub landing_confirm_s: f32,
     /// Landing is accepted from this fraction of the table's duration on
     /// (earlier contact is a scuff, not a landing).
     pub landing_window_fraction: f32,
@@ -57,7 +63,9 @@ pub struct SequencerConfig {
 
 impl SequencerConfig {
     /// Defaults for a 93 kg system: 60 N per crutch and 300 N on the stance
-    /// foot to be "ready", 80 N of swing-foot force for contact, landing
+    /// foot to be "ready", 80 N of swing-foot force for contact, held 8 ms
+    /// (a landing's force, once there, stays; the campaign's spikes last
+    /// 3 ms) for a landing,
     /// accepted after 60 % of the step, 1.5 s timeout, a ground search from
     /// 0.5 s after the table's end of up to 5 cm over 0.8 s (at most 9.4
     /// cm/s, slower the nearer the ground is), 0.15 rad start
@@ -68,6 +76,7 @@ impl SequencerConfig {
         crutch_ready_n: 60.0,
         feet_ready_n: 400.0,
         landing_contact_n: 80.0,
+        landing_confirm_s: 0.008,
         landing_window_fraction: 0.6,
         landing_timeout_s: 1.5,
         ground_search_after_s: 0.5,

@@ -1,0 +1,73 @@
+//! Runs of the 10,000-run campaign (`cargo xtask faults --runs 10000
+//! --seed 1`, session 9) in which a sensing fault's reaction dropped the
+//! pilot, replayed as the campaign played them (the same gait, fault, time
+//! and sensor noise). Each now stands (docs/safety.md, "Sensing faults
+//! after session 9").
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use std::str::FromStr;
+
+use exogait_device::DeviceConfig;
+use gait_control::faults::FaultCode;
+use gait_control::operator::Gait;
+use sim::campaign::{CampaignRun, RunResult, play};
+use sim::inject::Injection;
+
+fn replay(gait: Gait, fault: &str, noise_seed: u64) -> RunResult {
+    let run = CampaignRun {
+        gait,
+        fault: Injection::from_str(fault).unwrap(),
+        noise_seed,
+    };
+    play(&run, &DeviceConfig::exogait().unwrap())
+}
+
+/// The stance ankle's encoder lost in a stair descent's swing, with the
+/// foot in the air: the step finishes (0x0207) and lands on it. Its held
+/// reading was the swing's, 0.3 rad off the landing's lean; the static
+/// feed-forward built on it was wrong by some 60 N·m at the knee, the
+/// torque residual (0x0404) braked the knee and the body sank onto it.
+/// Now the lean comes through the closed chain or from the plan.
+#[test]
+fn a_lost_ankle_encoder_leaves_the_stair_descent_standing() {
+    for (fault, seed) in [
+        ("encoder-bus:left-ankle@4.095", 808_419),
+        ("encoder-parity:left-ankle@4.248", 122_854),
+        ("encoder-error-flag:left-ankle@4.003", 95_741),
+    ] {
+        let r = replay(Gait::StairDown, fault, seed);
+        let o = &r.outcome;
+        assert_eq!(o.fell, None, "{fault}");
+        assert!(r.detected && !r.false_trip && r.error.is_none(), "{fault}");
+        assert_eq!(
+            o.faults.first().map(|f| f.code),
+            Some(FaultCode::AnkleEncoder),
+            "{fault}"
+        );
+        assert!(
+            o.faults.iter().all(|f| f.code != FaultCode::MotorResponse),
+            "{fault}: {:?}",
+            o.faults
+        );
+        assert!(o.worst_limit_margin_rad > 0.0, "{fault}");
+    }
+}
+
+/// A 3 ms force spike on the swing foot late in a swing: taken as the
+/// landing, it swapped the legs with the foot in the air and the torso
+/// tipped over the leg it had just left. A landing is now contact held
+/// 8 ms; the step lands when the foot does, and nothing faults.
+#[test]
+fn a_force_spike_late_in_a_swing_is_not_taken_for_the_landing() {
+    for (gait, fault, seed) in [
+        (Gait::StairUp, "fsr-spike=397.3:right-foot@2.974", 168_797),
+        (Gait::StairUp, "fsr-spike=204.9:right-foot@3.184", 890_305),
+        (Gait::Walk, "fsr-spike=261.6:right-foot@3.429", 527_790),
+    ] {
+        let r = replay(gait, fault, seed);
+        let o = &r.outcome;
+        assert_eq!(o.fell, None, "{fault}");
+        assert!(o.faults.is_empty(), "{fault}: {:?}", o.faults);
+        assert!(o.landings >= 2, "{fault}: {} landings", o.landings);
+    }
+}
