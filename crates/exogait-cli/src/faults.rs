@@ -12,7 +12,7 @@ use gait_control::operator::Gait;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use sim::campaign::{
-    HEALTHY_STEPS, HealthyTally, Tally, healthy_plan, healthy_tally, plan, play_all,
+    HEALTHY_STEPS, HealthyTally, NamedCase, Tally, healthy_plan, healthy_tally, plan, play_all,
     play_all_healthy, tally,
 };
 
@@ -40,6 +40,7 @@ pub struct FaultsArgs {
 struct TallyJson {
     runs: usize,
     falls: usize,
+    unnamed_falls: usize,
     past_a_stop: usize,
     missed: usize,
     false_trips: usize,
@@ -51,6 +52,7 @@ impl From<&Tally> for TallyJson {
         Self {
             runs: t.runs,
             falls: t.falls,
+            unnamed_falls: t.unnamed_falls,
             past_a_stop: t.past_a_stop,
             missed: t.missed,
             false_trips: t.false_trips,
@@ -65,6 +67,8 @@ struct BadRunJson {
     fault: String,
     noise_seed: u64,
     fell: Option<String>,
+    /// The case docs/safety.md names the fall with (`None`: the device's).
+    named_case: Option<&'static str>,
     worst_limit_margin_rad: f64,
     missed: bool,
     false_trip: bool,
@@ -198,6 +202,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
                     fault: r.run.fault.to_string(),
                     noise_seed: r.run.noise_seed,
                     fell: r.outcome.fell.clone(),
+                    named_case: r.named_fall().map(NamedCase::name),
                     worst_limit_margin_rad: r.outcome.worst_limit_margin_rad,
                     missed: r.missed(),
                     false_trip: r.false_trip,
@@ -244,13 +249,27 @@ pub fn run(args: &FaultsArgs) -> u8 {
                 all.runs, args.seed
             );
             println!(
-                "{:<24} {:>5} {:>6} {:>11} {:>7} {:>12} {:>7}",
-                "kind", "runs", "falls", "past a stop", "missed", "false trips", "errors"
+                "{:<24} {:>5} {:>6} {:>8} {:>11} {:>7} {:>12} {:>7}",
+                "kind",
+                "runs",
+                "falls",
+                "unnamed",
+                "past a stop",
+                "missed",
+                "false trips",
+                "errors"
             );
             let row = |name: &str, t: &Tally| {
                 println!(
-                    "{:<24} {:>5} {:>6} {:>11} {:>7} {:>12} {:>7}",
-                    name, t.runs, t.falls, t.past_a_stop, t.missed, t.false_trips, t.errors
+                    "{:<24} {:>5} {:>6} {:>8} {:>11} {:>7} {:>12} {:>7}",
+                    name,
+                    t.runs,
+                    t.falls,
+                    t.unnamed_falls,
+                    t.past_a_stop,
+                    t.missed,
+                    t.false_trips,
+                    t.errors
                 );
             };
             for (k, t) in &by_kind {

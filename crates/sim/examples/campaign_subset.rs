@@ -66,6 +66,7 @@ fn main() {
     let mut falls = 0;
     let mut past = 0;
     let mut missed = 0;
+    let mut unnamed = 0;
     for r in &results {
         if r.outcome.worst_limit_margin_rad < 0.0 {
             past += 1;
@@ -75,11 +76,16 @@ fn main() {
         }
         if let Some(f) = &r.outcome.fell {
             falls += 1;
-            println!("{:?} {} {} {f}", r.run.gait, r.run.fault, r.run.noise_seed);
+            unnamed += usize::from(r.unnamed_fall());
+            let named = r.named_fall().map_or("device", |c| c.name());
+            println!(
+                "{:?} {} {} {f} [{named}]",
+                r.run.gait, r.run.fault, r.run.noise_seed
+            );
         }
     }
     println!(
-        "{} runs: {falls} falls, {past} past a stop, {missed} missed",
+        "{} runs: {falls} falls ({unnamed} outside the named cases), {past} past a stop, {missed} missed",
         results.len()
     );
 }

@@ -6,8 +6,13 @@
 //! seed gives the same runs. `exogait faults` and the campaign tests run
 //! them; docs/safety.md has the figures.
 
+mod named;
+
+pub use named::{NamedCase, named_case};
+
 use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
+use gait_control::sequencer::Phase;
 
 use crate::inject::{Injection, Kind, Target};
 use crate::outcome::{Outcome, outcome};
@@ -37,12 +42,27 @@ pub struct RunResult {
     pub detected: bool,
     /// Why the simulation stopped early, if it did (other than a fall).
     pub error: Option<String>,
+    /// Where the gait was when the fault struck.
+    pub struck_in: Option<Phase>,
 }
 
 impl RunResult {
     /// A kind the supervisor must detect was not detected.
     pub fn missed(&self) -> bool {
         must_be_detected(self.run.fault.kind) && !self.detected
+    }
+
+    /// The named case this run's fall belongs to, if it fell in one.
+    pub fn named_fall(&self) -> Option<NamedCase> {
+        self.outcome
+            .fell
+            .as_ref()
+            .and_then(|_| named_case(&self.run, self.struck_in))
+    }
+
+    /// The pilot fell, and not in a named case: the device's to fix.
+    pub fn unnamed_fall(&self) -> bool {
+        self.outcome.fell.is_some() && self.named_fall().is_none()
     }
 }
 
@@ -170,6 +190,14 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
             rig.schedule(fault);
         },
     );
+    let struck_in = played.as_ref().ok().and_then(|r| {
+        let &(_, at) = r.rig.injected().first()?;
+        r.rig
+            .trace
+            .iter()
+            .find(|s| s.state.time_s >= at - 1e-9)
+            .map(|s| s.report.phase)
+    });
     let (outcome, injected, error) = judged(played);
     let before = |t: f64| injected.is_none_or(|i| t < i - 1e-9);
     RunResult {
@@ -178,6 +206,7 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
         detected: outcome.faults.iter().any(|f| !before(f.detected_s)),
         outcome,
         error,
+        struck_in,
     }
 }
 
@@ -363,6 +392,9 @@ pub struct Tally {
     pub runs: usize,
     /// Runs in which the pilot fell.
     pub falls: usize,
+    /// Of them, falls outside the cases named with their physical reason
+    /// ([`NamedCase`]): the device's to fix.
+    pub unnamed_falls: usize,
     /// Runs in which a hip or knee went past its Table I stop.
     pub past_a_stop: usize,
     /// Runs of a must-detect kind that nothing detected.
@@ -378,6 +410,7 @@ impl Tally {
     pub fn add(&mut self, r: &RunResult) {
         self.runs += 1;
         self.falls += usize::from(r.outcome.fell.is_some());
+        self.unnamed_falls += usize::from(r.unnamed_fall());
         self.past_a_stop += usize::from(r.outcome.worst_limit_margin_rad < 0.0);
         self.missed += usize::from(r.missed());
         self.false_trips += usize::from(r.false_trip);
