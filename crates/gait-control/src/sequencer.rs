@@ -195,6 +195,21 @@ struct SetDown {
     done: bool,
 }
 
+impl SetDown {
+    /// The set-down of the swing leg from the posture `held` (joint
+    /// angles), its stance shank at `phi1`.
+    fn from_hold(held: &[f32; JOINTS], phi1: f32, stance: Side) -> Option<Self> {
+        let w = stance.other().hip();
+        Some(Self {
+            stance,
+            from: crate::posture::phi_from_joints(held, phi1, stance),
+            hip_and_ankle_m: None,
+            swing_rad: [held.get(w).copied()?, held.get(w + 1).copied()?],
+            done: false,
+        })
+    }
+}
+
 impl<'t> Sequencer<'t> {
     /// Starts standing, holding `posture` (normally the measured joints at
     /// power-up), with the left leg as stance.
@@ -415,16 +430,7 @@ impl<'t> Sequencer<'t> {
         self.phase = Phase::SafeHold { t_s: 0.0 };
         self.set_down = swinging
             .filter(|_| self.model.is_some() && in_swing == InSwing::HoldNow)
-            .and_then(|stance| {
-                let w = stance.other().hip();
-                Some(SetDown {
-                    stance,
-                    from: crate::posture::phi_from_joints(&target, self.swing_phi1, stance),
-                    hip_and_ankle_m: None,
-                    swing_rad: [target.get(w).copied()?, target.get(w + 1).copied()?],
-                    done: false,
-                })
-            });
+            .and_then(|stance| SetDown::from_hold(&target, self.swing_phi1, stance));
     }
 
     /// The hold after a restart (0x0603): the step the board was playing is
@@ -457,19 +463,10 @@ impl<'t> Sequencer<'t> {
         if self.model.is_none() || !phi1.is_finite() {
             return;
         }
-        let target = self.blend_to;
-        let w = stance.other().hip();
-        let (Some(&hip), Some(&knee)) = (target.get(w), target.get(w + 1)) else {
-            return;
-        };
-        self.stance = stance;
-        self.set_down = Some(SetDown {
-            stance,
-            from: crate::posture::phi_from_joints(&target, phi1, stance),
-            hip_and_ankle_m: None,
-            swing_rad: [hip, knee],
-            done: false,
-        });
+        if let Some(sd) = SetDown::from_hold(&self.blend_to, phi1, stance) {
+            self.stance = stance;
+            self.set_down = Some(sd);
+        }
     }
 
     /// The set-down `t_s` into the hold: `held` (the hold's ramp) with the
