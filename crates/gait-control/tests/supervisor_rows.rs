@@ -389,6 +389,43 @@ fn motor_response_follows_the_model_and_only_full_authority_drives() {
     assert_eq!(detected_at(&v, FaultCode::MotorResponse), None);
 }
 
+/// A swing knee that answers a push as its swing inertia says, then
+/// lands and goes on at the speed it had, pushed no more: read against the
+/// stance leg's inertia, 23 times the swing knee's, the swing's filtered
+/// acceleration would be some 200 N·m the drive did not give. At the
+/// landing the observer's acceleration starts again from 0, its rate kept.
+#[test]
+fn a_landing_leg_s_motion_is_not_read_against_the_stance_inertia() {
+    let swing = SupervisorConfig::paper().response.swing_inertia_kgm2[1];
+    let push = 20.0;
+    let land_at = 60;
+    let at = |k: u32| {
+        let a = push / swing;
+        let t = (k - 1) as f32 * 0.001;
+        let t0 = (land_at - 1) as f32 * 0.001;
+        if k < land_at {
+            STAND_JOINTS[3] + 0.5 * a * t * t
+        } else {
+            STAND_JOINTS[3] + 0.5 * a * t0 * t0 + a * t0 * (t - t0)
+        }
+    };
+    let (_, v) = inject(120, |k, input| {
+        let swinging = k < land_at;
+        input.swing_leg = swinging.then_some(gait_control::layout::Side::Right);
+        input.joints[3] = encoder(at(k));
+        let u = if swinging { push } else { 0.0 };
+        input.motors[3].commanded_nm = 5.0 + u;
+        input.motors[3].applied_nm = 5.0 + u;
+        input.motors[3].limit_nm = 150.0;
+    });
+    assert_eq!(
+        detected_at(&v, FaultCode::MotorResponse),
+        None,
+        "{:?}",
+        v.last()
+    );
+}
+
 /// The brake stays until a clinician's reset clears the fault, once the
 /// residual is back under the limit.
 #[test]

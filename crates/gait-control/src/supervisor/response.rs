@@ -123,6 +123,8 @@ pub(super) struct Residual {
     last_feedforward_nm: f32,
     /// The states are seeded.
     running: bool,
+    /// The inertia the states were run with, kg·m².
+    inertia_kgm2: f32,
     /// Consecutive ticks over the limit.
     pub(super) over_ticks: u32,
 }
@@ -148,6 +150,22 @@ impl Residual {
     ) -> f32 {
         let correction = applied_nm - self.last_feedforward_nm;
         self.last_feedforward_nm = feedforward_nm;
+        // A leg that lands or lifts changes the joint's inertia several
+        // times over: the acceleration filtered so far belongs to the
+        // other inertia's motion, and read against this one it is a torque
+        // nobody gave. The error's filter starts again as if the joint had
+        // always moved at its present rate: filtered acceleration 0, rate
+        // the filter's estimate of it (its rate state lags a steady
+        // acceleration by 2/ω of it; a moving joint must not read as a
+        // jolt), the value lagging that rate as a steady filter's does.
+        if self.running && inertia_kgm2 != self.inertia_kgm2 {
+            let w = 0.5 * o.two_w;
+            let acc = o.w2 * (error_rad - self.e[0]) - o.two_w * self.e[1];
+            let rate = self.e[1] + 2.0 * acc / w;
+            self.e = [error_rad - 2.0 * rate / w, rate];
+            self.over_ticks = 0;
+        }
+        self.inertia_kgm2 = inertia_kgm2;
         if !self.running {
             self.e = [error_rad, 0.0];
             self.u = [correction, 0.0];
