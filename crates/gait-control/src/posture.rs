@@ -69,11 +69,16 @@ pub fn phi_from_joints(joints: &[f32; JOINTS], stance_ankle_rad: f32, stance: Si
     [phi1, phi2, phi3, phi4, phi5]
 }
 
+/// An ankle reading within this of the dorsiflexion stop may be a heel
+/// lifted off the ground (toe rocker): the foot is then not flat, and the
+/// reading only a bound on the shank's lean, rad (0.5°).
+pub const ON_STOP_TOLERANCE_RAD: f32 = 0.5 * core::f32::consts::PI / 180.0;
+
 /// The stance shank's angle φ1 through the closed chain of double
 /// support, from the other ankle's reading (its foot flat on the ground)
 /// and the four joint angles: the other shank's φ5 = π + `other_ankle_rad`
-/// (legs parallel, both ankles read the same lean), and [`phi_from_joints`]
-/// carried back from it. Why: a stance ankle whose encoder is lost leaves
+/// (with every joint at 0 the shanks are parallel and both ankles read
+/// the same lean), and [`phi_from_joints`] carried back from it. Why: a stance ankle whose encoder is lost leaves
 /// the posture's lean unknown, and a stale reading sets the feed-forward
 /// for a posture the body has left.
 pub fn stance_phi1_through_other_leg(
@@ -92,7 +97,7 @@ pub fn stance_phi1_through_other_leg(
 /// `gait_core::foot`) and φ1 beyond what the encoder can see, so the larger
 /// of the reading and the `planned` φ1. NaN readings stay NaN.
 pub fn stance_phi1_estimate(reading: f32, stop: f32, planned: f32) -> f32 {
-    if reading >= stop - 0.5 * core::f32::consts::PI / 180.0 && planned.is_finite() {
+    if reading >= stop - ON_STOP_TOLERANCE_RAD && planned.is_finite() {
         reading.max(planned)
     } else {
         reading

@@ -8,26 +8,37 @@
 
 use std::str::FromStr;
 
-/// The runs listed in `path`, one `GAIT FAULT NOISE_SEED` a line.
-fn listed(path: &str) -> Vec<sim::campaign::CampaignRun> {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    text.lines()
-        .filter_map(|line| {
-            let mut w = line.split_whitespace();
-            let gait = match w.next()? {
-                "stair-up" => gait_control::operator::Gait::StairUp,
-                "stair-down" => gait_control::operator::Gait::StairDown,
-                _ => gait_control::operator::Gait::Walk,
-            };
-            let fault = sim::inject::Injection::from_str(w.next()?).ok()?;
-            let noise_seed = w.next()?.parse().ok()?;
-            Some(sim::campaign::CampaignRun {
-                gait,
-                fault,
-                noise_seed,
-            })
-        })
-        .collect()
+/// The runs listed in `path`, one `GAIT FAULT NOISE_SEED` a line (blank
+/// lines skipped); a line that does not read is an error naming it.
+fn listed(path: &str) -> Result<Vec<sim::campaign::CampaignRun>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
+    let mut runs = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let bad = |why: &str| format!("{path}:{}: {why}: {line:?}", n + 1);
+        let [gait, fault, seed] = words.as_slice() else {
+            if words.is_empty() {
+                continue;
+            }
+            return Err(bad("want GAIT FAULT NOISE_SEED"));
+        };
+        let gait = match *gait {
+            "walk" => gait_control::operator::Gait::Walk,
+            "stair-up" => gait_control::operator::Gait::StairUp,
+            "stair-down" => gait_control::operator::Gait::StairDown,
+            _ => return Err(bad("gait is walk, stair-up or stair-down")),
+        };
+        let fault = sim::inject::Injection::from_str(fault).map_err(|e| bad(&e.to_string()))?;
+        let noise_seed = seed
+            .parse()
+            .map_err(|_| bad("noise seed is a whole number"))?;
+        runs.push(sim::campaign::CampaignRun {
+            gait,
+            fault,
+            noise_seed,
+        });
+    }
+    Ok(runs)
 }
 
 fn main() {
@@ -53,7 +64,13 @@ fn main() {
         device.controller.sequencer.set_down_depth_m = m;
     }
     let plan: Vec<_> = match &file {
-        Some(path) => listed(path),
+        Some(path) => match listed(path) {
+            Ok(runs) => runs,
+            Err(e) => {
+                eprintln!("campaign_subset: {e}");
+                std::process::exit(2);
+            }
+        },
         None => sim::campaign::plan(seed, runs)
             .into_iter()
             .filter(|r| {

@@ -248,7 +248,7 @@ impl Controller<'_> {
     /// plan.
     fn static_stance_phi1(&self, s: &Senses, r: &Reference) -> f32 {
         let stop = StanceFoot::for_model(&self.cfg.model).heel_off_rad;
-        let on_stop = stop - 0.5f32.to_radians();
+        let on_stop = stop - crate::posture::ON_STOP_TOLERANCE_RAD;
         let stance = JOINTS + r.stance.ankle();
         let other = JOINTS + r.stance.other().ankle();
         let blind = |i: usize| {
