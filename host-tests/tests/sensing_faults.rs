@@ -1,5 +1,5 @@
 //! Runs of the 10,000-run campaign (`cargo xtask faults --runs 10000
-//! --seed 1`, session 9) in which a sensing fault's reaction dropped the
+//! --seed 1`, sessions 9 and 10) in which a sensing fault's reaction dropped the
 //! pilot, replayed as the campaign played them (the same gait, fault, time
 //! and sensor noise). Each now stands (docs/safety.md, "Sensing faults
 //! after session 9").
@@ -69,5 +69,37 @@ fn a_force_spike_late_in_a_swing_is_not_taken_for_the_landing() {
         assert_eq!(o.fell, None, "{fault}");
         assert!(o.faults.is_empty(), "{fault}: {:?}", o.faults);
         assert!(o.landings >= 2, "{fault}: {} landings", o.landings);
+    }
+}
+
+/// An ankle encoder stuck at toe-off in a stair descent (session 10's
+/// campaign): it read the dorsiflexion stop through the whole swing, and
+/// when its foot landed the stuck reading was taken for the landing's
+/// lean, a heel up on the stop; the feed-forward held a posture 0.3 rad
+/// off and the body sank. Only the ground holds an ankle on its stop:
+/// read there, unchanged, with the foot surely in the air, the encoder is
+/// stuck (0x0207, the step finishes), control stops taking it, and the
+/// landing's lean comes through the closed chain or from the plan.
+#[test]
+fn an_ankle_encoder_stuck_at_toe_off_is_found_in_the_air() {
+    for (fault, seed) in [
+        ("encoder-stuck:left-ankle@3.841", 954_929),
+        ("encoder-stuck:left-ankle@3.59", 64_989),
+    ] {
+        let r = replay(Gait::StairDown, fault, seed);
+        let o = &r.outcome;
+        assert_eq!(o.fell, None, "{fault}");
+        assert!(!r.false_trip && r.error.is_none(), "{fault}");
+        let first = o.faults.first().expect("detected");
+        assert_eq!(first.code, FaultCode::AnkleEncoder, "{fault}");
+        // Found in the swing after the stuck one (the foot lifts late in
+        // a descent), before the landing it would have spoilt.
+        assert!(first.detected_s < 6.0, "{fault}: {first:?}");
+        assert!(
+            o.faults.iter().all(|f| f.code != FaultCode::MotorResponse),
+            "{fault}: {:?}",
+            o.faults
+        );
+        assert!(o.worst_limit_margin_rad > 0.0, "{fault}");
     }
 }

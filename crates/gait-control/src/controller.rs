@@ -31,6 +31,7 @@ use crate::drivers::mcp3208::{ForceCalibration, ForceChannels, Mcp3208};
 use crate::drivers::motor::{self, Motor};
 use crate::drivers::status::Indicator;
 use crate::faults::{FaultCode, FaultSet, Reaction};
+use crate::layout::Side;
 use crate::operator::{self, ControllerStatus, Input, Operator, OperatorConfig, Request};
 use crate::position_loop::{JointGains, JointLoop};
 use crate::posture::JOINTS;
@@ -351,6 +352,19 @@ impl<'t> Controller<'t> {
         }
     }
 
+    /// The swing leg while its foot is surely in the air: the sequencer's
+    /// landing window ([`Sequencer::airborne_leg`]) and its sensor feeling
+    /// no contact (a failed sensor cannot tell: not airborne). For the
+    /// supervisor's stuck-ankle check.
+    fn airborne_leg(&self, s: &Senses) -> Option<Side> {
+        let contact = self.cfg.sequencer.landing_contact_n;
+        self.seq.airborne_leg().filter(|leg| {
+            s.forces_n
+                .get(leg.foot())
+                .is_some_and(|&load| load < contact)
+        })
+    }
+
     /// Stage 4: the supervisor's verdict on everything sensed and
     /// commanded, and the sequencer's reaction to it.
     #[inline(always)]
@@ -387,6 +401,7 @@ impl<'t> Controller<'t> {
             button_input_fault: s.mode.input_fault || s.go.input_fault,
             ankle_plan_rad: r.ankle_plan_rad,
             swing_leg,
+            airborne_leg: self.airborne_leg(s),
         };
         let verdict = self.supervisor.check(&input);
         match verdict.reaction {

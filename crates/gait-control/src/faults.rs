@@ -259,11 +259,15 @@ fault_table! {
         detection_bound: "same tick (1)",
         reset_allowed_when: "the frame is valid and < 3 bad frames in 100 ticks",
     },
-    /// Ankle encoder: any of the encoder faults above on a passive ankle.
+    /// Ankle encoder: any of the encoder faults above on a passive ankle,
+    /// or one stuck on its dorsiflexion stop with its foot in the air
+    /// (only the ground holds an ankle there; control then stops taking
+    /// its frames until they move).
     AnkleEncoder = 0x0207 {
         name: "ankle encoder fault",
         reaction: Reaction::FinishStepThenHold,
-        detection_bound: "3 ticks (window rule); 1 tick (invalid value)",
+        detection_bound: "3 ticks (window rule); 1 tick (invalid value); \
+            100 ticks (stuck on the stop in the air)",
         reset_allowed_when: "as for the joint encoders",
     },
     /// Force sensor: too many bad samples, the last a bus error.

@@ -166,6 +166,9 @@ pub struct Sequencer<'t> {
     /// How long the swing foot has felt the ground in the landing window
     /// without a break, s (`SequencerConfig::landing_confirm_s`).
     contact_s: f32,
+    /// The present swing has reached its landing window (set each swing
+    /// tick; a swing starts without it).
+    in_landing_window: bool,
     /// The ankle plan of the last reference (kept through a safe hold).
     ankle_plan: [f32; 2],
     /// The table's stance-shank angle φ1 at the last tick of a swing, rad.
@@ -231,6 +234,7 @@ impl<'t> Sequencer<'t> {
             transfer_targets: [None; 3],
             swing_start_m: [0.0; 2],
             lifted_at_s: None,
+            in_landing_window: false,
             contact_s: 0.0,
             ankle_plan: [f32::NAN; 2],
             swing_phi1: f32::NAN,
@@ -344,6 +348,18 @@ impl<'t> Sequencer<'t> {
         match (self.phase, self.set_down) {
             (Phase::Swing { stance, .. }, _) => Some(stance.other()),
             (Phase::SafeHold { .. }, Some(sd)) if !sd.done => Some(sd.stance.other()),
+            _ => None,
+        }
+    }
+
+    /// The swing leg once the table has it well in the air: lifted, and
+    /// into the part of its time in the air where a contact would be the
+    /// landing. Its foot has left the ground for certain (the trailing toe
+    /// may still brush it earlier): the supervisor's stuck-ankle check.
+    #[must_use]
+    pub fn airborne_leg(&self) -> Option<Side> {
+        match self.phase {
+            Phase::Swing { stance, .. } if self.in_landing_window => Some(stance.other()),
             _ => None,
         }
     }
@@ -593,6 +609,7 @@ impl<'t> Sequencer<'t> {
                         .planned_swing_toe(start.map(|p| Posture::new(&p)).as_ref())
                         .unwrap_or([0.0; 2]);
                     self.lifted_at_s = None;
+                    self.in_landing_window = false;
                     self.contact_s = 0.0;
                     events(SeqEvent::SwingStarted(self.gait, stance));
                     start.map_or(self.reference, |p| joints_from_phi(&p, stance))
@@ -626,6 +643,7 @@ impl<'t> Sequencer<'t> {
                 let in_window = self.lifted_at_s.is_some_and(|lift| {
                     t >= lift + cfg.landing_window_fraction * (duration - lift)
                 });
+                self.in_landing_window = in_window;
                 // A foot whose sensor has failed (NaN) cannot report the
                 // contact: the step ends on the table's own timing, where
                 // the table has put the foot down.

@@ -137,6 +137,10 @@ pub struct SupervisorInput {
     /// The leg in the air (`None` while both feet are down): its joints
     /// move only their own links (0x0404's swing inertias).
     pub swing_leg: Option<Side>,
+    /// The swing leg once its foot is surely in the air (the table's
+    /// landing window, no contact yet; `Sequencer::airborne_leg`): an
+    /// ankle its spring must have taken off the dorsiflexion stop.
+    pub airborne_leg: Option<Side>,
 }
 
 /// The supervisor's decision for one tick.
@@ -188,6 +192,12 @@ pub struct Supervisor {
     ankles: [EncoderTrack; ANKLES],
     /// Consecutive ticks each ankle has rested on its stop unplanned.
     heel_off_ticks: [u32; ANKLES],
+    /// Consecutive frames each ankle has read its dorsiflexion stop,
+    /// unchanged, with its foot in the air (0x0207's stuck ankle).
+    stuck_in_air_ticks: [u32; ANKLES],
+    /// An ankle found stuck: control takes none of its frames until its
+    /// counts move again.
+    ankle_stuck: [bool; ANKLES],
     forces: [ForceTrack; FORCES],
     previous_reference_rad: Option<[f32; JOINTS]>,
     /// `calls` at the latest deadline misses (ring).
@@ -215,6 +225,7 @@ impl Supervisor {
                 self.joints.get(channel).map(|j| &j.encoder),
                 cfg.max_jump_counts_per_tick,
             ),
+            Some(_) if self.ankle_is_stuck(channel) => return false,
             Some(a) => (self.ankles.get(a), cfg.max_ankle_jump_counts_per_tick),
         };
         track.is_some_and(|t| {
@@ -223,6 +234,14 @@ impl Supervisor {
                 Class::Seed | Class::Good { .. }
             )
         })
+    }
+
+    /// Whether `channel` is an ankle found stuck (control takes none of its
+    /// frames).
+    fn ankle_is_stuck(&self, channel: usize) -> bool {
+        channel
+            .checked_sub(JOINTS)
+            .is_some_and(|a| self.ankle_stuck.get(a).copied().unwrap_or(true))
     }
 
     /// Checks `cfg` and starts with nothing latched.
@@ -243,6 +262,8 @@ impl Supervisor {
             joints: [JointTrack::default(); JOINTS],
             ankles: [EncoderTrack::default(); ANKLES],
             heel_off_ticks: [0; ANKLES],
+            stuck_in_air_ticks: [0; ANKLES],
+            ankle_stuck: [false; ANKLES],
             forces: [ForceTrack::default(); FORCES],
             previous_reference_rad: None,
             misses: [None; MAX_DEADLINE_MISSES as usize],

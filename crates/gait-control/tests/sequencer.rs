@@ -823,3 +823,39 @@ fn a_hold_for_a_saturated_drive_leaves_the_foot_in_the_air() {
         assert_eq!(rig.step(&s), held);
     }
 }
+
+#[test]
+fn the_swing_foot_is_surely_in_the_air_only_in_its_landing_window() {
+    // Early in a swing the trailing toe may still hold the ground (and its
+    // ankle on the stop); from the landing window on the table has the
+    // foot well up: only then the supervisor's stuck-ankle check runs.
+    let img = walk_image();
+    let (mut rig, _model, s, _pose) = started_with_a_model(&img);
+    let window = SequencerConfig::DEFAULT.landing_window_fraction * rig.table.duration_s();
+    let (mut early, mut late) = (0, 0);
+    for _ in 0..20_000 {
+        rig.step(&s);
+        match rig.seq.phase() {
+            Phase::Swing { t_s, .. } if t_s < window => {
+                assert_eq!(rig.seq.swing_leg(), Some(Side::Right));
+                assert_eq!(rig.seq.airborne_leg(), None, "{t_s} s");
+                early += 1;
+            }
+            Phase::Swing { t_s, .. } => {
+                if rig.seq.airborne_leg().is_some() {
+                    assert_eq!(rig.seq.airborne_leg(), Some(Side::Right), "{t_s} s");
+                    late += 1;
+                }
+            }
+            _ if early > 0 => break,
+            _ => assert_eq!(rig.seq.airborne_leg(), None),
+        }
+    }
+    assert!(
+        early > 100 && late > 100,
+        "{early} early, {late} late ticks"
+    );
+    rig.seq
+        .enter_safe_hold(&rig.seq.reference(), InSwing::HoldNow);
+    assert_eq!(rig.seq.airborne_leg(), None, "a hold plays no table");
+}

@@ -135,6 +135,7 @@ fn random_input() -> impl Strategy<Value = SupervisorInput> {
                 button_input_fault: flags[4],
                 ankle_plan_rad: [f32::NAN; ANKLES],
                 swing_leg: None,
+                airborne_leg: None,
             },
         )
 }

@@ -293,6 +293,74 @@ fn row_ankle_encoder() {
     assert_row(&v, FaultCode::AnkleEncoder, Reaction::FinishStepThenHold, 1);
 }
 
+/// The right foot in the air, its ankle frozen at `reading` (the warm-up's
+/// dither stops: the counts no longer change).
+/// It rolls there at 0.02 rad a tick (no jump), then stays.
+fn right_ankle_frozen_in_the_air(reading: f32, airborne: bool) -> (Supervisor, Vec<Verdict>) {
+    inject(150, |k, input| {
+        let step = 0.02 * k as f32;
+        let start = STAND_ANKLES[1];
+        input.ankles[1] = encoder(if reading > start {
+            (start + step).min(reading)
+        } else {
+            (start - step).max(reading)
+        });
+        input.swing_leg = Some(gait_control::layout::Side::Right);
+        input.airborne_leg = airborne.then_some(gait_control::layout::Side::Right);
+        input.forces[1].newtons = 0.0;
+    })
+}
+
+#[test]
+fn an_ankle_stuck_on_its_stop_in_the_air_is_a_lost_ankle_encoder() {
+    // Only the ground holds an ankle on its dorsiflexion stop; in the air
+    // its spring takes it off. Counts that stay there, unchanged, for 100
+    // ticks of a foot surely in the air: 0x0207, and control stops taking
+    // them (a stuck reading taken for the landing's lean dropped the
+    // pilot in a stair descent).
+    let cfg = SupervisorConfig::paper();
+    let stop = cfg.heel_off_rad;
+    let (sup, v) = right_ankle_frozen_in_the_air(stop, true);
+    // 15 ticks to roll onto the stop (0.35 rad); the 100th frame read
+    // unchanged there trips.
+    let on_stop = (1..)
+        .find(|&k| STAND_ANKLES[1] + 0.02 * k as f32 >= stop)
+        .unwrap();
+    assert_row(
+        &v,
+        FaultCode::AnkleEncoder,
+        Reaction::FinishStepThenHold,
+        on_stop + cfg.frozen_ticks,
+    );
+    assert!(!sup.accepts_encoder(JOINTS + 1, &encoder(stop)));
+    // The other ankle's frames are still taken.
+    assert!(sup.accepts_encoder(JOINTS, &encoder(STAND_ANKLES[0])));
+    // Counts that move again are taken again.
+    let mut sup = sup;
+    let mut input = healthy_input(WARMUP + 200);
+    input.ankles[1] = encoder(stop - 2.0 * RAD_PER_COUNT);
+    assert!(!sup.accepts_encoder(JOINTS + 1, &input.ankles[1]));
+    sup.check(&input);
+    assert!(sup.accepts_encoder(JOINTS + 1, &encoder(stop - 3.0 * RAD_PER_COUNT)));
+
+    // Not yet surely in the air (a trailing toe may still hold the stop),
+    // off the stop (at the spring's rest), or moving: nothing.
+    for (reading, airborne) in [(stop, false), (0.0, true), (stop - 1.0 * DEG, true)] {
+        let (sup, v) = right_ankle_frozen_in_the_air(reading, airborne);
+        assert!(
+            v.iter().all(|x| x.reaction == Reaction::None),
+            "reading {reading}, airborne {airborne}"
+        );
+        assert!(sup.accepts_encoder(JOINTS + 1, &encoder(reading)));
+    }
+    let (_, v) = inject(300, |k, input| {
+        let ramp = (STAND_ANKLES[1] + 0.02 * k as f32).min(stop);
+        input.ankles[1] = encoder(ramp - 2.0 * RAD_PER_COUNT * (k % 2) as f32);
+        input.airborne_leg = Some(gait_control::layout::Side::Right);
+    });
+    assert!(v.iter().all(|x| x.reaction == Reaction::None));
+}
+
 fn bad_force(status: ForceStatus, code: FaultCode) {
     let (_, v) = inject(10, |_, input| input.forces[2].status = status);
     assert_row(&v, code, Reaction::FinishStepThenHold, 3);

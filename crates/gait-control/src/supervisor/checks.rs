@@ -232,7 +232,10 @@ impl Supervisor {
             if let Some((_, n)) = tripped {
                 self.latch.raise(t, FaultCode::AnkleEncoder, ch, n as f32);
             }
-            if let Frame::Accepted { angle_rad, .. } = frame {
+            if let Frame::Accepted {
+                angle_rad, delta, ..
+            } = frame
+            {
                 if !range.contains(angle_rad) {
                     self.latch
                         .raise(t, FaultCode::AnklePositionLimit, ch, angle_rad);
@@ -242,6 +245,32 @@ impl Supervisor {
                 // nor resets).
                 let plan = input.ankle_plan_rad.get(i).copied().unwrap_or(f32::NAN);
                 let on_stop = angle_rad >= cfg.heel_off_rad - cfg.heel_off_reading_tolerance_rad;
+                // Only a toe pushed up by the ground holds an ankle on its
+                // dorsiflexion stop: in the air its spring takes it off
+                // within tens of milliseconds. Counts that stay on the stop,
+                // unchanged, with the foot in the air are an encoder stuck
+                // where the foot left the ground (read as a lean, it set
+                // a stair descent's landing on the stop and dropped the
+                // pilot); control stops taking them until they move.
+                let in_air = input.airborne_leg.is_some_and(|leg| leg.ankle() == i);
+                let moved = delta.is_some_and(|(counts, _)| counts != 0);
+                if let (Some(n), Some(stuck)) = (
+                    self.stuck_in_air_ticks.get_mut(i),
+                    self.ankle_stuck.get_mut(i),
+                ) {
+                    *n = if in_air && on_stop && delta.is_some() && !moved {
+                        n.saturating_add(1)
+                    } else {
+                        0
+                    };
+                    if moved {
+                        *stuck = false;
+                    }
+                    if *n >= cfg.frozen_ticks {
+                        *stuck = true;
+                        self.latch.raise(t, FaultCode::AnkleEncoder, ch, *n as f32);
+                    }
+                }
                 let unplanned = plan < cfg.heel_off_rad - cfg.heel_off_plan_margin_rad;
                 if let Some(n) = self.heel_off_ticks.get_mut(i) {
                     *n = if on_stop && unplanned {

@@ -88,6 +88,7 @@ pub fn healthy_input(tick: u32) -> SupervisorInput {
         button_input_fault: false,
         ankle_plan_rad: [f32::NAN; ANKLES],
         swing_leg: None,
+        airborne_leg: None,
     }
 }
 
