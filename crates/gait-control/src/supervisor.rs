@@ -217,7 +217,8 @@ impl Supervisor {
     /// Whether the next check will take `sense` as encoder `channel`'s
     /// reading (joints in joint order, then the ankles): the same rules,
     /// nothing changed. The controller uses only the frames this takes, so
-    /// a frame the supervisor drops (a jump) never reaches control.
+    /// a frame the supervisor drops (a jump) never reaches control, nor do
+    /// an ankle's found stuck (0x0207) until its counts move.
     pub fn accepts_encoder(&self, channel: usize, sense: &EncoderSense) -> bool {
         let cfg = &self.cfg;
         let (track, max_jump) = match channel.checked_sub(JOINTS) {
