@@ -226,7 +226,7 @@ impl Supervisor {
                 self.joints.get(channel).map(|j| &j.encoder),
                 cfg.max_jump_counts_per_tick,
             ),
-            Some(_) if self.ankle_is_stuck(channel) => return false,
+            Some(a) if self.ankle_stuck.get(a).copied().unwrap_or(true) => return false,
             Some(a) => (self.ankles.get(a), cfg.max_ankle_jump_counts_per_tick),
         };
         track.is_some_and(|t| {
@@ -235,14 +235,6 @@ impl Supervisor {
                 Class::Seed | Class::Good { .. }
             )
         })
-    }
-
-    /// Whether `channel` is an ankle found stuck (control takes none of its
-    /// frames).
-    fn ankle_is_stuck(&self, channel: usize) -> bool {
-        channel
-            .checked_sub(JOINTS)
-            .is_some_and(|a| self.ankle_stuck.get(a).copied().unwrap_or(true))
     }
 
     /// Checks `cfg` and starts with nothing latched.

@@ -245,6 +245,18 @@ impl Supervisor {
                 // nor resets).
                 let plan = input.ankle_plan_rad.get(i).copied().unwrap_or(f32::NAN);
                 let on_stop = angle_rad >= cfg.heel_off_rad - cfg.heel_off_reading_tolerance_rad;
+                let unplanned = plan < cfg.heel_off_rad - cfg.heel_off_plan_margin_rad;
+                if let Some(n) = self.heel_off_ticks.get_mut(i) {
+                    *n = if on_stop && unplanned {
+                        n.saturating_add(1)
+                    } else {
+                        0
+                    };
+                    if *n >= cfg.heel_off_ticks {
+                        self.latch
+                            .raise(t, FaultCode::UnplannedHeelOff, ch, angle_rad);
+                    }
+                }
                 // Only a toe pushed up by the ground holds an ankle on its
                 // dorsiflexion stop: in the air its spring takes it off
                 // within tens of milliseconds. Counts that stay on the stop,
@@ -269,18 +281,6 @@ impl Supervisor {
                     if *n >= cfg.frozen_ticks {
                         *stuck = true;
                         self.latch.raise(t, FaultCode::AnkleEncoder, ch, *n as f32);
-                    }
-                }
-                let unplanned = plan < cfg.heel_off_rad - cfg.heel_off_plan_margin_rad;
-                if let Some(n) = self.heel_off_ticks.get_mut(i) {
-                    *n = if on_stop && unplanned {
-                        n.saturating_add(1)
-                    } else {
-                        0
-                    };
-                    if *n >= cfg.heel_off_ticks {
-                        self.latch
-                            .raise(t, FaultCode::UnplannedHeelOff, ch, angle_rad);
                     }
                 }
             }
