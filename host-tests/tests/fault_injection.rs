@@ -390,3 +390,50 @@ fn a_joint_whose_encoder_is_lost_is_braked_while_the_others_hold() {
     assert!(falls.len() <= 2, "falls: {falls:?}");
     assert_eq!(braked_right, 36);
 }
+
+/// One run of the campaign, as `exogait faults --json` lists it.
+fn campaign_run(gait: Gait, fault: &str, noise_seed: u64) -> sim::campaign::RunResult {
+    let run = sim::campaign::CampaignRun {
+        gait,
+        fault: fault.parse().unwrap(),
+        noise_seed,
+    };
+    sim::campaign::play(&run, &DeviceConfig::exogait().unwrap())
+}
+
+#[test]
+fn a_stop_crossed_is_the_device_s_unless_a_named_case_s_reason_took_the_joint_there() {
+    // Seed 1's campaign. A hip drive at 43 % from standing: unseen until
+    // the first swing stands on it (its deficit under the residual's
+    // noise while standing), which saturates it; the torso turns the hip
+    // onto its flexion stop: the stance hip in a swing.
+    let weak = campaign_run(
+        Gait::Walk,
+        "motor-weak=0.4326618927696655:left-hip@0.838",
+        173997,
+    );
+    assert_eq!(
+        weak.struck_in,
+        Some(gait_control::sequencer::Phase::Standing)
+    );
+    // The hold after the first swing ends the walk: only the left leg
+    // stood in a swing.
+    assert_eq!(weak.stance_after_strike, [true, false]);
+    assert!(weak.past_a_stop(), "{:?}", weak.outcome);
+    assert_eq!(weak.outcome.worst_limit_joint, 0);
+    assert_eq!(
+        weak.named_stop(),
+        Some(sim::campaign::NamedCase::StanceHipInASwing)
+    );
+    assert!(!weak.unnamed_stop());
+    // A stair descent's stuck stance knee: 0x0401 finds it, then the
+    // residual brakes the swing knee it drags, which folds onto its stop:
+    // that is the device's (a knee braked by a fault, not one whose drive
+    // gave all it has).
+    let dragged = campaign_run(Gait::StairDown, "motor-stuck:left-knee@1.156", 515747);
+    assert!(dragged.past_a_stop(), "{:?}", dragged.outcome);
+    assert_eq!(dragged.outcome.worst_limit_joint, 3);
+    assert!(dragged.outcome.limit_margins[3].1, "the flexion stop");
+    assert!(dragged.outcome.braked_joints[3]);
+    assert!(dragged.unnamed_stop());
+}

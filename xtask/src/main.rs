@@ -154,7 +154,7 @@ fn fault_campaign(args: &[String]) -> Result {
         Some(0) => Ok(()),
         Some(1) => {
             eprintln!(
-                "xtask faults: the campaign's goal (no fall, no stop crossed, no missed detection, no false trip; every healthy run clean) is not met"
+                "xtask faults: the campaign's goal (no fall and no stop crossed but the named cases, no missed detection, no false trip; every healthy run clean) is not met"
             );
             Ok(())
         }

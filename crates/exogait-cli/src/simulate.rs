@@ -116,10 +116,14 @@ struct FaultJson {
     detected_s: f64,
     latency_ticks: Option<u64>,
     reaction: &'static str,
+    /// The channel the supervisor's log first names it on (joint, ankle,
+    /// force sensor or motor index), if any.
+    channel: Option<u8>,
     safe_state_s: Option<f64>,
 }
 
-const JOINT_NAMES: [&str; 4] = ["left-hip", "left-knee", "right-hip", "right-knee"];
+/// The hips' and knees' names, in joint order.
+pub(crate) const JOINT_NAMES: [&str; 4] = ["left-hip", "left-knee", "right-hip", "right-knee"];
 
 fn reaction_name(r: gait_control::faults::Reaction) -> &'static str {
     use gait_control::faults::Reaction;
@@ -251,6 +255,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
                     detected_s: f.detected_s,
                     latency_ticks: f.latency_ticks,
                     reaction: reaction_name(f.reaction),
+                    channel: f.channel,
                     safe_state_s: f.safe_state_s,
                 })
                 .collect(),

@@ -84,9 +84,37 @@ fn main() {
     let mut past = 0;
     let mut missed = 0;
     let mut unnamed = 0;
+    let mut unnamed_past = 0;
     for r in &results {
+        unnamed_past += usize::from(r.unnamed_stop());
         if r.outcome.worst_limit_margin_rad < 0.0 {
             past += 1;
+            println!(
+                "past {:?} {} {} joint {} {} {:.2} deg{} [{}]",
+                r.run.gait,
+                r.run.fault,
+                r.run.noise_seed,
+                r.outcome.worst_limit_joint,
+                if r.outcome.limit_margins[r.outcome.worst_limit_joint].1 {
+                    "flexion"
+                } else {
+                    "extension"
+                },
+                r.outcome.worst_limit_margin_rad.to_degrees(),
+                if r.outcome.fell.is_some() {
+                    " fell"
+                } else {
+                    ""
+                },
+                r.named_stop().map_or("device", |c| c.name())
+            );
+            let codes: Vec<String> = r
+                .outcome
+                .faults
+                .iter()
+                .map(|f| format!("{:04x}@{:?}/{:.3}", f.code.code(), f.channel, f.detected_s))
+                .collect();
+            println!("  faults {}", codes.join(" "));
         }
         if r.missed() {
             missed += 1;
@@ -102,7 +130,7 @@ fn main() {
         }
     }
     println!(
-        "{} runs: {falls} falls ({unnamed} outside the named cases), {past} past a stop, {missed} missed",
+        "{} runs: {falls} falls ({unnamed} outside the named cases), {past} past a stop ({unnamed_past} outside), {missed} missed",
         results.len()
     );
 }

@@ -98,4 +98,10 @@ fn main() {
     for f in &o.faults {
         println!("{f:?}");
     }
+    for rec in r.rig.controller.supervisor().log() {
+        println!(
+            "log: tick {} {:?} channel {} value {}",
+            rec.tick, rec.code, rec.channel, rec.value
+        );
+    }
 }

@@ -8,9 +8,10 @@
 
 mod named;
 
-pub use named::{NamedCase, named_case};
+pub use named::{NamedCase, explains_stop, named_case};
 
 use exogait_device::DeviceConfig;
+use gait_control::layout::Side;
 use gait_control::operator::Gait;
 use gait_control::sequencer::Phase;
 
@@ -44,6 +45,9 @@ pub struct RunResult {
     pub error: Option<String>,
     /// Where the gait was when the fault struck.
     pub struck_in: Option<Phase>,
+    /// Per leg (left, right): it was the stance leg of a swing at or after
+    /// the strike (a drive lost before that swing is lost in it too).
+    pub stance_after_strike: [bool; 2],
 }
 
 impl RunResult {
@@ -52,17 +56,49 @@ impl RunResult {
         must_be_detected(self.run.fault.kind) && !self.detected
     }
 
+    /// The named case of this run's fault, where it struck (a fall or a
+    /// stop crossed is told by it).
+    fn named(&self) -> Option<NamedCase> {
+        named_case(&self.run, self.struck_in, self.stance_after_strike)
+    }
+
     /// The named case this run's fall belongs to, if it fell in one.
     pub fn named_fall(&self) -> Option<NamedCase> {
-        self.outcome
-            .fell
-            .as_ref()
-            .and_then(|_| named_case(&self.run, self.struck_in))
+        self.outcome.fell.as_ref().and_then(|_| self.named())
     }
 
     /// The pilot fell, and not in a named case: the device's to fix.
     pub fn unnamed_fall(&self) -> bool {
         self.outcome.fell.is_some() && self.named_fall().is_none()
+    }
+
+    /// A hip or knee crossed its stop.
+    pub fn past_a_stop(&self) -> bool {
+        self.outcome.worst_limit_margin_rad < 0.0
+    }
+
+    /// The named case whose physical reason took every joint that crossed
+    /// a stop past it ([`explains_stop`]), if the run crossed one.
+    pub fn named_stop(&self) -> Option<NamedCase> {
+        let crossed = || {
+            (0..4)
+                .zip(self.outcome.limit_margins)
+                .filter(|(_, (m, _))| *m < 0.0)
+        };
+        self.named().filter(|_| self.past_a_stop()).filter(|&c| {
+            crossed().all(|(j, (_, flexion))| {
+                let o = &self.outcome;
+                let gave_all = o.saturated_joints.get(j) == Some(&true)
+                    && o.braked_joints.get(j) == Some(&false);
+                explains_stop(c, &self.run, j, flexion, gave_all)
+            })
+        })
+    }
+
+    /// A joint crossed its stop, and not for a named case's reason: the
+    /// device's to fix.
+    pub fn unnamed_stop(&self) -> bool {
+        self.past_a_stop() && self.named_stop().is_none()
     }
 }
 
@@ -190,13 +226,27 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
             rig.schedule(fault);
         },
     );
-    let struck_in = played.as_ref().ok().and_then(|r| {
-        let &(_, at) = r.rig.injected().first()?;
-        r.rig
-            .trace
-            .iter()
-            .find(|s| s.state.time_s >= at - 1e-9)
-            .map(|s| s.report.phase)
+    let struck_at = played
+        .as_ref()
+        .ok()
+        .and_then(|r| r.rig.injected().first().map(|&(_, at)| at));
+    let after_strike = || {
+        played
+            .as_ref()
+            .ok()
+            .zip(struck_at)
+            .into_iter()
+            .flat_map(|(r, at)| {
+                r.rig
+                    .trace
+                    .iter()
+                    .filter(move |s| s.state.time_s >= at - 1e-9)
+            })
+    };
+    let struck_in = after_strike().next().map(|s| s.report.phase);
+    let stance_after_strike = [Side::Left, Side::Right].map(|leg| {
+        after_strike()
+            .any(|s| matches!(s.report.phase, Phase::Swing { stance, .. } if stance == leg))
     });
     let (outcome, injected, error) = judged(played);
     let before = |t: f64| injected.is_none_or(|i| t < i - 1e-9);
@@ -207,6 +257,7 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
         outcome,
         error,
         struck_in,
+        stance_after_strike,
     }
 }
 
@@ -380,6 +431,9 @@ fn no_outcome() -> Outcome {
         tracking_peak_rad: [0.0; 4],
         worst_limit_margin_rad: 0.0,
         worst_limit_joint: 0,
+        limit_margins: [(0.0, false); 4],
+        braked_joints: [false; 4],
+        saturated_joints: [false; 4],
         fell: None,
         faults: Vec::new(),
     }
@@ -397,6 +451,8 @@ pub struct Tally {
     pub unnamed_falls: usize,
     /// Runs in which a hip or knee went past its Table I stop.
     pub past_a_stop: usize,
+    /// Of them, runs whose stop no named case explains: the device's.
+    pub unnamed_past_a_stop: usize,
     /// Runs of a must-detect kind that nothing detected.
     pub missed: usize,
     /// Runs with a fault latched before the injection.
@@ -411,7 +467,8 @@ impl Tally {
         self.runs += 1;
         self.falls += usize::from(r.outcome.fell.is_some());
         self.unnamed_falls += usize::from(r.unnamed_fall());
-        self.past_a_stop += usize::from(r.outcome.worst_limit_margin_rad < 0.0);
+        self.past_a_stop += usize::from(r.past_a_stop());
+        self.unnamed_past_a_stop += usize::from(r.unnamed_stop());
         self.missed += usize::from(r.missed());
         self.false_trips += usize::from(r.false_trip);
         self.errors += usize::from(r.error.is_some());

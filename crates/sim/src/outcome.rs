@@ -28,6 +28,9 @@ pub struct FaultOutcome {
     pub latency_ticks: Option<u64>,
     /// Its reaction.
     pub reaction: Reaction,
+    /// The channel the supervisor's log first names it on (joint, ankle,
+    /// force sensor or motor index; `None`: none, or no longer logged).
+    pub channel: Option<u8>,
     /// When the reaction's state was reached, s: the safe hold's ramp
     /// done, standing after the finished step, or the motors off.
     pub safe_state_s: Option<f64>,
@@ -47,6 +50,14 @@ pub struct Outcome {
     pub worst_limit_margin_rad: f64,
     /// The joint of [`Outcome::worst_limit_margin_rad`] (joint order).
     pub worst_limit_joint: usize,
+    /// Per joint: its smallest distance to a stop over the run, rad, and
+    /// whether that stop is its flexion stop (else its extension stop).
+    pub limit_margins: [(f64, bool); 4],
+    /// Per joint: a fault braked its drive (the supervisor's log, newest
+    /// 32 records).
+    pub braked_joints: [bool; 4],
+    /// Per joint: its drive was saturated (0x0401: it gave all it has).
+    pub saturated_joints: [bool; 4],
     /// Why the pilot fell, if they did.
     pub fell: Option<String>,
     /// The faults latched, in the order they were.
@@ -66,6 +77,7 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
     let mut sq = [0.0f64; 4];
     let mut peak = [0.0f64; 4];
     let mut worst = (f64::INFINITY, 0);
+    let mut margins = [(f64::INFINITY, false); 4];
     let mut torso: Option<f64> = None;
     for s in trace {
         for j in 0..4 {
@@ -79,6 +91,9 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
             let margin = (q - lo).min(hi - q);
             if margin < worst.0 {
                 worst = (margin, j);
+            }
+            if margin < margins[j].0 {
+                margins[j] = (margin, hi - q < q - lo);
             }
         }
         let pitch = s.state.phi[2];
@@ -97,9 +112,19 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
         tracking_peak_rad: peak,
         worst_limit_margin_rad: if worst.0.is_finite() { worst.0 } else { 0.0 },
         worst_limit_joint: worst.1,
+        braked_joints: logged_on_joint(rig, FaultCode::brakes_joint),
+        saturated_joints: logged_on_joint(rig, |c| c == FaultCode::MotorSaturated),
+        limit_margins: margins.map(|(m, f)| (if m.is_finite() { m } else { 0.0 }, f)),
         fell,
         faults: fault_outcomes(rig, dt),
     }
+}
+
+/// Per joint: the supervisor's log holds a record of a code `which` picks
+/// on that joint's channel.
+fn logged_on_joint(rig: &Rig<'_>, which: impl Fn(FaultCode) -> bool) -> [bool; 4] {
+    let log = || rig.controller.supervisor().log();
+    core::array::from_fn(|j| log().any(|r| usize::from(r.channel) == j && which(r.code)))
 }
 
 fn fault_outcomes(rig: &Rig<'_>, dt: f64) -> Vec<FaultOutcome> {
@@ -140,6 +165,13 @@ fn fault_outcomes(rig: &Rig<'_>, dt: f64) -> Vec<FaultOutcome> {
                 detected_s,
                 latency_ticks: injected_s.map(|t| ((detected_s - t) / dt).round().max(0.0) as u64),
                 reaction,
+                channel: rig
+                    .controller
+                    .supervisor()
+                    .log()
+                    .find(|r| r.code == code)
+                    .map(|r| r.channel)
+                    .filter(|&c| c != gait_control::supervisor::NO_CHANNEL),
                 safe_state_s,
             });
         }

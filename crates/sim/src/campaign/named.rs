@@ -20,12 +20,17 @@ pub enum NamedCase {
     Pilot,
     /// In a stair descent, a knee that carries the body bent loses its
     /// drive (stuck, weak, its bridge's PWM or direction pin, or every
-    /// drive with the e-stop): braked, a bent loaded knee sinks at load /
-    /// brake damping, and only a working drive holds it still.
+    /// drive with the e-stop; a weak or stuck one also when it struck
+    /// before the swing that loads it): braked, a bent loaded knee sinks at
+    /// load / brake damping, and only a working drive holds it still.
     DescentKneeWithoutDrive,
     /// In a swing, the stance hip loses its drive or its encoder: the torso
     /// rests on that hip alone until the other foot is down, and the board
-    /// has no other sensor of the torso's pitch (no IMU).
+    /// has no other sensor of the torso's pitch (no IMU). A drive lost
+    /// before that swing (weak, or stuck on a set value) counts too: its
+    /// deficit is a share of the torque asked, which standing or swinging
+    /// that leg keeps under the residual's noise, so it is lost in the
+    /// swing that first loads it.
     StanceHipInASwing,
 }
 
@@ -57,8 +62,13 @@ fn loses_encoder(kind: Kind) -> bool {
 }
 
 /// The named case a fall of `run` belongs to, given the phase the gait was
-/// in when its fault struck (`None`: not known, or not struck).
-pub fn named_case(run: &CampaignRun, struck_in: Option<Phase>) -> Option<NamedCase> {
+/// in when its fault struck (`None`: not known, or not struck) and which
+/// legs (left, right) were the stance leg of a swing at or after it.
+pub fn named_case(
+    run: &CampaignRun,
+    struck_in: Option<Phase>,
+    stance_after_strike: [bool; 2],
+) -> Option<NamedCase> {
     let kind = run.fault.kind;
     if matches!(kind, Kind::PilotLean(_) | Kind::PilotStopsBalancing) {
         return Some(NamedCase::Pilot);
@@ -78,9 +88,15 @@ pub fn named_case(run: &CampaignRun, struck_in: Option<Phase>) -> Option<NamedCa
     });
     let is_knee = joint.zip(leg).is_some_and(|(j, s)| j == s.hip() + 1);
     let is_hip = joint.zip(leg).is_some_and(|(j, s)| j == s.hip());
+    // A weak or stuck drive shows only under load: one lost before the
+    // swing that loads its leg is lost in that swing (a lost encoder or
+    // output stage is found at once, and no step starts after it).
+    let latent = matches!(kind, Kind::MotorStuck | Kind::MotorWeak(_))
+        && leg.is_some_and(|l| stance_after_strike.get(l.index()) == Some(&true));
     // The knee carries the body unless its own foot is in the air.
-    let knee_loaded =
-        is_knee && struck_in.is_some() && leg.is_some_and(|l| swing_stance.is_none_or(|s| s == l));
+    let knee_loaded = is_knee
+        && (latent
+            || struck_in.is_some() && leg.is_some_and(|l| swing_stance.is_none_or(|s| s == l)));
     if run.gait == Gait::StairDown
         && (matches!(kind, Kind::EStop | Kind::EStopRead) || (loses_drive(kind) && knee_loaded))
     {
@@ -93,7 +109,44 @@ pub fn named_case(run: &CampaignRun, struck_in: Option<Phase>) -> Option<NamedCa
     {
         return Some(NamedCase::StanceHipInASwing);
     }
+    if is_hip && latent {
+        return Some(NamedCase::StanceHipInASwing);
+    }
     None
+}
+
+/// Whether `case` (the named case of `run`) is the physical reason for
+/// its joint `joint` crossing its flexion (`flexion`) or extension stop,
+/// the joint's drive having given all it has (`gave_all`: saturated and
+/// never braked): the pilot's push may take any joint there; a descent's
+/// braked loaded knee sinks onto its flexion stop (any knee for the
+/// e-stop, which brakes them all; the faulted one otherwise), and the body
+/// sinking with it loads the other bent knee past what its working drive
+/// gives; a stance hip without its drive or encoder lets the torso turn
+/// on it.
+pub fn explains_stop(
+    case: NamedCase,
+    run: &CampaignRun,
+    joint: usize,
+    flexion: bool,
+    gave_all: bool,
+) -> bool {
+    let target = match run.fault.target {
+        Some(Target::Joint(j)) => Some(j),
+        _ => None,
+    };
+    let is_knee = joint == Side::Left.hip() + 1 || joint == Side::Right.hip() + 1;
+    match case {
+        NamedCase::Pilot => true,
+        NamedCase::DescentKneeWithoutDrive => {
+            is_knee
+                && flexion
+                && (matches!(run.fault.kind, Kind::EStop | Kind::EStopRead)
+                    || target == Some(joint)
+                    || gave_all)
+        }
+        NamedCase::StanceHipInASwing => target == Some(joint),
+    }
 }
 
 #[cfg(test)]
@@ -113,6 +166,13 @@ mod tests {
         }
     }
 
+    const NONE_AFTER: [bool; 2] = [false; 2];
+
+    const SWING_RIGHT: Option<Phase> = Some(Phase::Swing {
+        stance: Side::Right,
+        t_s: 0.5,
+    });
+
     const SWING_LEFT: Option<Phase> = Some(Phase::Swing {
         stance: Side::Left,
         t_s: 0.5,
@@ -121,9 +181,12 @@ mod tests {
     #[test]
     fn the_pilot_s_own_faults_are_named_whatever_the_phase() {
         let r = run(Gait::Walk, Kind::PilotStopsBalancing, None);
-        assert_eq!(named_case(&r, None), Some(NamedCase::Pilot));
+        assert_eq!(named_case(&r, None, NONE_AFTER), Some(NamedCase::Pilot));
         let r = run(Gait::StairUp, Kind::PilotLean(0.1), None);
-        assert_eq!(named_case(&r, SWING_LEFT), Some(NamedCase::Pilot));
+        assert_eq!(
+            named_case(&r, SWING_LEFT, NONE_AFTER),
+            Some(NamedCase::Pilot)
+        );
     }
 
     #[test]
@@ -133,26 +196,36 @@ mod tests {
         let stuck = |t| run(Gait::StairDown, Kind::MotorStuck, t);
         // The stance knee in a swing; either knee standing.
         assert_eq!(
-            named_case(&stuck(left_knee), SWING_LEFT),
+            named_case(&stuck(left_knee), SWING_LEFT, NONE_AFTER),
             Some(NamedCase::DescentKneeWithoutDrive)
         );
         assert_eq!(
-            named_case(&stuck(right_knee), Some(Phase::Standing)),
+            named_case(&stuck(right_knee), Some(Phase::Standing), NONE_AFTER),
             Some(NamedCase::DescentKneeWithoutDrive)
         );
         // Not the swing knee, not a lost encoder, not in another gait.
-        assert_eq!(named_case(&stuck(right_knee), SWING_LEFT), None);
+        assert_eq!(named_case(&stuck(right_knee), SWING_LEFT, NONE_AFTER), None);
+        // Unless its leg then stands in a swing, which finds the drive.
+        assert_eq!(
+            named_case(&stuck(right_knee), SWING_LEFT, [true, true]),
+            Some(NamedCase::DescentKneeWithoutDrive)
+        );
+        let output_stage = run(Gait::StairDown, Kind::PwmFail, right_knee);
+        assert_eq!(named_case(&output_stage, SWING_LEFT, [true, true]), None);
         let blind = run(Gait::StairDown, Kind::EncoderStuck, left_knee);
-        assert_eq!(named_case(&blind, SWING_LEFT), None);
+        assert_eq!(named_case(&blind, SWING_LEFT, NONE_AFTER), None);
         let walk = run(Gait::Walk, Kind::MotorStuck, left_knee);
-        assert_eq!(named_case(&walk, SWING_LEFT), None);
+        assert_eq!(named_case(&walk, SWING_LEFT, NONE_AFTER), None);
         // The e-stop brakes every drive.
         let estop = run(Gait::StairDown, Kind::EStop, None);
         assert_eq!(
-            named_case(&estop, Some(Phase::Standing)),
+            named_case(&estop, Some(Phase::Standing), NONE_AFTER),
             Some(NamedCase::DescentKneeWithoutDrive)
         );
-        assert_eq!(named_case(&run(Gait::Walk, Kind::EStop, None), None), None);
+        assert_eq!(
+            named_case(&run(Gait::Walk, Kind::EStop, None), None, NONE_AFTER),
+            None
+        );
     }
 
     #[test]
@@ -161,16 +234,106 @@ mod tests {
         for kind in [Kind::MotorWeak(0.5), Kind::PwmFail, Kind::EncoderParity] {
             let r = run(Gait::StairUp, kind, left_hip);
             assert_eq!(
-                named_case(&r, SWING_LEFT),
+                named_case(&r, SWING_LEFT, NONE_AFTER),
                 Some(NamedCase::StanceHipInASwing)
             );
             // Both feet down, the other leg holds the torso.
-            assert_eq!(named_case(&r, Some(Phase::Standing)), None);
+            assert_eq!(named_case(&r, Some(Phase::Standing), NONE_AFTER), None);
         }
         // The swing hip, or a jump (the encoder still reads).
         let swing_hip = run(Gait::StairUp, Kind::MotorWeak(0.5), Some(Target::Joint(2)));
-        assert_eq!(named_case(&swing_hip, SWING_LEFT), None);
+        assert_eq!(named_case(&swing_hip, SWING_LEFT, NONE_AFTER), None);
         let jump = run(Gait::StairUp, Kind::EncoderJump(200), left_hip);
-        assert_eq!(named_case(&jump, SWING_LEFT), None);
+        assert_eq!(named_case(&jump, SWING_LEFT, NONE_AFTER), None);
+    }
+
+    #[test]
+    fn a_hip_drive_lost_before_the_swing_that_loads_it_is_a_stance_hip_in_a_swing() {
+        let left_hip = Some(Target::Joint(0));
+        let left_stance_later = [true, false];
+        // Weak or stuck while standing, or while it swung its own leg.
+        for kind in [Kind::MotorWeak(0.5), Kind::MotorStuck] {
+            let r = run(Gait::Walk, kind, left_hip);
+            for at in [Some(Phase::Standing), SWING_RIGHT] {
+                assert_eq!(
+                    named_case(&r, at, left_stance_later),
+                    Some(NamedCase::StanceHipInASwing)
+                );
+                // No swing on it came: not this case.
+                assert_eq!(named_case(&r, at, [false, true]), None);
+            }
+        }
+        // A lost encoder or output stage is found at once, the knee is not
+        // the torso's joint.
+        for (kind, target) in [
+            (Kind::EncoderBus, left_hip),
+            (Kind::PwmFail, left_hip),
+            (Kind::MotorWeak(0.5), Some(Target::Joint(1))),
+        ] {
+            let r = run(Gait::Walk, kind, target);
+            assert_eq!(
+                named_case(&r, Some(Phase::Standing), left_stance_later),
+                None
+            );
+        }
+    }
+
+    #[test]
+    fn a_named_case_explains_only_the_stops_its_reason_reaches() {
+        use NamedCase::*;
+        let pilot = run(Gait::Walk, Kind::PilotLean(0.1), None);
+        assert!(explains_stop(Pilot, &pilot, 0, false, false));
+        // The e-stop: any knee's flexion stop, no hip, no extension.
+        let estop = run(Gait::StairDown, Kind::EStop, None);
+        assert!(explains_stop(
+            DescentKneeWithoutDrive,
+            &estop,
+            3,
+            true,
+            false
+        ));
+        assert!(!explains_stop(
+            DescentKneeWithoutDrive,
+            &estop,
+            3,
+            false,
+            false
+        ));
+        assert!(!explains_stop(
+            DescentKneeWithoutDrive,
+            &estop,
+            2,
+            true,
+            true
+        ));
+        // A drive lost: that knee, and the other one only when its own
+        // drive gave all it has, not when a fault braked it.
+        let stuck = run(Gait::StairDown, Kind::MotorStuck, Some(Target::Joint(1)));
+        assert!(explains_stop(
+            DescentKneeWithoutDrive,
+            &stuck,
+            1,
+            true,
+            false
+        ));
+        assert!(!explains_stop(
+            DescentKneeWithoutDrive,
+            &stuck,
+            3,
+            true,
+            false
+        ));
+        assert!(explains_stop(
+            DescentKneeWithoutDrive,
+            &stuck,
+            3,
+            true,
+            true
+        ));
+        // A stance hip: that hip, either stop.
+        let hip = run(Gait::StairUp, Kind::MotorWeak(0.5), Some(Target::Joint(0)));
+        assert!(explains_stop(StanceHipInASwing, &hip, 0, true, false));
+        assert!(explains_stop(StanceHipInASwing, &hip, 0, false, false));
+        assert!(!explains_stop(StanceHipInASwing, &hip, 1, true, true));
     }
 }
