@@ -86,6 +86,13 @@ pub enum ReplayError {
     Config,
 }
 
+/// Marks, in QEMU's execution log, where the replay begins: `cargo xtask
+/// profile` counts the instructions executed from here on.
+#[inline(never)]
+fn replay_starts() {
+    core::hint::black_box(());
+}
+
 /// Replays [`TICK_RECORDS`] on `device`; `time` runs one tick and says how
 /// many instructions it took.
 pub fn replay(
@@ -93,6 +100,7 @@ pub fn replay(
     mut time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
 ) -> Result<Replay, ReplayError> {
     let mut out = Replay::default();
+    replay_starts();
     for segment in tick_record::segments(TICK_RECORDS).map_err(ReplayError::File)? {
         let mut controller =
             exogait_device::build_controller(device, board_config::flash_tables(), segment.gait)

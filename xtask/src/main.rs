@@ -9,6 +9,7 @@
 //! installed with apt-get (as root, or through sudo).
 
 mod panic_paths;
+mod profile;
 mod tick_replay;
 
 use std::env;
@@ -63,6 +64,14 @@ fn main() -> ExitCode {
             Ok(())
         }),
         "qemu" => Toolchain::detect().and_then(|tc| qemu(&tc)),
+        "profile" => Toolchain::detect().and_then(|tc| {
+            let board = BOARDS
+                .iter()
+                .find(|b| b.name == "qemu")
+                .copied()
+                .ok_or("no qemu board")?;
+            profile::profile(&build_firmware(&tc, board)?)
+        }),
         "size" => Toolchain::detect().and_then(|tc| size_all(&tc)),
         "panics" => Toolchain::detect().and_then(|tc| panic_paths_all(&tc)),
         "clippy" => Toolchain::detect().and_then(|tc| clippy(&tc)),
@@ -98,6 +107,8 @@ usage: cargo xtask <task>
             closed loop, walking and stairs (the paper's Table II; plot)
   firmware  build the firmware for every board (release)
   qemu      build the QEMU image and run its self-test and benchmarks
+  profile   where the replayed ticks' instructions go on the target, per
+            source file (QEMU's execution log; a minute or two)
   size      flash/RAM use per board
   panics    proves both release images hold no panic: none reachable from the
             vector table's handlers, no panic code left at all (no allow-list)
