@@ -5,36 +5,46 @@
 
 use super::*;
 
-/// Sliding window over the last ≤ 128 ticks: bit 0 of word 0 is this tick,
-/// bit 31 of word 0 continues in bit 0 of word 1, and so on (four words,
-/// not a `u128`: the M4 shifts a `u128` by a variable amount in some 25
-/// instructions, a word in one).
+/// Sliding window over the last ≤ 128 ticks: a ring of 128 bits (bit `i`
+/// of the ring is bit `i % 32` of word `i / 32`), written at `head`, so a
+/// push touches two bits instead of shifting all four words (10 windows a
+/// tick: 35–50 instructions a tick fewer on the M4, `cargo xtask qemu`).
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct SampleWindow {
-    history: [u32; 4],
+    ring: [u32; 4],
+    /// Where the next sample goes (0..128).
+    head: u8,
     /// Bad samples among the last `window_ticks` pushed, kept as they come
     /// and go (a 128-bit popcount is some 60 instructions on the M4; this
-    /// is a shift and two adds).
+    /// is a bit read and two adds).
     bad: u32,
 }
 
+/// The ring's length, samples.
+const RING_BITS: u8 = 128;
+
 impl SampleWindow {
+    /// The sample at ring position `i` (0..128).
+    fn bit(&self, i: u8) -> u32 {
+        self.ring
+            .get(usize::from(i / 32))
+            .map_or(0, |w| (w >> (i % 32)) & 1)
+    }
+
     /// Pushes this tick's sample; `window_ticks` (1..=128, the same on every
     /// push) is the window [`SampleWindow::count`] counts over.
     pub(super) fn push(&mut self, bad: bool, window_ticks: u8) {
-        let leaving = match usize::from(window_ticks).checked_sub(1) {
-            Some(oldest) => self
-                .history
-                .get(oldest / 32)
-                .map_or(0, |w| (w >> (oldest % 32)) & 1),
-            None => 0,
+        // The sample pushed `window_ticks` pushes ago leaves the window.
+        let leaving = if window_ticks == 0 || window_ticks > RING_BITS {
+            0
+        } else {
+            self.bit(self.head.wrapping_sub(window_ticks) % RING_BITS)
         };
-        let mut carry = u32::from(bad);
-        for w in &mut self.history {
-            let out = *w >> 31;
-            *w = (*w << 1) | carry;
-            carry = out;
+        if let Some(w) = self.ring.get_mut(usize::from(self.head / 32)) {
+            let mask = 1u32 << (self.head % 32);
+            *w = if bad { *w | mask } else { *w & !mask };
         }
+        self.head = (self.head + 1) % RING_BITS;
         self.bad = (self.bad + u32::from(bad)).saturating_sub(leaving);
     }
 
@@ -237,4 +247,31 @@ pub(super) struct JointTrack {
 pub(super) struct ForceTrack {
     pub(super) window: SampleWindow,
     pub(super) last_bad: Option<FaultCode>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SampleWindow;
+
+    #[test]
+    fn a_window_counts_the_bad_samples_among_its_last_pushes() {
+        // Against the plain count over a list, for windows 1..=128 and a
+        // pseudo-random pattern long enough to wrap the ring many times.
+        for window in [1u8, 2, 7, 31, 32, 33, 100, 127, 128] {
+            let mut w = SampleWindow::default();
+            let mut all = [false; 1000];
+            let mut x = 0x2545_f491_u32;
+            for n in 0..all.len() {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                let bad = x % 5 < 2;
+                all[n] = bad;
+                w.push(bad, window);
+                let from = (n + 1).saturating_sub(usize::from(window));
+                let expected = all[from..=n].iter().filter(|b| **b).count() as u32;
+                assert_eq!(w.count(), expected, "window {window} after {}", n + 1);
+            }
+        }
+    }
 }
