@@ -1,10 +1,10 @@
 //! `cargo xtask profile`: where the replayed ticks' instructions go. QEMU
 //! runs the image with its execution log (`-d in_asm,exec,nochain`)
 //! streamed to this task, which counts each translation block's executions
-//! from the firmware's `replay_starts` on, weighs them by the block's
-//! instructions, and attributes each block, through
-//! `arm-none-eabi-addr2line -i`, to the innermost project source file it
-//! was inlined from. The figure per file is instructions per replayed tick.
+//! from the firmware's `replay_starts` on, and attributes each executed
+//! instruction, through `arm-none-eabi-addr2line -i`, to the innermost
+//! project source file it was inlined from. The figure per file is
+//! instructions per replayed tick.
 
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read};
@@ -16,62 +16,74 @@ use crate::{Result, root};
 /// The firmware function whose first execution starts the count.
 const MARKER: &str = "replay_starts";
 
-/// Translation blocks: instructions per block start, executions per block
-/// start (from the marker on).
+/// Translation blocks: each block's instruction addresses and its runs
+/// from the marker on. A block is known by QEMU's host code pointer and its
+/// guest start: QEMU may translate the same guest address into blocks of
+/// different lengths (under `-icount`), and each is counted as itself.
 #[derive(Debug, Default, PartialEq)]
 pub struct ExecLog {
-    /// Instructions in the block starting at each address.
-    pub sizes: HashMap<u32, u64>,
-    /// Executions of the block starting at each address.
-    pub runs: HashMap<u32, u64>,
+    /// Each block's instruction addresses.
+    pub blocks: HashMap<(u64, u32), Vec<u32>>,
+    /// Runs of each block.
+    pub runs: HashMap<(u64, u32), u64>,
+    /// The marker was executed.
+    pub marked: bool,
 }
 
 impl ExecLog {
-    /// Reads QEMU's `in_asm,exec,nochain` log line by line.
+    /// Reads QEMU's `in_asm,exec,nochain` log line by line: a translation
+    /// ("IN:", its instructions, a blank line) is followed by its block's
+    /// first run ("Trace 0: <host pointer> [flags/<guest pc>/..] symbol").
     pub fn read(log: impl BufRead) -> std::io::Result<Self> {
         let mut out = Self::default();
-        let mut block: Option<(Option<u32>, u64)> = None;
-        let mut counting = false;
+        let mut reading: Option<Vec<u32>> = None;
+        let mut translated: Option<Vec<u32>> = None;
         for line in log.lines() {
             let line = line?;
             if line.starts_with("IN:") {
-                block = Some((None, 0));
-            } else if let Some((start, n)) = block.as_mut() {
+                reading = Some(Vec::new());
+            } else if let Some(addrs) = reading.as_mut() {
                 if let Some(addr) = line.strip_prefix("0x").and_then(|l| l.split(':').next()) {
-                    if start.is_none() {
-                        *start = u32::from_str_radix(addr, 16).ok();
+                    if let Ok(a) = u32::from_str_radix(addr, 16) {
+                        addrs.push(a);
                     }
-                    *n += 1;
                 } else if line.trim().is_empty() {
-                    if let Some(s) = *start {
-                        out.sizes.insert(s, *n);
-                    }
-                    block = None;
+                    translated = reading.take();
                 }
             } else if let Some(rest) = line.strip_prefix("Trace ") {
-                counting |= rest.contains(MARKER);
-                if counting {
-                    // "0: 0x7f.. [flags/PC/flags/flags] symbol"
-                    let pc = rest
-                        .split('[')
-                        .nth(1)
-                        .and_then(|f| f.split('/').nth(1))
-                        .and_then(|pc| u32::from_str_radix(pc, 16).ok());
-                    if let Some(pc) = pc {
-                        *out.runs.entry(pc).or_insert(0) += 1;
-                    }
+                let Some(key) = block_key(rest) else { continue };
+                if let Some(addrs) = translated.take_if(|a| a.first() == Some(&key.1)) {
+                    out.blocks.insert(key, addrs);
+                }
+                out.marked |= rest.contains(MARKER);
+                if out.marked {
+                    *out.runs.entry(key).or_insert(0) += 1;
                 }
             }
         }
         Ok(out)
     }
 
-    /// Instructions executed in the block starting at each address.
-    pub fn instructions(&self) -> impl Iterator<Item = (u32, u64)> + '_ {
-        self.runs
-            .iter()
-            .map(|(pc, n)| (*pc, n * self.sizes.get(pc).copied().unwrap_or(0)))
+    /// Instructions executed at each address.
+    pub fn instructions(&self) -> HashMap<u32, u64> {
+        let mut out = HashMap::new();
+        for (key, n) in &self.runs {
+            for a in self.blocks.get(key).into_iter().flatten() {
+                *out.entry(*a).or_insert(0) += n;
+            }
+        }
+        out
     }
+}
+
+/// A trace line's block: "0: 0x<host> [flags/<pc>/flags/flags] symbol".
+fn block_key(trace: &str) -> Option<(u64, u32)> {
+    let host = trace.split_whitespace().nth(1)?.strip_prefix("0x")?;
+    let pc = trace.split('[').nth(1)?.split('/').nth(1)?;
+    Some((
+        u64::from_str_radix(host, 16).ok()?,
+        u32::from_str_radix(pc, 16).ok()?,
+    ))
 }
 
 /// The innermost project file of each address in `addr2line -i -a`'s
@@ -129,6 +141,9 @@ pub fn profile(elf: &Path) -> Result {
     });
     let stderr = child.stderr.take().ok_or("no QEMU log")?;
     let log = ExecLog::read(BufReader::new(stderr)).map_err(|e| format!("QEMU log: {e}"))?;
+    if !log.marked {
+        return Err(format!("the image never ran `{MARKER}`: nothing counted"));
+    }
     let status = child.wait().map_err(|e| format!("QEMU: {e}"))?;
     let printed = printed.join().unwrap_or_default();
     if !status.success() {
@@ -141,7 +156,8 @@ pub fn profile(elf: &Path) -> Result {
         .and_then(|n| n.parse().ok())
         .filter(|&n| n > 0)
         .ok_or("the image replayed no ticks")?;
-    let pcs: Vec<String> = log.runs.keys().map(|pc| format!("0x{pc:08x}")).collect();
+    let instructions = log.instructions();
+    let pcs: Vec<String> = instructions.keys().map(|a| format!("0x{a:08x}")).collect();
     let lines = Command::new("arm-none-eabi-addr2line")
         .args(["-i", "-a", "-e"])
         .arg(elf)
@@ -151,11 +167,14 @@ pub fn profile(elf: &Path) -> Result {
     let repo = root().display().to_string();
     let files = files_of(&String::from_utf8_lossy(&lines.stdout), &repo);
     let mut by_file: HashMap<&str, u64> = HashMap::new();
-    for (pc, n) in log.instructions() {
-        let f = files.get(&pc).map_or(OTHER, String::as_str);
+    for (a, n) in &instructions {
+        let f = files.get(a).map_or(OTHER, String::as_str);
         *by_file.entry(f).or_insert(0) += n;
     }
     let total: u64 = by_file.values().sum();
+    if total == 0 {
+        return Err("no instruction counted after the marker".into());
+    }
     let mut rows: Vec<(&str, u64)> = by_file.into_iter().collect();
     rows.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
     println!(
@@ -199,15 +218,33 @@ Trace 0: 0x7f4bc4000100 [00800408/00000400/00000110/ff020200] Reset
 ";
 
     #[test]
-    fn blocks_count_from_the_marker_on_weighed_by_their_instructions() {
+    fn instructions_count_from_the_marker_on_block_by_block() {
         let log = ExecLog::read(LOG.as_bytes()).unwrap();
-        assert_eq!(log.sizes.get(&0x2000), Some(&3));
-        // Reset's first run was before the marker.
-        assert_eq!(log.runs.get(&0x400), Some(&1));
-        assert_eq!(log.runs.get(&0x2000), Some(&2));
-        let mut ins: Vec<_> = log.instructions().collect();
-        ins.sort();
-        assert_eq!(ins, vec![(0x400, 1), (0x1000, 1), (0x2000, 6)]);
+        assert!(log.marked);
+        assert_eq!(
+            log.blocks.get(&(0x7f4b_c400_0300, 0x2000)).map(Vec::len),
+            Some(3)
+        );
+        let ins = log.instructions();
+        // Reset's first run was before the marker, its second after.
+        assert_eq!(ins.get(&0x400), Some(&1));
+        assert_eq!(ins.get(&0x1000), Some(&1));
+        for a in [0x2000, 0x2002, 0x2004] {
+            assert_eq!(ins.get(&a), Some(&2), "{a:x}");
+        }
+        // The same address translated again, shorter (as under -icount):
+        // each block counts its own instructions.
+        let again = LOG.to_string()
+            + "----------------\nIN: tick\n0x00002000:  b580       push     {r7, lr}\n\n\
+               Trace 0: 0x7f4bc4000400 [00800408/00002000/00000110/ff020200] tick\n";
+        let ins = ExecLog::read(again.as_bytes()).unwrap().instructions();
+        assert_eq!(ins.get(&0x2000), Some(&3));
+        assert_eq!(ins.get(&0x2002), Some(&2));
+        // No marker, nothing counted.
+        let unmarked = LOG.replace("replay_starts", "something_else");
+        let log = ExecLog::read(unmarked.as_bytes()).unwrap();
+        assert!(!log.marked);
+        assert!(log.instructions().is_empty());
     }
 
     #[test]

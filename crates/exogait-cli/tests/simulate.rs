@@ -157,9 +157,6 @@ fn faults_runs_a_seeded_campaign_and_tallies_it() {
     assert_eq!(v["healthy"]["by_gait"].as_array().unwrap().len(), 3);
     // Exit 0 only when the campaign's goal (falls and stops crossed but
     // the named cases) and the healthy runs' are met.
-    let all = |k: &str| v["all"][k].as_u64().unwrap();
-    assert!(all("unnamed_falls") <= all("falls"), "{v:#}");
-    assert!(all("unnamed_past_a_stop") <= all("past_a_stop"), "{v:#}");
     let bad = [
         "unnamed_falls",
         "unnamed_past_a_stop",

@@ -61,8 +61,9 @@ fn loses_encoder(kind: Kind) -> bool {
     )
 }
 
-/// The named case a fall of `run` belongs to, given the phase the gait was
-/// in when its fault struck (`None`: not known, or not struck) and which
+/// The named case of `run`'s fault (its falls and, through
+/// [`explains_stop`], its stops crossed are told by it), given the phase
+/// the gait was in when its fault struck (`None`: not known, or not struck) and which
 /// legs (left, right) were the stance leg of a swing at or after it.
 pub fn named_case(
     run: &CampaignRun,
