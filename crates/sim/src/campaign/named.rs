@@ -63,8 +63,9 @@ fn loses_encoder(kind: Kind) -> bool {
 
 /// The named case of `run`'s fault (its falls and, through
 /// [`explains_stop`], its stops crossed are told by it), given the phase
-/// the gait was in when its fault struck (`None`: not known, or not struck) and which
-/// legs (left, right) were the stance leg of a swing at or after it.
+/// the gait was in when its fault struck (`None`: not known, or not
+/// struck) and which legs (left, right) were the stance leg of a swing at
+/// or after it.
 pub fn named_case(
     run: &CampaignRun,
     struck_in: Option<Phase>,
@@ -103,14 +104,9 @@ pub fn named_case(
     {
         return Some(NamedCase::DescentKneeWithoutDrive);
     }
-    if is_hip
-        && swing_stance.is_some()
-        && swing_stance == leg
-        && (loses_drive(kind) || loses_encoder(kind))
-    {
-        return Some(NamedCase::StanceHipInASwing);
-    }
-    if is_hip && latent {
+    let stance_hip_lost =
+        swing_stance.is_some() && swing_stance == leg && (loses_drive(kind) || loses_encoder(kind));
+    if is_hip && (stance_hip_lost || latent) {
         return Some(NamedCase::StanceHipInASwing);
     }
     None
