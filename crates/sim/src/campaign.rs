@@ -11,7 +11,6 @@ mod named;
 pub use named::{NamedCase, explains_stop, named_case};
 
 use exogait_device::DeviceConfig;
-use gait_control::layout::Side;
 use gait_control::operator::Gait;
 use gait_control::sequencer::Phase;
 
@@ -46,7 +45,8 @@ pub struct RunResult {
     /// Where the gait was when the fault struck.
     pub struck_in: Option<Phase>,
     /// Per leg (left, right): it was the stance leg of a swing at or after
-    /// the strike (a drive lost before that swing is lost in it too).
+    /// the strike and before any stop was crossed (a drive lost before
+    /// that swing is lost in it too).
     pub stance_after_strike: [bool; 2],
 }
 
@@ -244,11 +244,13 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
             })
     };
     let struck_in = after_strike().next().map(|s| s.report.phase);
-    let stance_after_strike = [Side::Left, Side::Right].map(|leg| {
-        after_strike()
-            .any(|s| matches!(s.report.phase, Phase::Swing { stance, .. } if stance == leg))
-    });
-    let (outcome, injected, error) = judged(played);
+    let (outcome, injected, error) = judged(played.as_ref());
+    // Only a swing before the first stop crossed can have taken a joint
+    // there (a fall ends the trace).
+    let stance_after_strike = stance_legs_before(
+        after_strike().map(|s| (s.state.time_s, s.report.phase)),
+        outcome.first_stop_crossed_s,
+    );
     let before = |t: f64| injected.is_none_or(|i| t < i - 1e-9);
     RunResult {
         run: *run,
@@ -261,11 +263,29 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
     }
 }
 
+/// Per leg (left, right): whether it was the stance leg of a swing among
+/// `phases` (time, s, and phase) before `crossed_s` (none: the whole run).
+fn stance_legs_before(
+    phases: impl Iterator<Item = (f64, Phase)>,
+    crossed_s: Option<f64>,
+) -> [bool; 2] {
+    let until = crossed_s.unwrap_or(f64::INFINITY);
+    let mut legs = [false; 2];
+    for (_, phase) in phases.take_while(|&(t, _)| t < until) {
+        if let Phase::Swing { stance, .. } = phase {
+            if let Some(l) = legs.get_mut(stance.index()) {
+                *l = true;
+            }
+        }
+    }
+    legs
+}
+
 /// A played run's outcome, when its first injection struck (s), and why
 /// the simulation stopped early other than by a fall; a run that could not
 /// start has no outcome to speak of and its error.
 fn judged(
-    played: Result<crate::scenario::StepRun<'_>, crate::closed_loop::RigError>,
+    played: Result<&crate::scenario::StepRun<'_>, &crate::closed_loop::RigError>,
 ) -> (Outcome, Option<f64>, Option<String>) {
     match played {
         Ok(r) => {
@@ -406,7 +426,7 @@ pub fn play_healthy(run: &HealthyRun, device: &DeviceConfig) -> HealthyResult {
         HEALTHY_STEPS,
         |rig| rig.set_sensor_noise(3, 10, seed),
     );
-    let (outcome, _, error) = judged(played);
+    let (outcome, _, error) = judged(played.as_ref());
     HealthyResult {
         run: *run,
         outcome,
@@ -432,6 +452,7 @@ fn no_outcome() -> Outcome {
         worst_limit_margin_rad: 0.0,
         worst_limit_joint: 0,
         limit_margins: [(0.0, false); 4],
+        first_stop_crossed_s: None,
         braked_joints: [false; 4],
         saturated_joints: [false; 4],
         fell: None,
@@ -543,6 +564,23 @@ pub fn healthy_tally(results: &[HealthyResult]) -> (Vec<(Gait, HealthyTally)>, H
 #[cfg(test)]
 mod tests {
     use super::*;
+    use gait_control::layout::Side;
+
+    #[test]
+    fn a_leg_counts_as_stance_only_in_a_swing_before_the_first_stop_crossed() {
+        let swing = |stance| Phase::Swing { stance, t_s: 0.1 };
+        let phases = [
+            (1.0, Phase::Standing),
+            (1.5, swing(Side::Left)),
+            (2.5, swing(Side::Right)),
+        ];
+        let legs = |crossed| stance_legs_before(phases.into_iter(), crossed);
+        assert_eq!(legs(None), [true, true]);
+        assert_eq!(legs(Some(2.0)), [true, false]);
+        // A swing that starts as the stop is crossed came too late for it.
+        assert_eq!(legs(Some(1.5)), [false, false]);
+        assert_eq!(legs(Some(3.0)), [true, true]);
+    }
 
     #[test]
     fn the_plan_is_seeded_valid_and_covers_every_kind() {

@@ -53,6 +53,8 @@ pub struct Outcome {
     /// Per joint: its smallest distance to a stop over the run, rad, and
     /// whether that stop is its flexion stop (else its extension stop).
     pub limit_margins: [(f64, bool); 4],
+    /// When a hip or knee first crossed its stop, s (`None`: none did).
+    pub first_stop_crossed_s: Option<f64>,
     /// Per joint: a fault braked its drive (the supervisor's log, newest
     /// 32 records).
     pub braked_joints: [bool; 4],
@@ -78,6 +80,7 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
     let mut peak = [0.0f64; 4];
     let mut worst = (f64::INFINITY, 0);
     let mut margins = [(f64::INFINITY, false); 4];
+    let mut first_crossed: Option<f64> = None;
     let mut torso: Option<f64> = None;
     for s in trace {
         for j in 0..4 {
@@ -94,6 +97,9 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
             }
             if margin < margins[j].0 {
                 margins[j] = (margin, hi - q < q - lo);
+            }
+            if margin < 0.0 && first_crossed.is_none() {
+                first_crossed = Some(s.state.time_s);
             }
         }
         let pitch = s.state.phi[2];
@@ -115,6 +121,7 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
         braked_joints: logged_on_joint(rig, FaultCode::brakes_joint),
         saturated_joints: logged_on_joint(rig, |c| c == FaultCode::MotorSaturated),
         limit_margins: margins.map(|(m, f)| (if m.is_finite() { m } else { 0.0 }, f)),
+        first_stop_crossed_s: first_crossed,
         fell,
         faults: fault_outcomes(rig, dt),
     }
