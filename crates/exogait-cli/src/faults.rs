@@ -81,6 +81,9 @@ struct BadRunJson {
     /// The case whose reason took every joint that crossed a stop past it
     /// (`None`: none crossed, or the device's).
     named_stop: Option<&'static str>,
+    /// The joints a fault braked, in joint order: more than the faulted
+    /// one is the residual's cascade (`docs/safety.md`, session 13).
+    braked_joints: Vec<&'static str>,
     missed: bool,
     false_trip: bool,
     error: Option<String>,
@@ -225,6 +228,11 @@ pub fn run(args: &FaultsArgs) -> u8 {
                         _ => "extension",
                     },
                     named_stop: r.named_stop().map(NamedCase::name),
+                    braked_joints: JOINT_NAMES
+                        .iter()
+                        .zip(r.outcome.braked_joints)
+                        .filter_map(|(&name, braked)| braked.then_some(name))
+                        .collect(),
                     missed: r.missed(),
                     false_trip: r.false_trip,
                     error: r.error.clone(),

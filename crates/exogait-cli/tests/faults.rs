@@ -1,0 +1,64 @@
+//! `exogait faults` end to end: the built binary plays a short seeded
+//! campaign, says by its exit status whether the goal held, and its JSON
+//! tells each bad run's braked joints.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use std::process::Command;
+
+const JOINTS: [&str; 4] = ["left-hip", "left-knee", "right-hip", "right-knee"];
+
+#[test]
+fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
+    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+        .args([
+            "faults",
+            "--runs",
+            "40",
+            "--seed",
+            "1",
+            "--healthy",
+            "0",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let v: serde_json::Value =
+        serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"));
+    let all = &v["all"];
+    assert_eq!(all["runs"], 40);
+    // Exit 0 only when no fall and no stop crossed is the device's.
+    let goal_met = all["unnamed_falls"] == 0
+        && all["unnamed_past_a_stop"] == 0
+        && all["missed"] == 0
+        && all["false_trips"] == 0
+        && all["errors"] == 0;
+    assert_eq!(out.status.code(), Some(if goal_met { 0 } else { 1 }));
+    let bad = v["bad_runs"].as_array().unwrap();
+    assert!(!bad.is_empty(), "seed 1's first 40 runs include bad ones");
+    let mut encoder_runs = 0;
+    for run in bad {
+        let braked: Vec<&str> = run["braked_joints"]
+            .as_array()
+            .unwrap_or_else(|| panic!("no braked_joints in {run}"))
+            .iter()
+            .map(|j| j.as_str().unwrap())
+            .collect();
+        // Known names, each once, in joint order.
+        let order: Vec<usize> = braked
+            .iter()
+            .map(|j| JOINTS.iter().position(|n| n == j).unwrap())
+            .collect();
+        assert!(order.windows(2).all(|w| w[0] < w[1]), "{run}");
+        // A lost encoder brakes its own joint.
+        let fault = run["fault"].as_str().unwrap();
+        if let Some(target) = fault
+            .strip_prefix("encoder-error-flag:")
+            .and_then(|rest| rest.split('@').next())
+        {
+            encoder_runs += 1;
+            assert!(braked.contains(&target), "{run}");
+        }
+    }
+    assert!(encoder_runs > 0, "the runs include a lost encoder: {text}");
+}
