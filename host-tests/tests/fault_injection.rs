@@ -420,6 +420,11 @@ fn a_stop_crossed_is_the_device_s_unless_a_named_case_s_reason_took_the_joint_th
     // stood in a swing.
     assert_eq!(weak.stance_after_strike, [true, false]);
     assert!(weak.past_a_stop(), "{:?}", weak.outcome);
+    // That swing started before the hip crossed its stop, so it tells the
+    // stop too.
+    let crossed = weak.outcome.first_stop_crossed_s.unwrap();
+    assert!(crossed > weak.run.fault.at_s, "{crossed}");
+    assert_eq!(weak.stance_before_stop, [true, false]);
     assert_eq!(weak.outcome.worst_limit_joint, 0);
     assert_eq!(
         weak.named_stop(),

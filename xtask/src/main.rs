@@ -108,7 +108,8 @@ usage: cargo xtask <task>
   firmware  build the firmware for every board (release)
   qemu      build the QEMU image and run its self-test and benchmarks
   profile   where the replayed ticks' instructions go on the target, per
-            source file (QEMU's execution log; about 3 minutes)
+            source file and the costliest lines (QEMU's execution log;
+            about 3-5 minutes)
   size      flash/RAM use per board
   panics    proves both release images hold no panic: none reachable from the
             vector table's handlers, no panic code left at all (no allow-list)

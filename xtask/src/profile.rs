@@ -3,8 +3,8 @@
 //! streamed to this task, which counts each translation block's executions
 //! from the firmware's `replay_starts` on, and attributes each executed
 //! instruction, through `arm-none-eabi-addr2line -i`, to the innermost
-//! project source file it was inlined from. The figure per file is
-//! instructions per replayed tick.
+//! project source line it was inlined from. The figures, per file and then
+//! for the costliest lines, are instructions per replayed tick.
 
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read};
@@ -86,30 +86,47 @@ fn block_key(trace: &str) -> Option<(u64, u32)> {
     ))
 }
 
-/// The innermost project file of each address in `addr2line -i -a`'s
-/// output (an address line, then its frames innermost first), relative to
-/// the repository; frames outside the project (core, libm, builtins) are
-/// skipped, and an address with none is "other (core, libm, builtins)".
-pub fn files_of(addr2line: &str, repo: &str) -> HashMap<u32, String> {
+/// Where an instruction came from: the innermost project source line it
+/// was inlined from (`line` 0 for [`OTHER`]).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Source {
+    pub file: String,
+    pub line: u32,
+}
+
+/// The innermost project source line of each address in `addr2line -i -a`'s
+/// output (an address line, then its frames innermost first, each
+/// `path:line`, perhaps followed by ` (discriminator n)`), the path
+/// relative to the repository; frames outside the project (core, libm,
+/// builtins) are skipped, and an address with none is [`OTHER`].
+pub fn sources_of(addr2line: &str, repo: &str) -> HashMap<u32, Source> {
+    let other = || Source {
+        file: OTHER.to_string(),
+        line: 0,
+    };
     let mut out = HashMap::new();
     let mut current: Option<u32> = None;
     for line in addr2line.lines() {
         if let Some(hex) = line.strip_prefix("0x") {
             current = u32::from_str_radix(hex.trim(), 16).ok();
             if let Some(a) = current {
-                out.insert(a, OTHER.to_string());
+                out.insert(a, other());
             }
             continue;
         }
         let Some(a) = current else { continue };
-        let file = line.split(':').next().unwrap_or_default();
+        let frame = line.split(" (").next().unwrap_or_default();
+        let (file, number) = frame.rsplit_once(':').unwrap_or((frame, ""));
         let ours = file
             .strip_prefix(repo)
             .map(|f| f.trim_start_matches('/'))
             .filter(|f| f.starts_with("crates/") || f.starts_with("firmware/"));
         if let (Some(f), Some(slot)) = (ours, out.get_mut(&a)) {
-            if slot == OTHER {
-                *slot = f.to_string();
+            if slot.file == OTHER {
+                *slot = Source {
+                    file: f.to_string(),
+                    line: number.trim().parse().unwrap_or(0),
+                };
             }
         }
     }
@@ -117,6 +134,9 @@ pub fn files_of(addr2line: &str, repo: &str) -> HashMap<u32, String> {
 }
 
 const OTHER: &str = "other (core, libm, builtins)";
+
+/// Source lines listed after the files, the costliest first.
+const TOP_LINES: usize = 40;
 
 /// Runs the QEMU image `elf` with its execution log and prints the
 /// instructions per replayed tick by source file, largest first.
@@ -165,11 +185,15 @@ pub fn profile(elf: &Path) -> Result {
         .output()
         .map_err(|e| format!("cannot run arm-none-eabi-addr2line: {e}"))?;
     let repo = root().display().to_string();
-    let files = files_of(&String::from_utf8_lossy(&lines.stdout), &repo);
+    let sources = sources_of(&String::from_utf8_lossy(&lines.stdout), &repo);
     let mut by_file: HashMap<&str, u64> = HashMap::new();
+    let mut by_line: HashMap<(&str, u32), u64> = HashMap::new();
     for (a, n) in &instructions {
-        let f = files.get(a).map_or(OTHER, String::as_str);
-        *by_file.entry(f).or_insert(0) += n;
+        let (file, line) = sources
+            .get(a)
+            .map_or((OTHER, 0), |s| (s.file.as_str(), s.line));
+        *by_file.entry(file).or_insert(0) += n;
+        *by_line.entry((file, line)).or_insert(0) += n;
     }
     let total: u64 = by_file.values().sum();
     if total == 0 {
@@ -187,6 +211,11 @@ pub fn profile(elf: &Path) -> Result {
             n / ticks,
             100.0 * n as f64 / total.max(1) as f64
         );
+    }
+    let mut lines: Vec<((&str, u32), u64)> = by_line.into_iter().collect();
+    lines.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    for ((f, line), n) in lines.into_iter().take(TOP_LINES) {
+        println!("profile-line: {:>6} {f}:{line}", n / ticks);
     }
     Ok(())
 }
@@ -248,17 +277,33 @@ Trace 0: 0x7f4bc4000100 [00800408/00000400/00000110/ff020200] Reset
     }
 
     #[test]
-    fn an_address_goes_to_the_innermost_file_of_the_project() {
+    fn an_address_goes_to_the_innermost_line_of_the_project() {
         let out = "\
 0x00002000
 /rustc/abc/library/core/src/slice/mod.rs:100
-/repo/crates/gait-core/src/scalar.rs:140
+/repo/crates/gait-core/src/scalar.rs:140 (discriminator 3)
 /repo/crates/gait-control/src/controller.rs:12
 0x00000400
 /rustc/abc/library/core/src/ptr/mod.rs:9
+0x00000402
+/repo/firmware/src/qemu_rig.rs:?
 ";
-        let files = files_of(out, "/repo");
-        assert_eq!(files[&0x2000], "crates/gait-core/src/scalar.rs");
-        assert_eq!(files[&0x400], OTHER);
+        let sources = sources_of(out, "/repo");
+        assert_eq!(
+            sources[&0x2000],
+            Source {
+                file: "crates/gait-core/src/scalar.rs".into(),
+                line: 140
+            }
+        );
+        assert_eq!(sources[&0x400].file, OTHER);
+        // A line addr2line cannot tell still names its file.
+        assert_eq!(
+            sources[&0x402],
+            Source {
+                file: "firmware/src/qemu_rig.rs".into(),
+                line: 0
+            }
+        );
     }
 }

@@ -37,6 +37,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
     let bad = v["bad_runs"].as_array().unwrap();
     assert!(!bad.is_empty(), "seed 1's first 40 runs include bad ones");
     let mut encoder_runs = 0;
+    let mut estop_runs = 0;
     for run in bad {
         let braked: Vec<&str> = run["braked_joints"]
             .as_array()
@@ -50,15 +51,26 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
             .map(|j| JOINTS.iter().position(|n| n == j).unwrap())
             .collect();
         assert!(order.windows(2).all(|w| w[0] < w[1]), "{run}");
-        // A lost encoder brakes its own joint.
         let fault = run["fault"].as_str().unwrap();
-        if let Some(target) = fault
-            .strip_prefix("encoder-error-flag:")
+        // The e-stop disables every drive without a joint's fault: none
+        // is listed.
+        if fault.starts_with("estop") {
+            estop_runs += 1;
+            assert!(braked.is_empty(), "{run}");
+        }
+        // A lost hip or knee encoder brakes its own joint.
+        let lost = ["encoder-bus:", "encoder-parity:", "encoder-error-flag:"]
+            .iter()
+            .find_map(|kind| fault.strip_prefix(kind))
             .and_then(|rest| rest.split('@').next())
-        {
+            .filter(|target| JOINTS.contains(target));
+        if let Some(target) = lost {
             encoder_runs += 1;
             assert!(braked.contains(&target), "{run}");
         }
     }
-    assert!(encoder_runs > 0, "the runs include a lost encoder: {text}");
+    assert!(
+        encoder_runs > 0 && estop_runs > 0,
+        "the runs include a lost encoder and an e-stop: {text}"
+    );
 }

@@ -45,9 +45,13 @@ pub struct RunResult {
     /// Where the gait was when the fault struck.
     pub struck_in: Option<Phase>,
     /// Per leg (left, right): it was the stance leg of a swing at or after
-    /// the strike and before any stop was crossed (a drive lost before
-    /// that swing is lost in it too).
+    /// the strike and before the fall, if any (a drive lost before that
+    /// swing is lost in it too): what tells the run's fall.
     pub stance_after_strike: [bool; 2],
+    /// The same, but only swings before the run's first stop crossed:
+    /// what tells its stops crossed (a later swing cannot have taken a
+    /// joint there).
+    pub stance_before_stop: [bool; 2],
 }
 
 impl RunResult {
@@ -56,15 +60,12 @@ impl RunResult {
         must_be_detected(self.run.fault.kind) && !self.detected
     }
 
-    /// The named case of this run's fault, where it struck (a fall or a
-    /// stop crossed is told by it).
-    fn named(&self) -> Option<NamedCase> {
-        named_case(&self.run, self.struck_in, self.stance_after_strike)
-    }
-
     /// The named case this run's fall belongs to, if it fell in one.
     pub fn named_fall(&self) -> Option<NamedCase> {
-        self.outcome.fell.as_ref().and_then(|_| self.named())
+        self.outcome
+            .fell
+            .as_ref()
+            .and_then(|_| named_case(&self.run, self.struck_in, self.stance_after_strike))
     }
 
     /// The pilot fell, and not in a named case: the device's to fix.
@@ -85,7 +86,8 @@ impl RunResult {
                 .zip(self.outcome.limit_margins)
                 .filter(|(_, (m, _))| *m < 0.0)
         };
-        self.named().filter(|_| self.past_a_stop()).filter(|&c| {
+        let named = named_case(&self.run, self.struck_in, self.stance_before_stop);
+        named.filter(|_| self.past_a_stop()).filter(|&c| {
             crossed().all(|(j, (_, flexion))| {
                 let o = &self.outcome;
                 let gave_all = o.saturated_joints.get(j) == Some(&true)
@@ -245,12 +247,11 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
     };
     let struck_in = after_strike().next().map(|s| s.report.phase);
     let (outcome, injected, error) = judged(played.as_ref());
-    // Only a swing before the first stop crossed can have taken a joint
-    // there (a fall ends the trace).
-    let stance_after_strike = stance_legs_before(
-        after_strike().map(|s| (s.state.time_s, s.report.phase)),
-        outcome.first_stop_crossed_s,
-    );
+    // Only a swing before the fall, or before the first stop crossed, can
+    // have taken the pilot or a joint there.
+    let phases = || after_strike().map(|s| (s.state.time_s, s.report.phase));
+    let stance_after_strike = stance_legs_before(phases(), outcome.fell_s);
+    let stance_before_stop = stance_legs_before(phases(), outcome.first_stop_crossed_s);
     let before = |t: f64| injected.is_none_or(|i| t < i - 1e-9);
     RunResult {
         run: *run,
@@ -260,16 +261,17 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
         error,
         struck_in,
         stance_after_strike,
+        stance_before_stop,
     }
 }
 
 /// Per leg (left, right): whether it was the stance leg of a swing among
-/// `phases` (time, s, and phase) before `crossed_s` (none: the whole run).
+/// `phases` (time, s, and phase) before `until_s` (none: the whole run).
 fn stance_legs_before(
     phases: impl Iterator<Item = (f64, Phase)>,
-    crossed_s: Option<f64>,
+    until_s: Option<f64>,
 ) -> [bool; 2] {
-    let until = crossed_s.unwrap_or(f64::INFINITY);
+    let until = until_s.unwrap_or(f64::INFINITY);
     let mut legs = [false; 2];
     for (_, phase) in phases.take_while(|&(t, _)| t < until) {
         if let Phase::Swing { stance, .. } = phase {
@@ -453,6 +455,7 @@ fn no_outcome() -> Outcome {
         worst_limit_joint: 0,
         limit_margins: [(0.0, false); 4],
         first_stop_crossed_s: None,
+        fell_s: None,
         braked_joints: [false; 4],
         saturated_joints: [false; 4],
         fell: None,
@@ -567,7 +570,7 @@ mod tests {
     use gait_control::layout::Side;
 
     #[test]
-    fn a_leg_counts_as_stance_only_in_a_swing_before_the_first_stop_crossed() {
+    fn a_leg_counts_as_stance_only_in_a_swing_before_the_time_given() {
         let swing = |stance| Phase::Swing { stance, t_s: 0.1 };
         let phases = [
             (1.0, Phase::Standing),
@@ -577,7 +580,8 @@ mod tests {
         let legs = |crossed| stance_legs_before(phases.into_iter(), crossed);
         assert_eq!(legs(None), [true, true]);
         assert_eq!(legs(Some(2.0)), [true, false]);
-        // A swing that starts as the stop is crossed came too late for it.
+        // A swing that starts as the stop is crossed (or the pilot falls)
+        // came too late for it.
         assert_eq!(legs(Some(1.5)), [false, false]);
         assert_eq!(legs(Some(3.0)), [true, true]);
     }

@@ -55,6 +55,9 @@ pub struct Outcome {
     pub limit_margins: [(f64, bool); 4],
     /// When a hip or knee first crossed its stop, s (`None`: none did).
     pub first_stop_crossed_s: Option<f64>,
+    /// When the pilot fell, s (`None`: they did not): the hips' fall ends
+    /// the run, the torso's pitch past 60° is found in the trace.
+    pub fell_s: Option<f64>,
     /// Per joint: a fault braked its drive (the supervisor's log, newest
     /// 32 records).
     pub braked_joints: [bool; 4],
@@ -108,9 +111,14 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
         }
     }
     let n = trace.len().max(1) as f64;
-    let fell = match ended_by {
-        Some(e @ (SimError::Fell { .. } | SimError::Runaway { .. })) => Some(e.to_string()),
-        _ => torso.map(|t| format!("the torso pitched past 60° at {t:.3} s")),
+    let (fell, fell_s) = match ended_by {
+        Some(e @ (SimError::Fell { .. } | SimError::Runaway { .. })) => {
+            (Some(e.to_string()), trace.last().map(|s| s.state.time_s))
+        }
+        _ => (
+            torso.map(|t| format!("the torso pitched past 60° at {t:.3} s")),
+            torso,
+        ),
     };
     Outcome {
         landings: rig.plant.landings().len(),
@@ -122,6 +130,7 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
         saturated_joints: logged_on_joint(rig, |c| c == FaultCode::MotorSaturated),
         limit_margins: margins.map(|(m, f)| (if m.is_finite() { m } else { 0.0 }, f)),
         first_stop_crossed_s: first_crossed,
+        fell_s,
         fell,
         faults: fault_outcomes(rig, dt),
     }

@@ -65,7 +65,8 @@ fn loses_encoder(kind: Kind) -> bool {
 /// [`explains_stop`], its stops crossed are told by it), given the phase
 /// the gait was in when its fault struck (`None`: not known, or not
 /// struck) and which legs (left, right) were the stance leg of a swing at
-/// or after it.
+/// or after it and before what is told (the fall, or the first stop
+/// crossed: [`RunResult`](super::RunResult)).
 pub fn named_case(
     run: &CampaignRun,
     struck_in: Option<Phase>,
