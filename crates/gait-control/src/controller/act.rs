@@ -84,14 +84,11 @@ impl Controller<'_> {
                 feedforward_nm: feedforward.get(i).copied().unwrap_or(0.0),
             };
             // A joint whose encoder is lost is not driven by PID on its
-            // stale angle: the model's torque for the reference alone,
-            // unless the closed chain gives its angle.
-            let lost = self
+            // stale angle: the model's torque for the reference alone.
+            let blind = self
                 .untaken
                 .get(i)
-                .is_some_and(|&n| n >= super::BLIND_AFTER_FRAMES)
-                || s.lost.get(i).copied().unwrap_or(false);
-            let blind = lost && !s.chain_closed.get(i).copied().unwrap_or(false);
+                .is_some_and(|&n| n >= super::BLIND_AFTER_FRAMES);
             let adjusted;
             let (g, measured, rate) = if blind {
                 adjusted = g.without_feedback();
