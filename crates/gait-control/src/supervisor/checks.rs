@@ -35,6 +35,12 @@ impl Supervisor {
         }
         let now = self.calls;
         let window = self.cfg.deadline_window_ticks;
+        // The newest miss outside the window: none to count (most ticks).
+        let len = self.misses.len();
+        let newest = self.misses.get((self.miss_next + len - 1) % len.max(1));
+        if newest.is_none_or(|m| m.is_none_or(|at| now.wrapping_sub(at) >= window)) {
+            return;
+        }
         let recent = self
             .misses
             .iter()
