@@ -17,6 +17,7 @@
 //! for the rates), one inverse-dynamics evaluation, no allocation, no wait.
 
 mod act;
+mod chain;
 mod sense;
 
 use embedded_hal::digital::{InputPin, OutputPin};
@@ -144,6 +145,8 @@ pub struct Controller<'t> {
     /// stance ankle's lean is estimated instead of read.
     untaken: [u8; ENCODERS],
     rate: [f32; JOINTS],
+    /// A lost hip's or knee's angle from the closed chain.
+    chain: chain::ChainEstimate,
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
     /// Joints whose drive the supervisor has disabled, braked
@@ -197,6 +200,7 @@ impl<'t> Controller<'t> {
             last_angle: [0.0; ENCODERS],
             untaken: [0; ENCODERS],
             rate: [0.0; JOINTS],
+            chain: chain::ChainEstimate::default(),
             motor_sense: [idle; JOINTS],
             motors_enabled: false,
             braked: [false; JOINTS],
@@ -402,6 +406,7 @@ impl<'t> Controller<'t> {
             ankle_plan_rad: r.ankle_plan_rad,
             swing_leg,
             airborne_leg: self.airborne_leg(s),
+            chain_closed: s.chain_closed,
         };
         let verdict = self.supervisor.check(&input);
         match verdict.reaction {

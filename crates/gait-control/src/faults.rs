@@ -40,7 +40,8 @@ pub enum Reaction {
 /// [`FaultSet`] (row *i* is bit *i*, `FaultCode::ALL[i]`). From the rows it
 /// generates [`FaultCode`] (variants, docs, codes), [`FaultCode::COUNT`],
 /// [`FaultCode::ALL`], [`FaultCode::index`], [`FaultCode::reaction`],
-/// [`FaultCode::name`], [`FaultCode::detection_bound`] and
+/// [`FaultCode::name`], [`FaultCode::detection_bound`], [`FaultCode::brakes_joint`],
+/// [`FaultCode::loses_angle`] and
 /// [`FaultCode::reset_rule`].
 macro_rules! fault_table {
     ($(
@@ -51,7 +52,8 @@ macro_rules! fault_table {
             detection_bound: $bound:literal,
             reset_allowed_when: $reset:literal
             $(, in_swing: $swing:path)?
-            $(, brakes_joint: $brakes:literal)? $(,)?
+            $(, brakes_joint: $brakes:literal)?
+            $(, loses_angle: $lost:literal)? $(,)?
         }
     ),+ $(,)?) => {
         /// One fault of the fault table. `#[repr(u16)]`: the discriminant is
@@ -139,8 +141,23 @@ macro_rules! fault_table {
                     $(Self::$variant => fault_table!(@brakes $($brakes)?)),+
                 }
             }
+
+            /// Whether the fault means the joint's own encoder no longer
+            /// tells its angle (`false` unless the row says so). Such a
+            /// joint is braked only while the closed chain of double
+            /// support cannot give its angle instead
+            /// ([`crate::posture::joint_through_closed_chain`]); the
+            /// others stay braked until a reset.
+            #[must_use]
+            pub const fn loses_angle(self) -> bool {
+                match self {
+                    $(Self::$variant => fault_table!(@lost $($lost)?)),+
+                }
+            }
         }
     };
+    (@lost) => { false };
+    (@lost $lost:literal) => { $lost };
     (@brakes) => { false };
     (@brakes $brakes:literal) => { $brakes };
     (@in_swing) => { InSwing::HoldNow };
@@ -219,6 +236,7 @@ fault_table! {
         detection_bound: "3 ticks when persistent; at the 3rd bad frame within 100 ms",
         reset_allowed_when: "< 3 bad frames in the last 100 ticks",
         brakes_joint: true,
+        loses_angle: true,
     },
     /// Joint encoder: too many bad frames, the last a parity error.
     EncoderParity = 0x0202 {
@@ -227,6 +245,7 @@ fault_table! {
         detection_bound: "as 0x0201",
         reset_allowed_when: "as 0x0201",
         brakes_joint: true,
+        loses_angle: true,
     },
     /// Joint encoder: too many bad frames, the last with the error flag.
     EncoderErrorFlag = 0x0203 {
@@ -235,6 +254,7 @@ fault_table! {
         detection_bound: "as 0x0201",
         reset_allowed_when: "as 0x0201",
         brakes_joint: true,
+        loses_angle: true,
     },
     /// Joint encoder: raw counts unchanged while the joint is driven.
     EncoderFrozen = 0x0204 {
@@ -243,6 +263,7 @@ fault_table! {
         detection_bound: "100 ticks",
         reset_allowed_when: "the counts change, or the joint is not driven",
         brakes_joint: true,
+        loses_angle: true,
     },
     /// Joint encoder: too many bad frames, the last an impossible jump.
     EncoderJump = 0x0205 {

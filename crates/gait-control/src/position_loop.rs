@@ -308,7 +308,11 @@ mod tests {
             rate_rad_s: -1e6,
             feedforward_nm: 1e4,
         };
-        assert!(!JointLoop::default().update(&G, &big, 1e6, 1e6, 0.001).rejected);
+        assert!(
+            !JointLoop::default()
+                .update(&G, &big, 1e6, 1e6, 0.001)
+                .rejected
+        );
     }
 
     #[test]

@@ -91,6 +91,34 @@ pub fn stance_phi1_through_other_leg(
     other_ankle_rad + get(s + 1) - get(s) + get(w) - get(w + 1)
 }
 
+/// The signs with which each joint (joint order) enters the closed
+/// chain's angle sum, left foot to right foot: aR − aL + kL − hL + hR − kR
+/// = 0 with both feet flat ([`stance_phi1_through_other_leg`] with the
+/// left leg standing, rearranged).
+const CHAIN_SIGNS: [f32; JOINTS] = [-1.0, 1.0, 1.0, -1.0];
+
+/// Joint `lost`'s angle (or rate) from the other three joints' and both
+/// ankles' (`ankles`: left, right) through the closed chain of double
+/// support: with both feet flat on the ground (level or on treads), the
+/// links' angles must come back to the ground's, so the six relative
+/// angles sum to zero with [`CHAIN_SIGNS`]. Linear, so the same holds for
+/// the rates. Why: a hip or knee whose encoder is lost can then still be
+/// held by its drive instead of its brake. NaN if `lost` is not a joint
+/// or an input is NaN.
+pub fn joint_through_closed_chain(joints: &[f32; JOINTS], ankles: [f32; 2], lost: usize) -> f32 {
+    let Some(&sign) = CHAIN_SIGNS.get(lost) else {
+        return f32::NAN;
+    };
+    let [left, right] = ankles;
+    let mut rest = right - left;
+    for (i, (&q, &si)) in joints.iter().zip(&CHAIN_SIGNS).enumerate() {
+        if i != lost {
+            rest += si * q;
+        }
+    }
+    -rest * sign
+}
+
 /// The stance shank's angle φ1 from the ankle encoder's `reading`: the
 /// reading itself while the foot is flat; once the reading is at the
 /// dorsiflexion `stop` (within 0.5°), the heel may be up (toe rocker,
@@ -140,6 +168,36 @@ mod tests {
             let moved = stance_phi1_through_other_leg(&joints, other + 0.1, side);
             assert!((moved - phi1 - 0.1).abs() < 1e-5);
         }
+    }
+
+    #[test]
+    fn the_closed_chain_gives_any_one_lost_joint() {
+        // Both feet flat, the left leg standing on a shank leaning 0.15
+        // rad: the right ankle reads the right shank's lean, φ5 − π.
+        let phi = [0.15f32, -0.35, 0.05, 2.75, 3.45];
+        let right_ankle = phi[4] - core::f32::consts::PI;
+        for side in [Side::Left, Side::Right] {
+            // The same posture seen with either leg as the stance leg.
+            let (joints, ankles) = match side {
+                Side::Left => (joints_from_phi(&phi, side), [phi[0], right_ankle]),
+                Side::Right => {
+                    let j = joints_from_phi(&phi, Side::Left);
+                    ([j[2], j[3], j[0], j[1]], [right_ankle, phi[0]])
+                }
+            };
+            for lost in 0..JOINTS {
+                let mut blind = joints;
+                blind[lost] = 99.0;
+                let est = joint_through_closed_chain(&blind, ankles, lost);
+                assert!((est - joints[lost]).abs() < 1e-5, "{side:?} {lost}: {est}");
+            }
+            // A foot turned (an ankle read 0.1 rad more) moves the estimate
+            // by as much, and a NaN reading gives NaN.
+            let moved = joint_through_closed_chain(&joints, [ankles[0] + 0.1, ankles[1]], 1);
+            assert!((moved - joints[1] - 0.1).abs() < 1e-5);
+            assert!(joint_through_closed_chain(&joints, [f32::NAN, 0.0], 0).is_nan());
+        }
+        assert!(joint_through_closed_chain(&[0.0; JOINTS], [0.0, 0.0], JOINTS).is_nan());
     }
 
     #[test]

@@ -543,6 +543,33 @@ impl<'t> Sequencer<'t> {
         self.set_down = Some(sd);
     }
 
+    /// In a safe hold, holds joint `joint` at `angle_rad` from now on
+    /// instead of where the hold found it: a joint braked while nothing
+    /// told its angle has moved since, and its drive, back on, must hold
+    /// it where it is, not pull the body back. Nothing outside a hold.
+    pub fn hold_joint_at(&mut self, joint: usize, angle_rad: f32) {
+        if !matches!(self.phase, Phase::SafeHold { .. }) || !angle_rad.is_finite() {
+            return;
+        }
+        for posture in [
+            &mut self.blend_from,
+            &mut self.blend_to,
+            &mut self.reference,
+        ] {
+            if let Some(a) = posture.get_mut(joint) {
+                *a = angle_rad;
+            }
+        }
+        if let Some(sd) = self.set_down.as_mut() {
+            let w = sd.stance.other().hip();
+            if let Some(offset) = joint.checked_sub(w) {
+                if let Some(a) = sd.swing_rad.get_mut(offset) {
+                    *a = angle_rad;
+                }
+            }
+        }
+    }
+
     /// While the motors are disabled the joints move freely: the reference
     /// follows the measured posture (so no tracking error builds up and
     /// nothing jumps when the motors come back after a reset).

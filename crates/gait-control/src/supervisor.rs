@@ -141,6 +141,12 @@ pub struct SupervisorInput {
     /// landing window, no contact yet; `Sequencer::airborne_leg`): an
     /// ankle its spring must have taken off the dorsiflexion stop.
     pub airborne_leg: Option<Side>,
+    /// Joints whose angle control takes this tick from the closed chain of
+    /// double support, not from their own encoder
+    /// ([`crate::posture::joint_through_closed_chain`]): a joint whose
+    /// encoder is lost ([`FaultCode::loses_angle`]) is then held by its
+    /// drive, not braked.
+    pub chain_closed: [bool; JOINTS],
 }
 
 /// The supervisor's decision for one tick.
@@ -153,9 +159,11 @@ pub struct Verdict {
     pub latched: FaultSet,
     /// Faults latched by this call (not latched before it).
     pub new: FaultSet,
-    /// Joints whose drive must stay disabled, braked (0x0404 latched on
-    /// them: a drive that does not give the torque commanded is worse
-    /// than its brake).
+    /// Joints whose drive must be disabled, braked: a drive that does not
+    /// give the torque commanded (0x0403, 0x0404 latched on it) is worse
+    /// than its brake, until a reset; a joint whose encoder is lost
+    /// (0x0201–0x0204) while the closed chain does not give its angle
+    /// (`SupervisorInput::chain_closed`).
     pub braked_joints: [bool; JOINTS],
 }
 
@@ -251,6 +259,7 @@ impl Supervisor {
                 logged_none: FaultSet::EMPTY,
                 log: RingLog::new(),
                 braked: [false; JOINTS],
+                angle_lost: [false; JOINTS],
             },
             joints: [JointTrack::default(); JOINTS],
             ankles: [EncoderTrack::default(); ANKLES],
@@ -286,6 +295,26 @@ impl Supervisor {
         self.deadline_misses_total
     }
 
+    /// Joints whose encoder a latched fault has lost
+    /// ([`FaultCode::loses_angle`]): control must not take their angle from
+    /// their encoder (a frozen one still sends valid frames).
+    pub const fn angle_lost_joints(&self) -> [bool; JOINTS] {
+        self.latch.angle_lost
+    }
+
+    /// Joints braked this tick: the drive faults' until a reset, a lost
+    /// encoder's while the chain does not give its angle.
+    fn braked_joints(&self, chain_closed: &[bool; JOINTS]) -> [bool; JOINTS] {
+        let mut out = self.latch.braked;
+        if self.latch.angle_lost == [false; JOINTS] {
+            return out;
+        }
+        for ((o, &lost), &closed) in out.iter_mut().zip(&self.latch.angle_lost).zip(chain_closed) {
+            *o |= lost && !closed;
+        }
+        out
+    }
+
     /// The post-mortem log, oldest record first (the newest [`LOG_LEN`]).
     pub fn log(&self) -> impl Iterator<Item = &FaultRecord> {
         self.latch.log.iter()
@@ -307,6 +336,7 @@ impl Supervisor {
         self.latch.logged_channels = [0; FaultCode::COUNT];
         self.latch.logged_none = FaultSet::EMPTY;
         self.latch.braked = [false; JOINTS];
+        self.latch.angle_lost = [false; JOINTS];
         Ok(())
     }
 
@@ -345,7 +375,7 @@ impl Supervisor {
             reaction: self.latch.latched.reaction(),
             latched: self.latch.latched,
             new: t.new,
-            braked_joints: self.latch.braked,
+            braked_joints: self.braked_joints(&input.chain_closed),
         }
     }
 }
@@ -364,6 +394,9 @@ struct Latch {
     /// Joints whose drive a fault has disabled ([`FaultCode::brakes_joint`]),
     /// until a reset.
     braked: [bool; JOINTS],
+    /// Joints whose encoder a fault has lost ([`FaultCode::loses_angle`]),
+    /// until a reset.
+    angle_lost: [bool; JOINTS],
 }
 
 impl Latch {
@@ -371,10 +404,15 @@ impl Latch {
     /// and logs it once per channel while latched.
     pub(super) fn raise(&mut self, t: &mut Tick, code: FaultCode, channel: u8, value: f32) {
         t.present.insert(code);
-        if code.brakes_joint() {
-            if let Some(b) = self.braked.get_mut(usize::from(channel)) {
-                *b = true;
-            }
+        let marks = if code.loses_angle() {
+            Some(&mut self.angle_lost)
+        } else if code.brakes_joint() {
+            Some(&mut self.braked)
+        } else {
+            None
+        };
+        if let Some(b) = marks.and_then(|m| m.get_mut(usize::from(channel))) {
+            *b = true;
         }
         if !self.latched.contains(code) {
             self.latched.insert(code);

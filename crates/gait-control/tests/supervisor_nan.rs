@@ -136,6 +136,7 @@ fn random_input() -> impl Strategy<Value = SupervisorInput> {
                 ankle_plan_rad: [f32::NAN; ANKLES],
                 swing_leg: None,
                 airborne_leg: None,
+                chain_closed: [false; 4],
             },
         )
 }

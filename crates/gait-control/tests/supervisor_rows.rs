@@ -517,6 +517,46 @@ fn a_braked_joint_is_released_by_a_reset() {
     assert!(v.latched.is_empty());
 }
 
+/// A lost encoder brakes its joint only while the closed chain of double
+/// support does not give its angle; a drive fault brakes its joint
+/// whatever the chain says. Both until a reset.
+#[test]
+fn a_lost_encoder_brakes_its_joint_only_while_the_chain_is_open() {
+    let (mut sup, v) = inject(5, |_, input| {
+        input.joints[1].status = EncoderStatus::BusError;
+        input.motors[2].output_fault = true;
+    });
+    let last = *v.last().unwrap();
+    assert!(last.latched.contains(FaultCode::EncoderBusError));
+    assert_eq!(last.braked_joints, [false, true, true, false]);
+    assert_eq!(sup.angle_lost_joints(), [false, true, false, false]);
+    // The frames come back (the fault stays latched): still braked while
+    // the chain is open, driven while it is closed, braked again when it
+    // opens.
+    for (k, closed, braked) in [(0, false, true), (1, true, false), (2, false, true)] {
+        let mut input = healthy_input(WARMUP + 10 + k);
+        input.chain_closed = [closed; JOINTS];
+        let v = sup.check(&input);
+        assert_eq!(v.braked_joints[1], braked, "chain closed: {closed}");
+        assert!(
+            v.braked_joints[2],
+            "a drive fault brakes whatever the chain"
+        );
+        assert_eq!(v.reaction, Reaction::SafeHold);
+    }
+    // Once the encoder has read well for 100 ticks, a reset clears it.
+    for tick in 0..110 {
+        let mut input = healthy_input(WARMUP + 20 + tick);
+        input.motors[1].enabled = false;
+        input.motors[2].enabled = false;
+        sup.check(&input);
+    }
+    sup.request_reset(true).unwrap();
+    assert_eq!(sup.angle_lost_joints(), [false; JOINTS]);
+    let v = sup.check(&healthy_input(WARMUP + 200));
+    assert_eq!(v.braked_joints, [false; JOINTS]);
+}
+
 #[test]
 fn row_motor_thermal() {
     let (_, v) = inject(3, |_, input| {

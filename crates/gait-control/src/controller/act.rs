@@ -84,11 +84,14 @@ impl Controller<'_> {
                 feedforward_nm: feedforward.get(i).copied().unwrap_or(0.0),
             };
             // A joint whose encoder is lost is not driven by PID on its
-            // stale angle: the model's torque for the reference alone.
-            let blind = self
+            // stale angle: the model's torque for the reference alone,
+            // unless the closed chain gives its angle.
+            let lost = self
                 .untaken
                 .get(i)
-                .is_some_and(|&n| n >= super::BLIND_AFTER_FRAMES);
+                .is_some_and(|&n| n >= super::BLIND_AFTER_FRAMES)
+                || s.lost.get(i).copied().unwrap_or(false);
+            let blind = lost && !s.chain_closed.get(i).copied().unwrap_or(false);
             let adjusted;
             let (g, measured, rate) = if blind {
                 adjusted = g.without_feedback();

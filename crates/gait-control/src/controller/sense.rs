@@ -25,8 +25,14 @@ pub(super) struct Senses {
     /// read failed.
     pub e_stop_pressed: bool,
     pub e_stop_read_error: bool,
-    /// Last good joint angles (joint order), rad.
+    /// Last good joint angles (joint order), rad; a lost encoder's from
+    /// the closed chain when it gives it.
     pub joints: [f32; JOINTS],
+    /// Joints whose angle (and rate) comes from the closed chain this
+    /// tick ([`Controller::close_chain`]).
+    pub chain_closed: [bool; JOINTS],
+    /// Joints whose encoder the supervisor has found lost.
+    pub lost: [bool; JOINTS],
     /// Calibrated forces (NaN if faulted), N.
     pub forces_n: [f32; FORCES],
     /// What the sequencer needs of it.
@@ -51,8 +57,11 @@ impl Controller<'_> {
         ADC: SpiDevice<u8>,
         IN: InputPin,
     {
-        let (encoders, taken) = self.read_encoders(hw);
+        let lost = self.supervisor.angle_lost_joints();
+        let (encoders, taken) = self.read_encoders(hw, &lost);
         let forces = self.read_forces(hw);
+        let forces_n = forces.map(|f| f.newtons);
+        let chain_closed = self.close_chain(&forces_n, &lost, self.rate_alpha());
         let mode = hw.mode.tick();
         let go = hw.go.tick();
         let (e_stop_pressed, e_stop_read_error) = match hw.e_stop.is_high() {
@@ -60,7 +69,6 @@ impl Controller<'_> {
             Err(_) => (true, true),
         };
         let joints = self.joint_angles();
-        let forces_n = forces.map(|f| f.newtons);
         let sensed = Sensed {
             joints_rad: joints,
             feet_n: [forces_n[0], forces_n[1]],
@@ -80,18 +88,30 @@ impl Controller<'_> {
             e_stop_pressed,
             e_stop_read_error,
             joints,
+            chain_closed,
+            lost,
             forces_n,
             sensed,
         }
+    }
+
+    /// The joint rates' first-order low-pass: α = dt / (RC + dt).
+    fn rate_alpha(&self) -> f32 {
+        let dt = self.cfg.dt_s;
+        let rc = 1.0 / (2.0 * core::f32::consts::PI * self.cfg.rate_filter_hz);
+        dt / (rc + dt)
     }
 
     /// Each encoder's frame as the supervisor will check it, and whether
     /// control takes it: only the frames the supervisor takes
     /// ([`crate::supervisor::Supervisor::accepts_encoder`]) move the
     /// angles and rates control uses; otherwise the last taken one holds.
+    /// Nor do those of an encoder the supervisor has found `lost` (a
+    /// frozen one's frames are valid).
     fn read_encoders<ENC, ADC, PWM, DIR, EN, IN, OUT>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+        lost: &[bool; JOINTS],
     ) -> ([EncoderSense; ENCODERS], [bool; ENCODERS])
     where
         ENC: SpiDevice<u8>,
@@ -99,9 +119,7 @@ impl Controller<'_> {
         let mut out = [BAD_ENCODER; ENCODERS];
         let mut taken = [false; ENCODERS];
         let dt = self.cfg.dt_s;
-        // First-order low-pass on the joint rates: α = dt / (RC + dt).
-        let rc = 1.0 / (2.0 * core::f32::consts::PI * self.cfg.rate_filter_hz);
-        let alpha = dt / (rc + dt);
+        let alpha = self.rate_alpha();
         for (i, ((enc, o), took)) in hw
             .encoders
             .iter_mut()
@@ -127,7 +145,8 @@ impl Controller<'_> {
             if let Some(n) = self.untaken.get_mut(i) {
                 *n = if *took { 0 } else { n.saturating_add(1) };
             }
-            if let (Ok(r), true) = (&result, *took) {
+            let trusted = !lost.get(i).copied().unwrap_or(false);
+            if let (Ok(r), true) = (&result, *took && trusted) {
                 if let (Some(last), Some(raw)) =
                     (self.last_angle.get_mut(i), self.last_raw.get_mut(i))
                 {

@@ -163,8 +163,12 @@ impl Supervisor {
                         track.frozen_ticks = 0;
                     }
                 }
+                // A lost encoder's frames (a frozen one still sends valid
+                // ones) say nothing of the joint's motion: no tracking or
+                // residual check on them.
+                let trusted = !latch.angle_lost.get(i).copied().unwrap_or(true);
                 let error = angle_rad - reference;
-                if error.abs() <= cfg.tracking_error_limit_rad {
+                if !trusted || error.abs() <= cfg.tracking_error_limit_rad {
                     track.tracking_ticks = 0;
                 } else {
                     track.tracking_ticks = track.tracking_ticks.saturating_add(1);
@@ -175,7 +179,7 @@ impl Supervisor {
                 // A reference faster than the joint can go is a jump of the
                 // plan (a hold's start, a reset), not a motion to check
                 // against: the observer restarts from it.
-                if motor.enabled && delta.is_some() && reference_speed <= vmax {
+                if trusted && motor.enabled && delta.is_some() && reference_speed <= vmax {
                     let o = &self.observer;
                     let swing = input.swing_leg.is_some_and(|leg| leg.has_joint(i));
                     let d = track.residual.update(

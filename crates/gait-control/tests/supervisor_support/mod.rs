@@ -89,6 +89,7 @@ pub fn healthy_input(tick: u32) -> SupervisorInput {
         ankle_plan_rad: [f32::NAN; ANKLES],
         swing_leg: None,
         airborne_leg: None,
+        chain_closed: [false; JOINTS],
     }
 }
 
