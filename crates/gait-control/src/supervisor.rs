@@ -245,6 +245,18 @@ impl Supervisor {
         })
     }
 
+    /// The angle control takes from encoder `channel`'s accepted frame
+    /// `angle_rad`: the reading without the offset of a persistent jump
+    /// (0x0205), which the supervisor keeps until power-off (a reset does
+    /// not move the encoder back).
+    pub fn encoder_angle(&self, channel: usize, angle_rad: f32) -> f32 {
+        let track = match channel.checked_sub(JOINTS) {
+            None => self.joints.get(channel).map(|j| &j.encoder),
+            Some(a) => self.ankles.get(a),
+        };
+        track.map_or(f32::NAN, |t| t.angle_without_offset(angle_rad))
+    }
+
     /// Checks `cfg` and starts with nothing latched.
     pub fn new(cfg: SupervisorConfig) -> Result<Self, ConfigError> {
         cfg.validate()?;

@@ -248,6 +248,75 @@ fn row_encoder_jump() {
     assert_row(&v, FaultCode::EncoderJump, Reaction::SafeHold, 3);
 }
 
+/// A frame of an encoder mounted with `direction`, reading `angle_rad`
+/// plus `offset` counts (a magnet that slipped on its shaft).
+fn offset_frame(angle_rad: f32, offset: i32, direction: Direction) -> EncoderSense {
+    let counts = (angle_rad / RAD_PER_COUNT).round() as i32;
+    let signed = match direction {
+        Direction::Positive => counts,
+        Direction::Negative => -counts,
+    };
+    let raw = (signed + offset).rem_euclid(i32::from(COUNTS_PER_REV)) as u16;
+    let cal = Calibration {
+        zero_offset_counts: 0,
+        direction,
+    };
+    EncoderSense {
+        status: EncoderStatus::Ok,
+        raw_counts: raw,
+        angle_rad: cal.counts_to_rad(raw),
+    }
+}
+
+#[test]
+fn a_persistent_jump_is_taken_out_of_the_frames_after_it() {
+    // The knee reads 2,000 counts (44°) off from the 20th tick on while it
+    // bends on at 0.5 rad/s; its reference follows the true angle. The
+    // jump latches 0x0205, and from then on the supervisor takes the
+    // frames without the offset: they continue from the last accepted
+    // one, control is given the true angle, and nothing else trips (the
+    // reading 44° off used to trip the tracking error).
+    for direction in [Direction::Positive, Direction::Negative] {
+        for offset in [2000, -2000, 9000] {
+            let mut sup = supervisor();
+            let base = STAND_JOINTS[1];
+            let mut worst = 0.0f32;
+            for tick in 0..600u32 {
+                let mut input = healthy_input(tick);
+                let truth = base + 0.0005 * tick as f32;
+                let shift = if tick >= 20 { offset } else { 0 };
+                let frame = offset_frame(truth, shift, direction);
+                input.joints[1] = frame;
+                input.joint_reference_rad[1] = offset_frame(truth, 0, direction).angle_rad;
+                let taken = sup.accepts_encoder(1, &frame);
+                let v = sup.check(&input);
+                assert_eq!(
+                    taken,
+                    !(20..23).contains(&tick),
+                    "{direction:?} {offset} tick {tick}"
+                );
+                if taken {
+                    let seen = sup.encoder_angle(1, frame.angle_rad);
+                    let truth = offset_frame(truth, 0, direction).angle_rad;
+                    worst = worst.max((seen - truth).abs());
+                }
+                let others = v.latched.iter().filter(|&c| c != FaultCode::EncoderJump);
+                assert_eq!(
+                    others.count(),
+                    0,
+                    "{direction:?} {offset} tick {tick}: {v:?}"
+                );
+                assert_eq!(v.latched.contains(FaultCode::EncoderJump), tick >= 22);
+            }
+            // The joint's motion over the three jumping frames goes into
+            // the offset: 3 ticks at 0.5 rad/s.
+            assert!(worst < 0.0016, "{direction:?} {offset}: {worst} rad");
+            // The window drains: the condition is gone, a reset is allowed.
+            assert!(sup.request_reset(true).is_ok());
+        }
+    }
+}
+
 #[test]
 fn a_single_jump_frame_is_dropped() {
     let jumped = encoder(STAND_JOINTS[1] + 2000.0 * RAD_PER_COUNT);

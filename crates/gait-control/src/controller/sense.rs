@@ -75,9 +75,11 @@ impl Controller<'_> {
             crutches_n: [forces_n[2], forces_n[3]],
             // This tick's readings (NaN unless the frame was taken): a held
             // last-good value must not count as "ready".
-            ankles_rad: [JOINTS, JOINTS + 1].map(|i| match (encoders.get(i), taken.get(i)) {
-                (Some(e), Some(true)) => e.angle_rad,
-                _ => f32::NAN,
+            ankles_rad: [JOINTS, JOINTS + 1].map(|i| {
+                match (self.last_angle.get(i), taken.get(i)) {
+                    (Some(&a), Some(true)) => a,
+                    _ => f32::NAN,
+                }
             }),
         };
         Senses {
@@ -147,18 +149,19 @@ impl Controller<'_> {
             }
             let trusted = !lost.get(i).copied().unwrap_or(false);
             if let (Ok(r), true) = (&result, *took && trusted) {
+                let angle = self.supervisor.encoder_angle(i, r.angle_rad);
                 if let (Some(last), Some(raw)) =
                     (self.last_angle.get_mut(i), self.last_raw.get_mut(i))
                 {
                     if let Some(rate) = self.rate.get_mut(i) {
                         let raw_rate = if self.primed {
-                            (r.angle_rad - *last) / dt
+                            (angle - *last) / dt
                         } else {
                             0.0
                         };
                         *rate += alpha * (raw_rate - *rate);
                     }
-                    *last = r.angle_rad;
+                    *last = angle;
                     *raw = r.raw_counts;
                 }
             }

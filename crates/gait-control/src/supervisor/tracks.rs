@@ -85,8 +85,14 @@ pub(super) struct EncoderTrack {
     pub(super) last: Option<Accepted>,
     /// Ticks since `last` was accepted.
     pub(super) since_last: u32,
-    /// Consecutive frames rejected as jumps (re-seed at the debounce count).
+    /// Consecutive frames rejected as jumps (the offset below is taken at
+    /// the debounce count).
     pub(super) consecutive_jumps: u8,
+    /// What the encoder reads beyond the joint since a jump persisted (its
+    /// magnet or zero moved: the joint cannot have moved so far so fast),
+    /// in raw counts (mod 2¹⁴) and rad; taken out of every frame after.
+    pub(super) offset_counts: u16,
+    pub(super) offset_rad: f32,
 }
 
 /// What this tick's encoder frame turned out to be.
@@ -150,7 +156,7 @@ impl EncoderTrack {
         let Some(previous) = self.last.filter(|_| since_last <= window) else {
             return Class::Seed;
         };
-        let delta = wrapped_delta(previous.raw, sense.raw_counts);
+        let delta = wrapped_delta(previous.raw, self.raw_without_offset(sense.raw_counts));
         let allowed = u32::from(max_jump).saturating_mul(since_last);
         if u32::from(delta.unsigned_abs()) > allowed {
             Class::Jump
@@ -174,8 +180,8 @@ impl EncoderTrack {
         let class = self.classify(sense, debounce, max_jump);
         self.since_last = self.since_last.saturating_add(1);
         let current = Accepted {
-            raw: sense.raw_counts,
-            angle_rad: sense.angle_rad,
+            raw: self.raw_without_offset(sense.raw_counts),
+            angle_rad: self.angle_without_offset(sense.angle_rad),
         };
         match class {
             Class::Bad(code, invalid) => {
@@ -200,10 +206,18 @@ impl EncoderTrack {
                 self.last_bad = Some(FaultCode::EncoderJump);
                 self.consecutive_jumps = self.consecutive_jumps.saturating_add(1);
                 if self.consecutive_jumps >= debounce.count {
-                    // The jump persists: it is where the encoder now reads.
-                    // The fault is raised by the window; take the new value
-                    // as the reference so the condition can clear.
-                    self.last = None;
+                    // The jump persists: the encoder now reads offset. The
+                    // fault is raised by the window; from now on the offset
+                    // is taken out, so the next frame continues from the
+                    // last accepted one (the joint's motion over these few
+                    // ticks, a fraction of a degree, goes into the offset)
+                    // and control keeps the joint's true angle: a hold that
+                    // sets a foot down on angles 6° off dropped the pilot.
+                    if let Some(previous) = self.last {
+                        self.offset_counts =
+                            sense.raw_counts.wrapping_sub(previous.raw) & DATA_MASK;
+                        self.offset_rad = wrap_pi(sense.angle_rad - previous.angle_rad);
+                    }
                     self.consecutive_jumps = 0;
                 }
                 (Frame::Rejected, None)
@@ -227,6 +241,20 @@ impl EncoderTrack {
         }
     }
 
+    /// `raw` without the offset of a persistent jump.
+    pub(super) fn raw_without_offset(&self, raw: u16) -> u16 {
+        raw.wrapping_sub(self.offset_counts) & DATA_MASK
+    }
+
+    /// `angle_rad` without the offset of a persistent jump, in (−π, π].
+    pub(super) fn angle_without_offset(&self, angle_rad: f32) -> f32 {
+        if self.offset_rad == 0.0 {
+            angle_rad
+        } else {
+            wrap_pi(angle_rad - self.offset_rad)
+        }
+    }
+
     pub(super) fn accept(&mut self, sample: Accepted) {
         self.last = Some(sample);
         self.since_last = 0;
@@ -241,6 +269,18 @@ impl EncoderTrack {
         } else {
             None
         }
+    }
+}
+
+/// `x` (within (−3π, 3π]) folded into (−π, π].
+fn wrap_pi(x: f32) -> f32 {
+    use core::f32::consts::{PI, TAU};
+    if x > PI {
+        x - TAU
+    } else if x <= -PI {
+        x + TAU
+    } else {
+        x
     }
 }
 
