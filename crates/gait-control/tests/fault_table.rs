@@ -197,3 +197,37 @@ fn only_safe_holds_land_first_and_only_for_missed_deadlines() {
         .collect();
     assert_eq!(in_air, [0x0401]);
 }
+
+#[test]
+fn a_sets_reaction_is_its_most_severe_codes() {
+    use gait_control::faults::FaultSet;
+    // The set's reaction (masks made when compiling) against the plain
+    // maximum over its codes: the empty set, every code alone, every pair,
+    // and pseudo-random sets.
+    let plain = |set: FaultSet| {
+        set.iter()
+            .map(FaultCode::reaction)
+            .max()
+            .unwrap_or(Reaction::None)
+    };
+    assert_eq!(FaultSet::EMPTY.reaction(), Reaction::None);
+    for &a in FaultCode::ALL.iter() {
+        for &b in FaultCode::ALL.iter() {
+            let set: FaultSet = [a, b].into_iter().collect();
+            assert_eq!(set.reaction(), plain(set), "{a:?} {b:?}");
+        }
+    }
+    let mut x = 0x9e37_79b9_u32;
+    for _ in 0..2000 {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        let set: FaultSet = FaultCode::ALL
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| x >> (i % 32) & 1 == 1)
+            .map(|(_, &c)| c)
+            .collect();
+        assert_eq!(set.reaction(), plain(set), "{set:?}");
+    }
+}
