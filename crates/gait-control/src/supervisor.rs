@@ -212,6 +212,9 @@ pub struct Supervisor {
     misses: [Option<u32>; MAX_DEADLINE_MISSES as usize],
     miss_next: usize,
     deadline_misses_total: u32,
+    /// Some encoder's persistent jump is taken out of its frames
+    /// ([`Supervisor::encoder_offsets`]).
+    encoder_offsets: bool,
 }
 
 /// Collects what one check raised.
@@ -238,6 +241,13 @@ impl Supervisor {
             Some(a) => (self.ankles.get(a), cfg.max_ankle_jump_counts_per_tick),
         };
         track.is_some_and(|t| {
+            let corrected;
+            let sense = if self.encoder_offsets && t.offset_counts != 0 {
+                corrected = t.without_offset(sense);
+                &corrected
+            } else {
+                sense
+            };
             matches!(
                 t.classify(sense, cfg.encoder_debounce, max_jump),
                 Class::Seed | Class::Good { .. }
@@ -248,13 +258,20 @@ impl Supervisor {
     /// The angle control takes from encoder `channel`'s accepted frame
     /// `angle_rad`: the reading without the offset of a persistent jump
     /// (0x0205), which the supervisor keeps until power-off (a reset does
-    /// not move the encoder back).
+    /// not move the encoder back). Needed only while
+    /// [`Supervisor::encoder_offsets`].
     pub fn encoder_angle(&self, channel: usize, angle_rad: f32) -> f32 {
         let track = match channel.checked_sub(JOINTS) {
             None => self.joints.get(channel).map(|j| &j.encoder),
             Some(a) => self.ankles.get(a),
         };
         track.map_or(f32::NAN, |t| t.angle_without_offset(angle_rad))
+    }
+
+    /// Whether any encoder reads offset since a persistent jump (nearly
+    /// never): only then are frames corrected, here and in control.
+    pub const fn encoder_offsets(&self) -> bool {
+        self.encoder_offsets
     }
 
     /// Checks `cfg` and starts with nothing latched.
@@ -283,6 +300,7 @@ impl Supervisor {
             misses: [None; MAX_DEADLINE_MISSES as usize],
             miss_next: 0,
             deadline_misses_total: 0,
+            encoder_offsets: false,
         })
     }
 

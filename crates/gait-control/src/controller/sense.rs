@@ -122,6 +122,7 @@ impl Controller<'_> {
         let mut taken = [false; ENCODERS];
         let dt = self.cfg.dt_s;
         let alpha = self.rate_alpha();
+        let offsets = self.supervisor.encoder_offsets();
         for (i, ((enc, o), took)) in hw
             .encoders
             .iter_mut()
@@ -149,7 +150,11 @@ impl Controller<'_> {
             }
             let trusted = !lost.get(i).copied().unwrap_or(false);
             if let (Ok(r), true) = (&result, *took && trusted) {
-                let angle = self.supervisor.encoder_angle(i, r.angle_rad);
+                let angle = if offsets {
+                    self.supervisor.encoder_angle(i, r.angle_rad)
+                } else {
+                    r.angle_rad
+                };
                 if let (Some(last), Some(raw)) =
                     (self.last_angle.get_mut(i), self.last_raw.get_mut(i))
                 {

@@ -120,6 +120,13 @@ impl Supervisor {
             let Some(track) = self.joints.get_mut(i) else {
                 continue;
             };
+            let corrected;
+            let sense = if self.encoder_offsets && track.encoder.offset_counts != 0 {
+                corrected = track.encoder.without_offset(sense);
+                &corrected
+            } else {
+                sense
+            };
             let (frame, invalid) =
                 track
                     .encoder
@@ -205,6 +212,7 @@ impl Supervisor {
                 }
             } else {
                 track.residual.stop(motor.feedforward_nm);
+                self.encoder_offsets |= track.encoder.offset_counts != 0;
             }
             // Conditions that persist while frames are rejected.
             if track.velocity_valid && !within(track.velocity_rad_s, vmax) {
@@ -229,6 +237,13 @@ impl Supervisor {
                 self.ankles.get_mut(i),
             ) else {
                 continue;
+            };
+            let corrected;
+            let sense = if self.encoder_offsets && track.offset_counts != 0 {
+                corrected = track.without_offset(sense);
+                &corrected
+            } else {
+                sense
             };
             let (frame, invalid) = track.update(
                 sense,
@@ -293,6 +308,8 @@ impl Supervisor {
                         self.latch.raise(t, FaultCode::AnkleEncoder, ch, *n as f32);
                     }
                 }
+            } else {
+                self.encoder_offsets |= track.offset_counts != 0;
             }
         }
     }

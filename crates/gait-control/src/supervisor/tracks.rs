@@ -156,7 +156,7 @@ impl EncoderTrack {
         let Some(previous) = self.last.filter(|_| since_last <= window) else {
             return Class::Seed;
         };
-        let delta = wrapped_delta(previous.raw, self.raw_without_offset(sense.raw_counts));
+        let delta = wrapped_delta(previous.raw, sense.raw_counts);
         let allowed = u32::from(max_jump).saturating_mul(since_last);
         if u32::from(delta.unsigned_abs()) > allowed {
             Class::Jump
@@ -180,8 +180,8 @@ impl EncoderTrack {
         let class = self.classify(sense, debounce, max_jump);
         self.since_last = self.since_last.saturating_add(1);
         let current = Accepted {
-            raw: self.raw_without_offset(sense.raw_counts),
-            angle_rad: self.angle_without_offset(sense.angle_rad),
+            raw: sense.raw_counts,
+            angle_rad: sense.angle_rad,
         };
         match class {
             Class::Bad(code, invalid) => {
@@ -213,10 +213,13 @@ impl EncoderTrack {
                     // ticks, a fraction of a degree, goes into the offset)
                     // and control keeps the joint's true angle: a hold that
                     // sets a foot down on angles 6° off dropped the pilot.
+                    // (`sense` is already without the offset so far.)
                     if let Some(previous) = self.last {
-                        self.offset_counts =
-                            sense.raw_counts.wrapping_sub(previous.raw) & DATA_MASK;
-                        self.offset_rad = wrap_pi(sense.angle_rad - previous.angle_rad);
+                        let more = sense.raw_counts.wrapping_sub(previous.raw);
+                        self.offset_counts = self.offset_counts.wrapping_add(more) & DATA_MASK;
+                        self.offset_rad = wrap_pi(
+                            self.offset_rad + wrap_pi(sense.angle_rad - previous.angle_rad),
+                        );
                     }
                     self.consecutive_jumps = 0;
                 }
@@ -241,9 +244,20 @@ impl EncoderTrack {
         }
     }
 
-    /// `raw` without the offset of a persistent jump.
-    pub(super) fn raw_without_offset(&self, raw: u16) -> u16 {
-        raw.wrapping_sub(self.offset_counts) & DATA_MASK
+    /// `sense` without the offset of a persistent jump; a bad or invalid
+    /// frame unchanged, so [`EncoderTrack::classify`] still sees it.
+    pub(super) fn without_offset(&self, sense: &EncoderSense) -> EncoderSense {
+        let valid = matches!(sense.status, EncoderStatus::Ok)
+            && sense.raw_counts <= DATA_MASK
+            && sense.angle_rad.abs() <= MAX_ENCODER_ANGLE_RAD;
+        if !valid {
+            return *sense;
+        }
+        EncoderSense {
+            status: sense.status,
+            raw_counts: sense.raw_counts.wrapping_sub(self.offset_counts) & DATA_MASK,
+            angle_rad: self.angle_without_offset(sense.angle_rad),
+        }
     }
 
     /// `angle_rad` without the offset of a persistent jump, in (−π, π].
