@@ -337,7 +337,7 @@ mod tests {
                 // the window empties and a push only moves the head).
                 let bad = match (n / 300) % 3 {
                     0 => x % 5 < 2,
-                    1 => x % 97 == 0,
+                    1 => x.is_multiple_of(97),
                     _ => false,
                 };
                 all[n] = bad;
