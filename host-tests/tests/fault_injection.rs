@@ -516,3 +516,41 @@ fn a_stop_crossed_is_the_device_s_unless_a_named_case_s_reason_took_the_joint_th
     assert!(dragged.outcome.braked_joints[3]);
     assert!(dragged.unnamed_stop());
 }
+
+#[test]
+fn a_persistent_encoder_jump_is_taken_out_and_the_step_lands_before_the_hold() {
+    // Seed 1's campaign: stair descents whose jump dropped the pilot when
+    // the reading stayed offset (the first three, session 14) or when the
+    // offset was taken out but the hold set the foot down at once (the
+    // last four). With the offset taken out and the step landing first
+    // (0x0205 is marked "land first"), each stands with no joint past a
+    // stop, and its hold begins only after the landing.
+    for (fault, seed) in [
+        ("encoder-jump=315:right-knee@1.908", 456_424),
+        ("encoder-jump=-336:left-knee@4.575", 817_201),
+        ("encoder-jump=-287:left-hip@4.689", 231_619),
+        ("encoder-jump=370:right-hip@2.699", 910_021),
+        ("encoder-jump=198:left-knee@2.685", 367_922),
+        ("encoder-jump=-182:left-hip@2.678", 569),
+        ("encoder-jump=-298:right-hip@2.684", 994_257),
+    ] {
+        let r = campaign_run(Gait::StairDown, fault, seed);
+        let o = &r.outcome;
+        assert!(o.fell.is_none(), "{fault}: {o:?}");
+        assert!(o.worst_limit_margin_rad >= 0.0, "{fault}: {o:?}");
+        let f = o
+            .faults
+            .iter()
+            .find(|f| f.code == FaultCode::EncoderJump)
+            .unwrap_or_else(|| panic!("{fault}: no 0x0205: {o:?}"));
+        assert!(f.latency_ticks.unwrap() <= 3, "{fault}: {f:?}");
+        assert!(o.landings >= 1, "{fault}: {o:?}");
+        // The swing played on to its landing (1.1–2.2 s here) before the
+        // hold stood still; a hold at once stands within a few tenths.
+        let held_after = f.safe_state_s.unwrap() - f.detected_s;
+        assert!(
+            held_after > 0.5,
+            "{fault}: held {held_after} s after detection"
+        );
+    }
+}

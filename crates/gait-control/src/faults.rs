@@ -271,6 +271,7 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "3 ticks when persistent; a single jumping frame is dropped and tolerated",
         reset_allowed_when: "as 0x0201",
+        in_swing: InSwing::LandFirst,
     },
     /// Joint encoder: a frame reported good carries an impossible value
     /// (raw counts beyond 14 bits, angle not finite or outside (−π, π]).

@@ -168,7 +168,7 @@ fn the_cell_splitter_keeps_escaped_pipes() {
 }
 
 #[test]
-fn only_safe_holds_land_first_and_only_for_missed_deadlines() {
+fn only_safe_holds_land_first_and_only_for_missed_deadlines_and_jumps() {
     use gait_control::faults::InSwing;
     let landing: Vec<FaultCode> = FaultCode::ALL
         .into_iter()
@@ -177,7 +177,7 @@ fn only_safe_holds_land_first_and_only_for_missed_deadlines() {
     assert!(landing.iter().all(|c| c.reaction() == Reaction::SafeHold));
     assert_eq!(
         landing.iter().map(|c| c.code()).collect::<Vec<_>>(),
-        [0x0601]
+        [0x0205, 0x0601]
     );
     // A set lands first only if every safe-hold fault in it does.
     let mut set: gait_control::faults::FaultSet = [FaultCode::DeadlineMissed, FaultCode::ForceOpen]

@@ -31,14 +31,14 @@ const RUNS: [(Gait, usize, f64, Option<&str>); 5] = [
     (Gait::Walk, 2, 12.0, None),
     (Gait::StairUp, 2, 12.0, None),
     (Gait::StairDown, 2, 12.0, None),
-    // Mid first swing (1.36–3.54 s): a jump on the right knee, then a
-    // safe hold for the second it lasts.
+    // Mid first swing (1.36–3.54 s): a jump on the right knee, its offset
+    // taken out; the step lands, then a safe hold for the second left.
     (Gait::Walk, 2, 4.5, Some("encoder-jump=300:right-knee@2.4")),
-    // Mid first swing of a stair ascent: the stance hip's encoder jumps,
-    // the hold sets the swing foot down onto the tread (an IK a tick). (A
-    // record carries counts, not a frame's errors: a parity or bus fault
-    // would replay as good frames.)
-    (Gait::StairUp, 1, 4.0, Some("encoder-jump=300:left-hip@2.4")),
+    // Mid first swing of a stair ascent: the swing knee's encoder freezes,
+    // found 100 ms later; the knee braked, the hold sets the swing foot
+    // down onto the tread (an IK a tick). (A record carries counts, not a
+    // frame's errors: a parity or bus fault would replay as good frames.)
+    (Gait::StairUp, 1, 4.0, Some("encoder-stuck:right-knee@2.4")),
 ];
 
 /// Records the runs above on `device` with the flash tables.
