@@ -241,13 +241,7 @@ impl Supervisor {
             Some(a) => (self.ankles.get(a), cfg.max_ankle_jump_counts_per_tick),
         };
         track.is_some_and(|t| {
-            let corrected;
-            let sense = if self.encoder_offsets && t.offset_counts != 0 {
-                corrected = t.without_offset(sense);
-                &corrected
-            } else {
-                sense
-            };
+            let sense = &t.seen(sense, self.encoder_offsets);
             matches!(
                 t.classify(sense, cfg.encoder_debounce, max_jump),
                 Class::Seed | Class::Good { .. }

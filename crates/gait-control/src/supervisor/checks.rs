@@ -120,13 +120,7 @@ impl Supervisor {
             let Some(track) = self.joints.get_mut(i) else {
                 continue;
             };
-            let corrected;
-            let sense = if self.encoder_offsets && track.encoder.offset_counts != 0 {
-                corrected = track.encoder.without_offset(sense);
-                &corrected
-            } else {
-                sense
-            };
+            let sense = &track.encoder.seen(sense, self.encoder_offsets);
             let (frame, invalid) =
                 track
                     .encoder
@@ -238,13 +232,7 @@ impl Supervisor {
             ) else {
                 continue;
             };
-            let corrected;
-            let sense = if self.encoder_offsets && track.offset_counts != 0 {
-                corrected = track.without_offset(sense);
-                &corrected
-            } else {
-                sense
-            };
+            let sense = &track.seen(sense, self.encoder_offsets);
             let (frame, invalid) = track.update(
                 sense,
                 cfg.encoder_debounce,

@@ -244,6 +244,17 @@ impl EncoderTrack {
         }
     }
 
+    /// `sense` as this track takes it: without the offset of a persistent
+    /// jump when it has one (`any_offset`: some track has, else nothing to
+    /// look at).
+    pub(super) fn seen(&self, sense: &EncoderSense, any_offset: bool) -> EncoderSense {
+        if any_offset && self.offset_counts != 0 {
+            self.without_offset(sense)
+        } else {
+            *sense
+        }
+    }
+
     /// `sense` without the offset of a persistent jump; a bad or invalid
     /// frame unchanged, so [`EncoderTrack::classify`] still sees it.
     pub(super) fn without_offset(&self, sense: &EncoderSense) -> EncoderSense {
