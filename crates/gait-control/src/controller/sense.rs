@@ -58,10 +58,11 @@ impl Controller<'_> {
         IN: InputPin,
     {
         let lost = self.supervisor.angle_lost_joints();
-        let (encoders, taken) = self.read_encoders(hw, &lost);
+        let alpha = self.rate_alpha();
+        let (encoders, taken) = self.read_encoders(hw, &lost, alpha);
         let forces = self.read_forces(hw);
         let forces_n = forces.map(|f| f.newtons);
-        let chain_closed = self.close_chain(&forces_n, &lost, self.rate_alpha());
+        let chain_closed = self.close_chain(&forces_n, &lost, alpha);
         let mode = hw.mode.tick();
         let go = hw.go.tick();
         let (e_stop_pressed, e_stop_read_error) = match hw.e_stop.is_high() {
@@ -109,11 +110,13 @@ impl Controller<'_> {
     /// ([`crate::supervisor::Supervisor::accepts_encoder`]) move the
     /// angles and rates control uses; otherwise the last taken one holds.
     /// Nor do those of an encoder the supervisor has found `lost` (a
-    /// frozen one's frames are valid).
+    /// frozen one's frames are valid). `alpha` is the rates' low-pass
+    /// ([`Controller::rate_alpha`], worked out once a tick).
     fn read_encoders<ENC, ADC, PWM, DIR, EN, IN, OUT>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
         lost: &[bool; JOINTS],
+        alpha: f32,
     ) -> ([EncoderSense; ENCODERS], [bool; ENCODERS])
     where
         ENC: SpiDevice<u8>,
@@ -121,7 +124,6 @@ impl Controller<'_> {
         let mut out = [BAD_ENCODER; ENCODERS];
         let mut taken = [false; ENCODERS];
         let dt = self.cfg.dt_s;
-        let alpha = self.rate_alpha();
         let offsets = self.supervisor.encoder_offsets();
         for (i, ((enc, o), took)) in hw
             .encoders
