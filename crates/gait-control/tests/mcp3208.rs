@@ -12,8 +12,8 @@ mod common;
 use common::{FaultySpi, frame, frames};
 use embedded_hal::spi::ErrorKind;
 use gait_control::drivers::mcp3208::{
-    CalibrationError, Channel, Error, ForceCalibration, ForceFault, Mcp3208, decode_reply,
-    encode_request,
+    CalibrationError, Channel, DriveCurrentCalibration, Error, ForceCalibration, ForceFault,
+    Mcp3208, decode_reply, encode_request,
 };
 use proptest::prelude::*;
 
@@ -193,5 +193,54 @@ proptest! {
             prop_assert!((-20.0..=1200.0).contains(&n));
             prop_assert!((50..=4000).contains(&counts));
         }
+    }
+}
+
+/// A drive's current monitor: 2,048 counts at 0 A, 0.1 N·m a count.
+fn drive_cal() -> DriveCurrentCalibration {
+    DriveCurrentCalibration::new(2048, 0.1, 100, 4000).unwrap()
+}
+
+#[test]
+fn a_drive_current_reads_as_joint_torque_either_way() {
+    let mut adc = new_adc(
+        &[
+            frame(&[0x07, 0x00, 0x00], &reply(2548)),
+            frame(&[0x07, 0xC0, 0x00], &reply(1548)),
+        ],
+        None,
+    );
+    let flex = adc.read_drive_torque(Channel::Ch4, &drive_cal()).unwrap();
+    let ext = adc.read_drive_torque(Channel::Ch7, &drive_cal()).unwrap();
+    assert!((flex - 50.0).abs() < 1e-3, "{flex}");
+    assert!((ext + 50.0).abs() < 1e-3, "{ext}");
+    destroy_adc(adc);
+}
+
+#[test]
+fn a_drive_current_monitor_at_a_rail_is_a_fault_not_a_current() {
+    let c = drive_cal();
+    assert_eq!(c.convert(99), Err(ForceFault::OpenCircuit { counts: 99 }));
+    assert_eq!(
+        c.convert(4001),
+        Err(ForceFault::ShortCircuit { counts: 4001 })
+    );
+    assert!(c.convert(100).is_ok() && c.convert(4000).is_ok());
+}
+
+#[test]
+fn a_drive_current_calibration_needs_its_zero_between_the_rails() {
+    for (zero, per, open, short) in [
+        (50, 0.1, 100, 4000),
+        (4050, 0.1, 100, 4000),
+        (2048, 0.0, 100, 4000),
+        (2048, f32::NAN, 100, 4000),
+        (2048, 0.1, 100, 4096),
+    ] {
+        assert_eq!(
+            DriveCurrentCalibration::new(zero, per, open, short),
+            Err(CalibrationError::BadBounds),
+            "{zero} {per} {open} {short}"
+        );
     }
 }

@@ -1,5 +1,6 @@
-//! MCP3208 12-bit, 8-channel SPI ADC reading the force-sensing resistors
-//! under the feet and in the crutch tips.
+//! MCP3208 12-bit, 8-channel SPI ADC reading the force sensors under the
+//! feet and in the crutch tips, and the hip and knee drives' current
+//! monitors.
 //!
 //! Wire format (Microchip MCP3204/3208 datasheet, section 6.1, "Using the
 //! MCP3204/3208 with microcontroller SPI ports"): one chip-select window of
@@ -54,7 +55,8 @@ pub const fn decode_reply(reply: [u8; 3]) -> u16 {
     (((reply[1] & 0x0F) as u16) << 8) | reply[2] as u16
 }
 
-/// Why a force reading was not believed.
+/// Why a force reading (or a drive-current one: [`DriveCurrentCalibration`])
+/// was not believed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ForceFault {
@@ -180,6 +182,57 @@ impl<const N: usize> ForceCalibration<N> {
     }
 }
 
+/// Counts → joint torque for one drive's current monitor: the servo
+/// amplifier's analog output of its actual current, scaled and offset onto
+/// an ADC channel, times the joint torque per ampere. Linear (an amplifier's
+/// output is, unlike a force-sensing resistor), and checked like a force
+/// sensor: a reading at a rail is a broken monitor, not a current.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DriveCurrentCalibration {
+    zero_counts: u16,
+    nm_per_count: f32,
+    open_below_counts: u16,
+    short_above_counts: u16,
+}
+
+impl DriveCurrentCalibration {
+    /// `zero_counts`: the reading at 0 A; `nm_per_count`: joint torque per
+    /// count (flexion positive, finite, non-zero); readings below
+    /// `open_below_counts` or above `short_above_counts` are a broken
+    /// monitor (open < zero < short ≤ 4095).
+    pub fn new(
+        zero_counts: u16,
+        nm_per_count: f32,
+        open_below_counts: u16,
+        short_above_counts: u16,
+    ) -> Result<Self, CalibrationError> {
+        let ordered = open_below_counts < zero_counts
+            && zero_counts < short_above_counts
+            && short_above_counts <= MAX_COUNTS;
+        if !ordered || !nm_per_count.is_finite() || nm_per_count == 0.0 {
+            return Err(CalibrationError::BadBounds);
+        }
+        Ok(Self {
+            zero_counts,
+            nm_per_count,
+            open_below_counts,
+            short_above_counts,
+        })
+    }
+
+    /// Counts → joint torque, N·m, with the rail checks.
+    pub fn convert(&self, counts: u16) -> Result<f32, ForceFault> {
+        if counts < self.open_below_counts {
+            return Err(ForceFault::OpenCircuit { counts });
+        }
+        if counts > self.short_above_counts {
+            return Err(ForceFault::ShortCircuit { counts });
+        }
+        Ok((f32::from(counts) - f32::from(self.zero_counts)) * self.nm_per_count)
+    }
+}
+
 /// The outcome of one force conversion, without the bus's own error type:
 /// the kind of a driver error, which the supervisor counts as it is
 /// ([`crate::supervisor::ForceStatus`]).
@@ -260,6 +313,16 @@ where
         Ok(decode_reply(buf))
     }
 
+    /// One drive-current conversion, as joint torque, checked.
+    pub fn read_drive_torque(
+        &mut self,
+        channel: Channel,
+        calibration: &DriveCurrentCalibration,
+    ) -> Result<f32, Error<E>> {
+        let counts = self.read_raw(channel)?;
+        calibration.convert(counts).map_err(Error::Sensor)
+    }
+
     /// One conversion, calibrated and checked.
     pub fn read_force<const N: usize>(
         &mut self,
@@ -285,6 +348,12 @@ pub struct ForceChannels {
     pub right_crutch: Channel,
 }
 
+gait_core::impl_fingerprint!(DriveCurrentCalibration {
+    zero_counts,
+    nm_per_count,
+    open_below_counts,
+    short_above_counts,
+});
 gait_core::impl_fingerprint!([const N: usize] ForceCalibration<N> {
     counts,
     newtons,
