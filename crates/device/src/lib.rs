@@ -43,8 +43,8 @@ use gait_core::fingerprint::Fingerprint;
 use gait_core::{BodyModel, JointLimits};
 
 use crate::drive::DriveSpec;
-use crate::parts::{CRUTCH_LOAD_CELL, FOOT_LOAD_CELL, JOINT_DRIVE};
-use crate::sensors::LoadCellSpec;
+use crate::parts::{CRUTCH_LOAD_CELL, DRIVE_CURRENT_MONITOR, FOOT_LOAD_CELL, JOINT_DRIVE};
+use crate::sensors::{CurrentMonitorSpec, LoadCellSpec};
 
 /// Control-loop rate, Hz.
 pub const TICK_HZ: u32 = 1_000;
@@ -78,6 +78,10 @@ pub struct DeviceConfig {
     pub crutch_sensor: LoadCellSpec,
     /// Which ADC channel each force sensor is on.
     pub force_channels: ForceChannels,
+    /// The hip and knee amplifiers' current monitors.
+    pub drive_current_monitor: CurrentMonitorSpec,
+    /// Which ADC channel each drive's current monitor is on (joint order).
+    pub drive_current_channels: [Channel; JOINTS],
     /// MODE and GO.
     pub buttons: ButtonConfig,
     /// `true` when the e-stop input reads high while pressed.
@@ -93,6 +97,8 @@ pub enum DeviceError {
     /// A force calibration was refused (index: left foot, right foot, left
     /// crutch, right crutch).
     ForceCalibration(usize, CalibrationError),
+    /// A drive current monitor's calibration was refused (joint index).
+    DriveCurrentCalibration(usize, CalibrationError),
     /// A motor configuration was refused (joint index).
     Motor(usize, motor::ConfigError),
     /// Disabling a motor at boot failed (joint index).
@@ -161,6 +167,12 @@ impl DeviceConfig {
                 .calibration()
                 .map_err(|e| DeviceError::ForceCalibration(i, e))
         };
+        let drive_current = |j: usize| {
+            let d: &DriveSpec = drives.get(j).unwrap_or(&JOINT_DRIVE);
+            DRIVE_CURRENT_MONITOR
+                .calibration(d.joint_torque_per_amp())
+                .map_err(|e| DeviceError::DriveCurrentCalibration(j, e))
+        };
         let model32: BodyModel<f32> = body.cast();
         let controller = ControllerConfig {
             dt_s: DT_S,
@@ -170,6 +182,12 @@ impl DeviceConfig {
             }),
             sequencer: SEQUENCER,
             force_calibration: [foot(0)?, foot(1)?, crutch(2)?, crutch(3)?],
+            drive_current_calibration: [
+                drive_current(0)?,
+                drive_current(1)?,
+                drive_current(2)?,
+                drive_current(3)?,
+            ],
             e_stop_active_high: true,
             rate_filter_hz: 40.0,
             still_rate_rad_s: 0.2,
@@ -180,6 +198,7 @@ impl DeviceConfig {
         supervisor.max_jump_counts_per_tick = supervisor.physical_jump_counts();
         supervisor.force_min_n = FOOT_LOAD_CELL.rated_min_n;
         supervisor.force_max_n = FOOT_LOAD_CELL.rated_max_n;
+        supervisor.drive_current.full_torque_speed_rad_s = JOINT_DRIVE.full_torque_speed_rad_s();
         Ok(Self {
             dt_s: DT_S,
             body,
@@ -192,6 +211,8 @@ impl DeviceConfig {
             foot_sensor: FOOT_LOAD_CELL,
             crutch_sensor: CRUTCH_LOAD_CELL,
             force_channels: FORCE_CHANNELS,
+            drive_current_monitor: DRIVE_CURRENT_MONITOR,
+            drive_current_channels: DRIVE_CURRENT_CHANNELS,
             buttons: ButtonConfig::DEFAULT_1KHZ,
             e_stop_active_high: true,
             reset_hold_ticks: 3_000,
@@ -258,9 +279,19 @@ gait_core::impl_fingerprint!(DeviceConfig {
     foot_sensor,
     crutch_sensor,
     force_channels,
+    drive_current_monitor,
+    drive_current_channels,
     buttons,
     e_stop_active_high,
     reset_hold_ticks,
+});
+gait_core::impl_fingerprint!(CurrentMonitorSpec {
+    name,
+    current_full_scale_a,
+    output_full_scale_v,
+    divider_gain,
+    offset_v,
+    adc_reference_v,
 });
 gait_core::impl_fingerprint!(LoadCellSpec {
     name,
@@ -349,6 +380,11 @@ pub const FORCE_CHANNELS: ForceChannels = ForceChannels {
     left_crutch: Channel::Ch2,
     right_crutch: Channel::Ch3,
 };
+
+/// The drives' current monitors on the MCP3208's other four channels:
+/// left hip CH4, left knee CH5, right hip CH6, right knee CH7.
+pub const DRIVE_CURRENT_CHANNELS: [Channel; JOINTS] =
+    [Channel::Ch4, Channel::Ch5, Channel::Ch6, Channel::Ch7];
 
 /// The controller the device runs over `tables` (each already verified),
 /// the clinician's list starting with `first`.
@@ -441,6 +477,7 @@ where
         ],
         adc: Mcp3208::new(io.adc),
         force_channels: cfg.force_channels,
+        drive_current_channels: cfg.drive_current_channels,
         motors,
         mode: Button::new(io.mode, cfg.buttons),
         go: Button::new(io.go, cfg.buttons),

@@ -2,7 +2,7 @@
 //! datasheets (sources and caveats in `docs/device.md`).
 
 use crate::drive::{AmplifierSpec, DriveSpec, DynamicBrake, GearboxSpec, MotorSpec};
-use crate::sensors::LoadCellSpec;
+use crate::sensors::{CurrentMonitorSpec, LoadCellSpec};
 
 /// TQ RoboDrive ILM 85x26, 48 V winding (frameless, 10 pole pairs): the
 /// figures of TQ's product page as carried in IHMC's motor parameter file
@@ -95,4 +95,18 @@ pub const CRUTCH_LOAD_CELL: LoadCellSpec = LoadCellSpec {
     rated_min_n: -20.0,
     rated_max_n: 500.0,
     calibration_points_n: [0.0, 150.0, 300.0, 450.0],
+};
+
+/// Each hip and knee amplifier's analog output 1, set (ESCON Studio) to
+/// "actual current averaged", ±4 V for ±12 A (the 9.9 A limit stays
+/// inside), onto the MCP3208 through a 0.4 divider around 1.65 V: 2,048
+/// counts at 0 A, 165.5 counts/A, the 9.9 A limit 410 … 3,686 counts
+/// (inside the 100 / 4,000 count open and short thresholds).
+pub const DRIVE_CURRENT_MONITOR: CurrentMonitorSpec = CurrentMonitorSpec {
+    name: "ESCON 70/10 analog output 1, actual current averaged, ±4 V = ±12 A",
+    current_full_scale_a: 12.0,
+    output_full_scale_v: 4.0,
+    divider_gain: 0.4,
+    offset_v: 1.65,
+    adc_reference_v: 3.3,
 };

@@ -1,10 +1,10 @@
-//! The force sensors' characteristic and the calibration the controller
-//! reads them with. The simulator's ADC inputs follow the same
-//! characteristic, so the calibration is exact there as on a freshly
-//! calibrated device.
+//! The force sensors' and the drives' current monitors' characteristics
+//! and the calibrations the controller reads them with. The simulator's
+//! ADC inputs follow the same characteristics, so the calibrations are
+//! exact there as on a freshly calibrated device.
 
 use gait_control::controller::FORCE_CAL_POINTS;
-use gait_control::drivers::mcp3208::{CalibrationError, ForceCalibration};
+use gait_control::drivers::mcp3208::{CalibrationError, DriveCurrentCalibration, ForceCalibration};
 
 /// Readings below this are an open sensor or cable (both sensor kinds).
 pub const OPEN_BELOW_COUNTS: u16 = 100;
@@ -54,6 +54,67 @@ impl LoadCellSpec {
             SHORT_ABOVE_COUNTS,
             self.rated_min_n,
             self.rated_max_n,
+        )
+    }
+}
+
+/// A servo amplifier's analog monitor output of its actual current, scaled
+/// and offset by the board onto an ADC channel:
+/// `V_adc = offset_v + divider_gain · V_out`, `V_out = I · output_full_scale_v
+/// / current_full_scale_a`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurrentMonitorSpec {
+    /// What it is.
+    pub name: &'static str,
+    /// The current the amplifier's output reports at full scale, A.
+    pub current_full_scale_a: f32,
+    /// The output's full scale, V (either sign).
+    pub output_full_scale_v: f32,
+    /// The board's divider from the output to the ADC input.
+    pub divider_gain: f32,
+    /// The board's offset at the ADC input (0 A), V.
+    pub offset_v: f32,
+    /// The ADC's reference, V (4,096 counts).
+    pub adc_reference_v: f32,
+}
+
+impl CurrentMonitorSpec {
+    /// ADC counts per ampere.
+    pub fn counts_per_amp(&self) -> f32 {
+        4096.0 / self.adc_reference_v * self.divider_gain * self.output_full_scale_v
+            / self.current_full_scale_a
+    }
+
+    /// ADC counts at 0 A.
+    pub fn zero_counts(&self) -> f32 {
+        4096.0 * self.offset_v / self.adc_reference_v
+    }
+
+    /// ADC counts for a joint torque through a drive giving
+    /// `joint_nm_per_amp` (unrounded, unclamped).
+    pub fn counts(&self, torque_nm: f32, joint_nm_per_amp: f32) -> f32 {
+        self.zero_counts() + self.counts_per_amp() * torque_nm / joint_nm_per_amp
+    }
+
+    /// The calibration the controller reads it with, as joint torque, for
+    /// a drive giving `joint_nm_per_amp`; the same open and short
+    /// thresholds as the force channels (the output's full scale stays
+    /// inside them).
+    pub fn calibration(
+        &self,
+        joint_nm_per_amp: f32,
+    ) -> Result<DriveCurrentCalibration, CalibrationError> {
+        let zero = self.zero_counts();
+        let zero_counts = if zero.is_finite() {
+            (zero.clamp(0.0, 4095.0) + 0.5) as u16
+        } else {
+            0
+        };
+        DriveCurrentCalibration::new(
+            zero_counts,
+            joint_nm_per_amp / self.counts_per_amp(),
+            OPEN_BELOW_COUNTS,
+            SHORT_ABOVE_COUNTS,
         )
     }
 }

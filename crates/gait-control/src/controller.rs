@@ -28,7 +28,9 @@ use gait_core::BodyModel;
 use crate::crutch_load::CrutchLoad;
 use crate::drivers::as5048a::As5048a;
 use crate::drivers::buttons::Button;
-use crate::drivers::mcp3208::{ForceCalibration, ForceChannels, Mcp3208};
+use crate::drivers::mcp3208::{
+    Channel, DriveCurrentCalibration, ForceCalibration, ForceChannels, Mcp3208,
+};
 use crate::drivers::motor::{self, Motor};
 use crate::drivers::status::Indicator;
 use crate::faults::{FaultCode, FaultSet, Reaction};
@@ -56,6 +58,9 @@ pub struct Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT> {
     pub adc: Mcp3208<ADC>,
     /// Which ADC channel each force sensor is on.
     pub force_channels: ForceChannels,
+    /// Which ADC channel each hip and knee drive's current monitor is on
+    /// (joint order).
+    pub drive_current_channels: [Channel; JOINTS],
     /// Joint motors (joint order).
     pub motors: [Motor<PWM, DIR, EN>; JOINTS],
     /// MODE button.
@@ -83,6 +88,8 @@ pub struct ControllerConfig {
     pub sequencer: SequencerConfig,
     /// Force calibrations: left foot, right foot, left crutch, right crutch.
     pub force_calibration: [ForceCalibration<FORCE_CAL_POINTS>; FORCES],
+    /// The drives' current monitors as joint torque (joint order).
+    pub drive_current_calibration: [DriveCurrentCalibration; JOINTS],
     /// `true` when the e-stop input reads high while pressed.
     pub e_stop_active_high: bool,
     /// Cut-off of the joint-rate low-pass filter, Hz.
@@ -407,6 +414,7 @@ impl<'t> Controller<'t> {
             swing_leg,
             airborne_leg: self.airborne_leg(s),
             chain_closed: s.chain_closed,
+            drive_current: s.drive_current,
         };
         let verdict = self.supervisor.check(&input);
         match verdict.reaction {

@@ -417,6 +417,30 @@ fault_table! {
         reset_allowed_when: "the residual is under the limit",
         brakes_joint: true,
     },
+    /// A hip or knee drive's current, read from its amplifier's monitor
+    /// output, is not the torque it was given: a set value stuck, a share
+    /// of the current missing. Found at the drive's own joint in
+    /// milliseconds (0x0404 finds it through the motion, later and often
+    /// first at a joint it dragged); that drive is disabled, its brake
+    /// holds the joint, the others hold the posture.
+    DriveCurrentMismatch = 0x0405 {
+        name: "drive current not following its command",
+        reaction: Reaction::SafeHold,
+        detection_bound: "3 samples of that drive in a row (one every 4 ticks): 9 ticks from the \
+            first, at most 12 from the onset",
+        reset_allowed_when: "the drive's samples match (a braked drive is checked again once \
+            enabled)",
+        brakes_joint: true,
+    },
+    /// A drive's current monitor reads at a rail, or cannot be read: the
+    /// drive still works, but one of its checks is lost.
+    DriveCurrentMonitor = 0x0406 {
+        name: "drive current monitor fault",
+        reaction: Reaction::FinishStepThenHold,
+        detection_bound: "3 bad samples of that monitor among its last 25 (100 ticks); \
+            1 tick if reported Ok but not finite",
+        reset_allowed_when: "< 3 bad samples among that monitor's last 25",
+    },
 }
 
 // A `FaultSet` has one bit per code in a `u32`.

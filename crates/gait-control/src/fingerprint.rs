@@ -11,7 +11,7 @@ use crate::drivers::mcp3208::{Channel, ForceChannels};
 use crate::drivers::motor::MotorConfig;
 use crate::position_loop::JointGains;
 use crate::sequencer::SequencerConfig;
-use crate::supervisor::{AngleRange, Debounce, ResponseCheck, SupervisorConfig};
+use crate::supervisor::{AngleRange, Debounce, DriveCurrentCheck, ResponseCheck, SupervisorConfig};
 
 impl_fingerprint_enum!(Direction, ActiveLevel, Channel);
 
@@ -74,6 +74,7 @@ impl_fingerprint!(ControllerConfig {
     gains,
     sequencer,
     force_calibration,
+    drive_current_calibration,
     e_stop_active_high,
     rate_filter_hz,
     still_rate_rad_s,
@@ -109,6 +110,15 @@ impl_fingerprint!(SupervisorConfig {
     deadline_miss_count,
     deadline_window_ticks,
     response,
+    drive_current,
+});
+impl_fingerprint!(DriveCurrentCheck {
+    band_nm,
+    band_share,
+    samples,
+    full_torque_speed_rad_s,
+    back_emf_speed_share,
+    debounce,
 });
 impl_fingerprint!(ResponseCheck {
     stance_inertia_kgm2,

@@ -28,12 +28,14 @@ pub use crate::layout::{ANKLES, FORCES, JOINTS, Side};
 
 mod checks;
 mod config;
+mod drive_current;
 mod response;
 mod tracks;
 
 pub use config::{
     AngleRange, ConfigError, Debounce, EnvelopeMargins, ResetRefused, SupervisorConfig,
 };
+pub use drive_current::{DriveCurrentCheck, DriveCurrentSense};
 pub use response::ResponseCheck;
 use tracks::{Class, EncoderTrack, ForceTrack, Frame, JointTrack};
 /// Records kept in the post-mortem log (the newest ones).
@@ -147,6 +149,9 @@ pub struct SupervisorInput {
     /// encoder is lost ([`FaultCode::loses_angle`]) is then held by its
     /// drive, not braked.
     pub chain_closed: [bool; JOINTS],
+    /// The drive whose current monitor was sampled this tick, if any (one
+    /// drive a tick, in turn).
+    pub drive_current: Option<DriveCurrentSense>,
 }
 
 /// The supervisor's decision for one tick.
@@ -207,6 +212,7 @@ pub struct Supervisor {
     /// counts move again.
     ankle_stuck: [bool; ANKLES],
     forces: [ForceTrack; FORCES],
+    drive_currents: [drive_current::DriveCurrentTrack; JOINTS],
     previous_reference_rad: Option<[f32; JOINTS]>,
     /// `calls` at the latest deadline misses (ring).
     misses: [Option<u32>; MAX_DEADLINE_MISSES as usize],
@@ -290,6 +296,7 @@ impl Supervisor {
             stuck_in_air_ticks: [0; ANKLES],
             ankle_stuck: [false; ANKLES],
             forces: [ForceTrack::default(); FORCES],
+            drive_currents: Default::default(),
             previous_reference_rad: None,
             misses: [None; MAX_DEADLINE_MISSES as usize],
             miss_next: 0,
@@ -393,6 +400,7 @@ impl Supervisor {
         self.check_joints(input, &mut t);
         self.check_ankles(input, &mut t);
         self.check_forces(input, &mut t);
+        self.check_drive_current(input, &mut t);
         self.previous_reference_rad = Some(input.joint_reference_rad);
         self.present = t.present;
         Verdict {

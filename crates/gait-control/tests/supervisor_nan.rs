@@ -32,6 +32,11 @@ const FLOAT_FIELDS: &[(&str, Setter)] = &[
     }),
     ("motors[1].applied_nm", |i, x| i.motors[1].applied_nm = x),
     ("motors[2].limit_nm", |i, x| i.motors[2].limit_nm = x),
+    ("drive_current.torque_nm", |i, x| {
+        if let Some(d) = i.drive_current.as_mut() {
+            d.torque_nm = x;
+        }
+    }),
 ];
 
 #[test]
@@ -89,6 +94,21 @@ fn random_input() -> impl Strategy<Value = SupervisorInput> {
         float(),
     )
         .prop_map(|(status, newtons)| ForceSense { status, newtons });
+    let drive_current = (
+        0u8..4,
+        prop_oneof![
+            4 => Just(ForceStatus::Ok),
+            1 => Just(ForceStatus::BusError),
+            1 => Just(ForceStatus::Open),
+            1 => Just(ForceStatus::Shorted),
+        ],
+        float(),
+    )
+        .prop_map(|(joint, status, torque_nm)| DriveCurrentSense {
+            joint,
+            status,
+            torque_nm,
+        });
     let motor = (
         float(),
         float(),
@@ -119,24 +139,28 @@ fn random_input() -> impl Strategy<Value = SupervisorInput> {
         proptest::array::uniform4(force),
         proptest::array::uniform4(motor),
         proptest::array::uniform5(any::<bool>()),
+        proptest::option::of(drive_current),
     )
         .prop_map(
-            |(tick, joints, joint_reference_rad, ankles, forces, motors, flags)| SupervisorInput {
-                tick,
-                joints,
-                joint_reference_rad,
-                ankles,
-                forces,
-                motors,
-                e_stop_pressed: flags[0],
-                e_stop_read_error: flags[1],
-                deadline_missed: flags[2],
-                step_in_progress: flags[3],
-                button_input_fault: flags[4],
-                ankle_plan_rad: [f32::NAN; ANKLES],
-                swing_leg: None,
-                airborne_leg: None,
-                chain_closed: [false; 4],
+            |(tick, joints, joint_reference_rad, ankles, forces, motors, flags, drive_current)| {
+                SupervisorInput {
+                    tick,
+                    joints,
+                    joint_reference_rad,
+                    ankles,
+                    forces,
+                    motors,
+                    e_stop_pressed: flags[0],
+                    e_stop_read_error: flags[1],
+                    deadline_missed: flags[2],
+                    step_in_progress: flags[3],
+                    button_input_fault: flags[4],
+                    ankle_plan_rad: [f32::NAN; ANKLES],
+                    swing_leg: None,
+                    airborne_leg: None,
+                    chain_closed: [false; 4],
+                    drive_current,
+                }
             },
         )
 }
@@ -156,6 +180,9 @@ fn has_nan(input: &SupervisorInput) -> bool {
             .motors
             .iter()
             .any(|m| m.commanded_nm.is_nan() || m.applied_nm.is_nan() || m.limit_nm.is_nan())
+        || input
+            .drive_current
+            .is_some_and(|d| d.status == ForceStatus::Ok && d.torque_nm.is_nan())
 }
 
 proptest! {

@@ -476,12 +476,14 @@ fn row_motor_saturated() {
     let (_, v) = inject(250, |_, input| {
         input.motors[3].commanded_nm = -LIMIT_NM;
         input.motors[3].applied_nm = -LIMIT_NM;
+        currents_follow(input);
     });
     assert_row(&v, FaultCode::MotorSaturated, Reaction::SafeHold, 200);
 }
 
-/// A drive stuck on its old set value: the position loop asks 125 N·m
-/// more than the model's torque, the joint does not move. The residual's
+/// A gearbox that slips (the drive's current follows its command, so
+/// 0x0405 cannot see it): the position loop asks 125 N·m more than the
+/// model's torque, the joint does not move. The residual's
 /// 3 Hz critically damped low-pass passes 80 % of a step after about 160
 /// ticks, and the fault latches 10 ticks later; the joint's drive is to be
 /// braked.
@@ -491,6 +493,7 @@ fn row_motor_response() {
         input.motors[1].commanded_nm = 130.0;
         input.motors[1].applied_nm = 130.0;
         input.motors[1].limit_nm = 150.0;
+        currents_follow(input);
     });
     let at = detected_at(&v, FaultCode::MotorResponse).unwrap();
     assert!((150..=190).contains(&at), "detected at tick {at}");
@@ -514,6 +517,7 @@ fn motor_response_follows_the_model_and_only_full_authority_drives() {
         input.motors[1].commanded_nm = 5.0 + push;
         input.motors[1].applied_nm = 5.0 + push;
         input.motors[1].limit_nm = 150.0;
+        currents_follow(input);
     });
     assert_eq!(detected_at(&v, FaultCode::MotorResponse), None);
     assert!(v.last().unwrap().latched.is_empty());
@@ -704,4 +708,152 @@ fn codes_are_stable_unique_and_grouped() {
     assert_eq!(FaultCode::EStopPressed.code(), 0x0501);
     assert_eq!(FaultCode::JointPositionLimit.code(), 0x0101);
     assert_eq!(FaultCode::from_code(0x0000), None);
+}
+
+/// The injected ticks (1-based) on which joint `j`'s drive is sampled.
+fn samples_of(j: u8, n: u32) -> Vec<u32> {
+    (1..=n)
+        .filter(|&k| healthy_input(WARMUP + k - 1).drive_current.unwrap().joint == j)
+        .collect()
+}
+
+/// Joint `j`'s drive asked `asked` N·m, its monitor reading `got` (the
+/// other drives give what they are asked).
+fn drive_gives(j: usize, asked: f32, got: f32) -> impl FnMut(u32, &mut SupervisorInput) {
+    move |_, input| {
+        input.motors[j].commanded_nm = asked;
+        input.motors[j].applied_nm = asked;
+        input.motors[j].limit_nm = 150.0;
+        currents_follow(input);
+        if let Some(d) = input.drive_current.as_mut() {
+            if usize::from(d.joint) == j {
+                d.torque_nm = got;
+            }
+        }
+    }
+}
+
+/// A drive stuck on an old set value: asked 60 N·m, its current gives
+/// −1.2. Found on its third sample, at its own joint, which is braked.
+#[test]
+fn row_drive_current_mismatch() {
+    let (_, v) = inject(40, drive_gives(1, 60.0, -1.2));
+    let third = samples_of(1, 40)[2];
+    assert!(third <= 12, "{third}");
+    assert_row(
+        &v,
+        FaultCode::DriveCurrentMismatch,
+        Reaction::SafeHold,
+        third,
+    );
+    assert_eq!(
+        v[third as usize - 1].braked_joints,
+        [false, true, false, false]
+    );
+    // More than asked is a mismatch too (a set value stuck high).
+    let (_, v) = inject(40, drive_gives(3, -10.0, -60.0));
+    assert_eq!(
+        detected_at(&v, FaultCode::DriveCurrentMismatch),
+        Some(samples_of(3, 40)[2])
+    );
+}
+
+/// A drive at half its current is found where the missing half exceeds
+/// the band (10 N·m + 10 %), not below it.
+#[test]
+fn a_weak_drive_is_a_mismatch_once_the_missing_torque_exceeds_the_band() {
+    let (_, v) = inject(40, drive_gives(0, 80.0, 40.0));
+    assert_eq!(
+        detected_at(&v, FaultCode::DriveCurrentMismatch),
+        Some(samples_of(0, 40)[2])
+    );
+    let (_, v) = inject(200, drive_gives(0, 30.0, 18.0));
+    assert!(v.last().unwrap().latched.is_empty(), "{:?}", v.last());
+    // Two bad samples, then a good one: the count starts again.
+    let mut k_seen = 0;
+    let (_, v) = inject(40, move |k, input| {
+        drive_gives(2, 80.0, 80.0)(k, input);
+        if input.drive_current.unwrap().joint == 2 {
+            k_seen += 1;
+            if k_seen % 3 != 0 {
+                input.drive_current.as_mut().unwrap().torque_nm = 0.0;
+            }
+        }
+    });
+    assert_eq!(detected_at(&v, FaultCode::DriveCurrentMismatch), None);
+}
+
+/// Moving fast in its torque's direction a drive cannot push the current
+/// asked against the motor's back-EMF: no mismatch. Against the motion it
+/// can, and must.
+#[test]
+fn less_current_than_asked_counts_only_where_the_back_emf_does_not_explain_it() {
+    let moving = |torque: f32| {
+        move |k: u32, input: &mut SupervisorInput| {
+            // Joint 1 flexing at 2 rad/s, its reference with it.
+            let angle = STAND_JOINTS[1] + 2.0 * 0.001 * k as f32;
+            input.joints[1] = encoder(angle);
+            input.joint_reference_rad[1] = angle;
+            input.motors[1].feedforward_nm = torque;
+            drive_gives(1, torque, 0.0)(k, input);
+        }
+    };
+    let (_, v) = inject(60, moving(100.0));
+    assert_eq!(detected_at(&v, FaultCode::DriveCurrentMismatch), None);
+    let (_, v) = inject(60, moving(-100.0));
+    assert!(detected_at(&v, FaultCode::DriveCurrentMismatch).is_some());
+}
+
+/// A disabled drive gives no current: nothing to compare.
+#[test]
+fn a_disabled_drive_s_current_is_not_compared() {
+    let (_, v) = inject(100, |k, input| {
+        drive_gives(1, 60.0, 0.0)(k, input);
+        input.motors[1].enabled = false;
+    });
+    assert_eq!(detected_at(&v, FaultCode::DriveCurrentMismatch), None);
+}
+
+/// A monitor at a rail, or its conversion failing: 0x0406 on its third
+/// bad sample; the drive goes on (finish the step, then hold). Reported Ok
+/// but not finite: at once.
+#[test]
+fn row_drive_current_monitor() {
+    for status in [
+        ForceStatus::Open,
+        ForceStatus::Shorted,
+        ForceStatus::BusError,
+    ] {
+        let (sup, v) = inject(40, |_, input| {
+            if let Some(d) = input.drive_current.as_mut() {
+                if d.joint == 2 {
+                    d.status = status;
+                    d.torque_nm = f32::NAN;
+                }
+            }
+        });
+        let third = samples_of(2, 40)[2];
+        assert_row(
+            &v,
+            FaultCode::DriveCurrentMonitor,
+            Reaction::FinishStepThenHold,
+            third,
+        );
+        assert_eq!(v[third as usize - 1].braked_joints, [false; JOINTS]);
+        assert_eq!(sup.log().last().unwrap().channel, 2);
+    }
+    let first = samples_of(0, 40)[0];
+    let (_, v) = inject(40, |_, input| {
+        if let Some(d) = input.drive_current.as_mut() {
+            if d.joint == 0 {
+                d.torque_nm = f32::INFINITY;
+            }
+        }
+    });
+    assert_row(
+        &v,
+        FaultCode::DriveCurrentMonitor,
+        Reaction::FinishStepThenHold,
+        first,
+    );
 }

@@ -106,9 +106,9 @@ impl RunResult {
 
 /// Kinds every run must detect: those whose fault the table promises to
 /// see whatever the gait is doing. (A glitch or a spike is tolerated by
-/// design; a weak motor, a stuck bridge, a frozen encoder or the pilot's
-/// lean are found only through their consequences — the model-based checks
-/// are still to come.)
+/// design; a weak motor or a stuck bridge is found once its current departs
+/// from its command, a frozen encoder while its joint is driven, the
+/// pilot's lean through its consequences.)
 pub fn must_be_detected(kind: Kind) -> bool {
     matches!(
         kind,
@@ -120,6 +120,8 @@ pub fn must_be_detected(kind: Kind) -> bool {
             | Kind::FsrShort
             | Kind::AdcBus
             | Kind::PwmFail
+            | Kind::CurrentOpen
+            | Kind::CurrentShort
             | Kind::EStop
             | Kind::EStopRead
             | Kind::ButtonRead

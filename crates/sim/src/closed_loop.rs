@@ -444,6 +444,7 @@ impl<'t> Rig<'t> {
         if target != self.plant.pilot() {
             self.plant.set_pilot(target);
         }
+        self.wiring.record_drive_currents();
         let torques = self.wiring.motor_torques_nm();
         if self.now() >= self.support_ticks {
             self.plant.step(torques)?;

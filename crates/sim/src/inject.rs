@@ -48,6 +48,11 @@ pub enum Kind {
     PwmFail,
     /// Every write to the bridge's direction pin fails.
     DirFail,
+    /// The drive's current-monitor line opens (its ADC channel reads 0).
+    CurrentOpen,
+    /// The drive's current-monitor line shorts to the reference (full
+    /// scale).
+    CurrentShort,
     /// The emergency stop is pressed.
     EStop,
     /// The emergency-stop input cannot be read.
@@ -134,6 +139,8 @@ impl Kind {
             Self::MotorStuck => "motor-stuck",
             Self::PwmFail => "pwm-fail",
             Self::DirFail => "dir-fail",
+            Self::CurrentOpen => "current-open",
+            Self::CurrentShort => "current-short",
             Self::EStop => "estop",
             Self::EStopRead => "estop-read",
             Self::ButtonRead => "button-read",
@@ -153,7 +160,12 @@ impl Kind {
             | Self::EncoderJump(_)
             | Self::EncoderGlitch(_) => Needs::Encoder,
             Self::FsrOpen | Self::FsrShort | Self::FsrOverRange | Self::FsrSpike(_) => Needs::Force,
-            Self::MotorWeak(_) | Self::MotorStuck | Self::PwmFail | Self::DirFail => Needs::Motor,
+            Self::MotorWeak(_)
+            | Self::MotorStuck
+            | Self::PwmFail
+            | Self::DirFail
+            | Self::CurrentOpen
+            | Self::CurrentShort => Needs::Motor,
             Self::AdcBus
             | Self::EStop
             | Self::EStopRead
@@ -166,7 +178,7 @@ impl Kind {
     }
 
     /// Every kind's name, for help texts and errors.
-    pub const NAMES: [&'static str; 22] = [
+    pub const NAMES: [&'static str; 24] = [
         "encoder-bus",
         "encoder-parity",
         "encoder-error-flag",
@@ -182,6 +194,8 @@ impl Kind {
         "motor-stuck",
         "pwm-fail",
         "dir-fail",
+        "current-open",
+        "current-short",
         "estop",
         "estop-read",
         "button-read",
@@ -338,6 +352,8 @@ fn parse_kind(text: &str, name: &str, value: Option<&str>) -> Result<Kind, Parse
         "motor-stuck" => Kind::MotorStuck,
         "pwm-fail" => Kind::PwmFail,
         "dir-fail" => Kind::DirFail,
+        "current-open" => Kind::CurrentOpen,
+        "current-short" => Kind::CurrentShort,
         "estop" => Kind::EStop,
         "estop-read" => Kind::EStopRead,
         "button-read" => Kind::ButtonRead,
@@ -392,6 +408,7 @@ mod tests {
             "fsr-spike=300:right-foot@1.25",
             "encoder-glitch=-2000:left-ankle@0.5",
             "pilot-stops-balancing@3",
+            "current-open:right-knee@1.5",
         ] {
             let i: Injection = text.parse().unwrap_or_else(|e| panic!("{text}: {e}"));
             assert_eq!(i.to_string(), text);
@@ -410,6 +427,7 @@ mod tests {
             ("estop:left-knee@2", "takes no target"),
             ("fsr-open:left-knee@2", "cannot strike"),
             ("motor-stuck:left-ankle@2", "cannot strike"),
+            ("current-short:left-foot@2", "cannot strike"),
             ("motor-weak=1.5:left-knee@2", "fraction in [0, 1]"),
             ("encoder-jump:left-knee@2", "needs a value"),
             ("encoder-jump=2.5:left-knee@2", "whole number"),

@@ -305,6 +305,14 @@ impl SimMotor {
         self.0.borrow().torque_nm()
     }
 
+    /// The joint torque the amplifier's own current gives now, N·m: what
+    /// its current monitor reports. While disabled, none (the brake's
+    /// current flows through the contactor, not the amplifier).
+    pub fn amplifier_torque_nm(&self) -> f64 {
+        let b = self.0.borrow();
+        if b.enable_high { b.torque_nm() } else { 0.0 }
+    }
+
     /// (duty, direction high, enable high).
     pub fn outputs(&self) -> (u16, bool, bool) {
         let b = self.0.borrow();

@@ -4,7 +4,8 @@
 //! connects them the same way.
 //!
 //! Channel map of the force ADC (MCP3208): 0 left foot, 1 right foot,
-//! 2 left crutch, 3 right crutch. Encoder and motor order: left hip, left
+//! 2 left crutch, 3 right crutch; on the device's other channels the hip
+//! and knee amplifiers' current monitors (`DeviceConfig::drive_current_channels`). Encoder and motor order: left hip, left
 //! knee, right hip, right knee ([`crate::plant::joint`]).
 
 use embedded_hal::spi;
@@ -71,6 +72,13 @@ pub struct Wiring {
     pub encoder_mounts: [EncoderMount; 4],
     /// The sensors on ADC channels 0…3 (see [`channel`]).
     pub force_sensors: [ForceSensorCal; 4],
+    /// Each drive's amplifier current as joint torque over the last plant
+    /// step, N·m (joint order): what its current monitor reports.
+    pub drive_currents: [SharedF64; 4],
+    /// The current monitors as counts per joint N·m, and the ADC channel
+    /// of each (joint order; `None` on the bench harness: nothing
+    /// connected).
+    pub current_monitor: Option<(ForceSensorCal, [usize; 4])>,
 }
 
 /// The mounting a calibration sheet describes: the encoder reads
@@ -120,6 +128,8 @@ impl Wiring {
                 ForceSensorCal::CRUTCH,
                 ForceSensorCal::CRUTCH,
             ],
+            drive_currents: Default::default(),
+            current_monitor: None,
         }
     }
 
@@ -145,6 +155,17 @@ impl Wiring {
                 sensor_of(&cfg.crutch_sensor),
                 sensor_of(&cfg.crutch_sensor),
             ],
+            drive_currents: Default::default(),
+            // The four drives are alike (`DeviceConfig::drives`).
+            current_monitor: cfg.drives.first().map(|d| {
+                let m = &cfg.drive_current_monitor;
+                let per_amp = d.joint_torque_per_amp();
+                let cal = ForceSensorCal {
+                    offset_counts: f64::from(m.counts(0.0, per_amp)),
+                    counts_per_n: f64::from(m.counts_per_amp() / per_amp),
+                };
+                (cal, cfg.drive_current_channels.map(|c| c as usize))
+            }),
         }
     }
 
@@ -162,6 +183,11 @@ impl Wiring {
         let adc = SimMcp3208::new();
         for (ch, (cell, cal)) in self.forces.iter().zip(self.force_sensors).enumerate() {
             adc.connect(ch, cell.clone(), cal);
+        }
+        if let Some((cal, channels)) = self.current_monitor {
+            for (cell, ch) in self.drive_currents.iter().zip(channels) {
+                adc.connect(ch, cell.clone(), cal);
+            }
         }
         adc
     }
@@ -190,11 +216,20 @@ impl Wiring {
     /// torques, publishes the new state to the sensors and advances the
     /// clock. The controller's tick goes between two calls.
     pub fn step(&self, plant: &mut Plant) -> Result<Option<Landing>, SimError> {
+        self.record_drive_currents();
         let landing = plant.step(self.motor_torques_nm())?;
         self.integrate_thermal(plant.config().dt_s);
         self.publish(&plant.state());
         self.clock.tick();
         Ok(landing)
+    }
+
+    /// Sets what the current monitors report for the plant step about to
+    /// be taken (call just before it, with the same bridge state).
+    pub fn record_drive_currents(&self) {
+        for (cell, m) in self.drive_currents.iter().zip(&self.motors) {
+            cell.set(m.amplifier_torque_nm());
+        }
     }
 
     /// Advances every drive's winding model over one plant step.

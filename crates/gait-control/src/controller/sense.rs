@@ -1,4 +1,5 @@
-//! *sense*: read every encoder, force sensor, button and the e-stop;
+//! *sense*: read every encoder, force sensor, button and the e-stop, and
+//! one drive's current monitor;
 //! decode, calibrate, check. A failed read becomes a status, never a
 //! panic, and the last good angle is kept for control.
 
@@ -8,7 +9,7 @@ use embedded_hal::spi::SpiDevice;
 use crate::drivers::buttons::Sample;
 use crate::posture::JOINTS;
 use crate::sequencer::Sensed;
-use crate::supervisor::{EncoderSense, EncoderStatus, ForceSense, ForceStatus};
+use crate::supervisor::{DriveCurrentSense, EncoderSense, EncoderStatus, ForceSense, ForceStatus};
 
 use super::{Controller, ENCODERS, FORCES, Hardware};
 
@@ -18,6 +19,8 @@ pub(super) struct Senses {
     pub encoders: [EncoderSense; ENCODERS],
     /// Each force sensor's sample as the supervisor checks it.
     pub forces: [ForceSense; FORCES],
+    /// This tick's drive-current sample.
+    pub drive_current: Option<DriveCurrentSense>,
     /// Debounced MODE and GO.
     pub mode: Sample,
     pub go: Sample,
@@ -61,6 +64,7 @@ impl Controller<'_> {
         let alpha = self.rate_alpha();
         let (encoders, taken) = self.read_encoders(hw, &lost, alpha);
         let forces = self.read_forces(hw);
+        let drive_current = Some(self.read_drive_current(hw));
         let forces_n = forces.map(|f| f.newtons);
         let chain_closed = self.close_chain(&forces_n, &lost, alpha);
         let mode = hw.mode.tick();
@@ -86,6 +90,7 @@ impl Controller<'_> {
         Senses {
             encoders,
             forces,
+            drive_current,
             mode,
             go,
             e_stop_pressed,
@@ -201,6 +206,31 @@ impl Controller<'_> {
             };
         }
         out
+    }
+
+    /// One drive's current monitor a tick, in turn (each every
+    /// [`JOINTS`] ticks: one ADC conversion, not four, in the tick's
+    /// budget).
+    fn read_drive_current<ENC, ADC, PWM, DIR, EN, IN, OUT>(
+        &mut self,
+        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+    ) -> DriveCurrentSense
+    where
+        ADC: SpiDevice<u8>,
+    {
+        let joint = (self.tick % JOINTS as u32) as usize;
+        let (Some(&channel), Some(cal)) = (
+            hw.drive_current_channels.get(joint),
+            self.cfg.drive_current_calibration.get(joint),
+        ) else {
+            return DriveCurrentSense::default();
+        };
+        let result = hw.adc.read_drive_torque(channel, cal);
+        DriveCurrentSense {
+            joint: joint as u8,
+            status: ForceStatus::of(&result),
+            torque_nm: result.unwrap_or(f32::NAN),
+        }
     }
 
     /// Last good joint angles (joint order).

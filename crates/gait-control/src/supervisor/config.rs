@@ -136,6 +136,8 @@ pub struct SupervisorConfig {
     pub deadline_window_ticks: u32,
     /// The drives' torque residual (0x0404).
     pub response: ResponseCheck,
+    /// The drives' currents against their commands (0x0405, 0x0406).
+    pub drive_current: DriveCurrentCheck,
 }
 
 impl SupervisorConfig {
@@ -213,6 +215,7 @@ impl SupervisorConfig {
             deadline_miss_count: 3,
             deadline_window_ticks: 1000,
             response: ResponseCheck::DEFAULT,
+            drive_current: DriveCurrentCheck::DEFAULT,
         }
     }
 
@@ -235,7 +238,8 @@ impl SupervisorConfig {
             .all(|v| v.is_finite() && *v > 0.0);
         if !(positive.iter().all(|v| v.is_finite() && *v > 0.0)
             && velocities_ok
-            && self.response.is_valid())
+            && self.response.is_valid()
+            && self.drive_current.is_valid())
             || self.velocity_filter_alpha > 1.0
         {
             return Err(ConfigError::NotPositive);
@@ -255,7 +259,9 @@ impl SupervisorConfig {
         let debounce_ok = |d: &Debounce| {
             d.count >= 1 && d.count <= d.window_ticks && d.window_ticks <= MAX_SAMPLE_WINDOW_TICKS
         };
-        if !(debounce_ok(&self.encoder_debounce) && debounce_ok(&self.force_debounce))
+        if !(debounce_ok(&self.encoder_debounce)
+            && debounce_ok(&self.force_debounce)
+            && debounce_ok(&self.drive_current.debounce))
             || self.deadline_miss_count == 0
             || self.deadline_miss_count > MAX_DEADLINE_MISSES
             || self.deadline_window_ticks == 0

@@ -10,9 +10,9 @@
 pub use gait_control::drivers::as5048a::{COUNTS_PER_REV, Calibration, Direction};
 pub use gait_control::faults::{FaultCode, FaultSet, Reaction};
 pub use gait_control::supervisor::{
-    ANKLES, ConfigError, EncoderSense, EncoderStatus, FORCES, ForceSense, ForceStatus, JOINTS,
-    LOG_LEN, MotorSense, NO_CHANNEL, ResetRefused, Supervisor, SupervisorConfig, SupervisorInput,
-    Verdict,
+    ANKLES, ConfigError, DriveCurrentSense, EncoderSense, EncoderStatus, FORCES, ForceSense,
+    ForceStatus, JOINTS, LOG_LEN, MotorSense, NO_CHANNEL, ResetRefused, Supervisor,
+    SupervisorConfig, SupervisorInput, Verdict,
 };
 pub use proptest::prelude::*;
 
@@ -90,6 +90,12 @@ pub fn healthy_input(tick: u32) -> SupervisorInput {
         swing_leg: None,
         airborne_leg: None,
         chain_closed: [false; JOINTS],
+        // One drive a tick, in turn, giving what it was asked.
+        drive_current: Some(DriveCurrentSense {
+            joint: (tick % JOINTS as u32) as u8,
+            status: ForceStatus::Ok,
+            torque_nm: 5.0 + dither(tick, 0) * 100.0,
+        }),
     }
 }
 
@@ -108,11 +114,23 @@ pub fn moving_input(tick: u32) -> SupervisorInput {
         // The model's torque for this motion is what is commanded.
         input.motors[j].feedforward_nm = input.motors[j].commanded_nm;
     }
+    if let Some(d) = input.drive_current.as_mut() {
+        d.torque_nm = input.motors[usize::from(d.joint)].applied_nm;
+    }
     for a in 0..ANKLES {
         input.ankles[a] = encoder(0.1 + 0.08 * libm::sinf(3.0 * t + a as f32));
     }
     input.step_in_progress = true;
     input
+}
+
+/// The drive sampled this tick gives the current it was asked for (its
+/// monitor reads the applied torque): a fault the monitor cannot see, or
+/// none.
+pub fn currents_follow(input: &mut SupervisorInput) {
+    if let Some(d) = input.drive_current.as_mut() {
+        d.torque_nm = input.motors[usize::from(d.joint)].applied_nm;
+    }
 }
 
 pub fn supervisor() -> Supervisor {

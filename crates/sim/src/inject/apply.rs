@@ -187,6 +187,20 @@ impl Rig<'_> {
                     m.fail_pin_writes(BridgePin::Direction, u32::MAX);
                 }
             }
+            Kind::CurrentOpen | Kind::CurrentShort => {
+                let channel = match (self.wiring.current_monitor, target) {
+                    (Some((_, channels)), Some(Target::Joint(j))) => channels.get(j).copied(),
+                    _ => None,
+                };
+                if let Some(ch) = channel {
+                    let fault = if f.kind == Kind::CurrentOpen {
+                        ChannelFault::Open
+                    } else {
+                        ChannelFault::Short
+                    };
+                    self.adc.set_fault(ch, Some(fault));
+                }
+            }
             Kind::EStop => self.e_stop.set_pressed(true),
             Kind::EStopRead => self.e_stop.fail_reads(u32::MAX),
             Kind::ButtonRead => {
