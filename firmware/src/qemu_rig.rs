@@ -356,7 +356,7 @@ pub const STANDING_ANKLES_RAD: [f32; 2] = [0.0, 0.0];
 pub const STANDING_FORCES_N: [f32; 4] = [367.0, 367.0, 82.0, 82.0];
 
 /// ADC counts of the standing rig: [`STANDING_FORCES_N`] through the
-XX
+/// device's load cells; the drives' current monitors at mid-range (0 A).
 #[must_use]
 pub fn standing_adc_counts(device: &DeviceConfig) -> [u16; 8] {
     let [lf, rf, lc, rc] = STANDING_FORCES_N;

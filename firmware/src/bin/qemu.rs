@@ -74,6 +74,7 @@ fn line(s: &str) -> Line {
 fn device_error(l: &mut Line, e: &DeviceError) {
     let (name, index) = match e {
         DeviceError::ForceCalibration(i, _) => ("force calibration", Some(*i)),
+        DeviceError::DriveCurrentCalibration(i, _) => ("drive current calibration", Some(*i)),
         DeviceError::Motor(i, _) => ("motor", Some(*i)),
         DeviceError::MotorDisable(i) => ("motor disable", Some(*i)),
         DeviceError::Operator(_) => ("operator", None),
@@ -422,10 +423,11 @@ fn control_tick_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
         ));
     }
     // The drivers must have spoken the parts' protocols: two 16-bit frames
-    // per encoder read, one conversion per force sensor, every tick.
+    // per encoder read, one conversion per force sensor and one drive's
+    // current monitor, every tick.
     let frames = hw.encoders.map(|e| e.destroy().frames);
     let conversions = hw.adc.destroy().conversions;
-    if frames.iter().any(|&f| f != 2 * CONTROL_TICKS) || conversions != 4 * CONTROL_TICKS {
+    if frames.iter().any(|&f| f != 2 * CONTROL_TICKS) || conversions != 5 * CONTROL_TICKS {
         let mut l = line("FAIL control: bus traffic: encoder frames [");
         for (i, f) in frames.iter().enumerate() {
             if i > 0 {
