@@ -476,44 +476,30 @@ fn campaign_run(gait: Gait, fault: &str, noise_seed: u64) -> sim::campaign::RunR
 
 #[test]
 fn a_stop_crossed_is_the_device_s_unless_a_named_case_s_reason_took_the_joint_there() {
-    // Seed 1's campaign. A hip drive at 43 % from standing: unseen until
-    // the first swing stands on it (its deficit under the residual's
-    // noise while standing), which saturates it; the torso turns the hip
-    // onto its flexion stop: the stance hip in a swing.
-    let weak = campaign_run(
-        Gait::Walk,
-        "motor-weak=0.4326618927696655:left-hip@0.838",
-        173997,
-    );
+    // Seed 1's campaign. The e-stop late in a stair descent: every drive
+    // off and braked, the bent knee that carries the body sinks at load /
+    // brake damping onto its flexion stop: a descent knee without its
+    // drive, named.
+    let estop = campaign_run(Gait::StairDown, "estop@4.869", 874458);
+    assert!(estop.past_a_stop(), "{:?}", estop.outcome);
+    assert_eq!(estop.outcome.worst_limit_joint, 1);
+    assert!(estop.outcome.limit_margins[1].1, "the flexion stop");
     assert_eq!(
-        weak.struck_in,
-        Some(gait_control::sequencer::Phase::Standing)
+        estop.named_stop(),
+        Some(sim::campaign::NamedCase::DescentKneeWithoutDrive)
     );
-    // The hold after the first swing ends the walk: only the left leg
-    // stood in a swing.
-    assert_eq!(weak.stance_after_strike, [true, false]);
-    assert!(weak.past_a_stop(), "{:?}", weak.outcome);
-    // That swing started before the hip crossed its stop, so it tells the
-    // stop too.
-    let crossed = weak.outcome.first_stop_crossed_s.unwrap();
-    assert!(crossed > weak.run.fault.at_s, "{crossed}");
-    assert_eq!(weak.stance_before_stop, [true, false]);
-    assert_eq!(weak.outcome.worst_limit_joint, 0);
-    assert_eq!(
-        weak.named_stop(),
-        Some(sim::campaign::NamedCase::StanceHipInASwing)
-    );
-    assert!(!weak.unnamed_stop());
-    // A stair descent's stuck stance knee: 0x0401 finds it, then the
-    // residual brakes the swing knee it drags, which folds onto its stop:
-    // that is the device's (a knee braked by a fault, not one whose drive
-    // gave all it has).
-    let dragged = campaign_run(Gait::StairDown, "motor-stuck:left-knee@1.156", 515747);
-    assert!(dragged.past_a_stop(), "{:?}", dragged.outcome);
-    assert_eq!(dragged.outcome.worst_limit_joint, 3);
-    assert!(dragged.outcome.limit_margins[3].1, "the flexion stop");
-    assert!(dragged.outcome.braked_joints[3]);
-    assert!(dragged.unnamed_stop());
+    assert!(!estop.unnamed_stop());
+    // A stair descent's stance knee whose encoder's bus fails: braked
+    // while the chain does not give its angle, it sinks onto its stop:
+    // that is the device's (a knee braked for a lost encoder, not one
+    // whose drive gave all it has).
+    let lost = campaign_run(Gait::StairDown, "encoder-bus:right-knee@1.925", 732265);
+    assert!(lost.past_a_stop(), "{:?}", lost.outcome);
+    assert_eq!(lost.outcome.worst_limit_joint, 3);
+    assert!(lost.outcome.limit_margins[3].1, "the flexion stop");
+    assert!(lost.outcome.braked_joints[3]);
+    assert_eq!(lost.named_stop(), None);
+    assert!(lost.unnamed_stop());
 }
 
 #[test]

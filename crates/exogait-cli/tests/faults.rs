@@ -15,7 +15,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
             "--runs",
             "40",
             "--seed",
-            "1",
+            "7",
             "--healthy",
             "0",
             "--json",
@@ -35,7 +35,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
         && all["errors"] == 0;
     assert_eq!(out.status.code(), Some(if goal_met { 0 } else { 1 }));
     let bad = v["bad_runs"].as_array().unwrap();
-    assert!(!bad.is_empty(), "seed 1's first 40 runs include bad ones");
+    assert!(!bad.is_empty(), "seed 7's first 40 runs include bad ones");
     let mut encoder_runs = 0;
     let mut estop_runs = 0;
     for run in bad {

@@ -174,7 +174,7 @@ pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
             };
             let force = Target::Force(d.below(4));
             let sign = if d.below(2) == 0 { -1 } else { 1 };
-            let (kind, target) = match d.below(21) {
+            let (kind, target) = match d.below(23) {
                 0 => (Kind::EncoderBus, Some(encoder)),
                 1 => (Kind::EncoderParity, Some(encoder)),
                 2 => (Kind::EncoderErrorFlag, Some(encoder)),
@@ -201,7 +201,9 @@ pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
                 17 => (Kind::ButtonRead, None),
                 18 => (Kind::Overrun(3 + d.below(8) as u32), None),
                 19 => (Kind::PilotLean(d.range(0.05, 0.2)), None),
-                _ => (Kind::PilotStopsBalancing, None),
+                20 => (Kind::PilotStopsBalancing, None),
+                21 => (Kind::CurrentOpen, Some(joint)),
+                _ => (Kind::CurrentShort, Some(joint)),
             };
             // Standing before GO, then anywhere in the first two steps.
             let at_s = (d.range(0.3, 5.0) * 1000.0).round() / 1000.0;
@@ -607,6 +609,8 @@ mod tests {
             "motor-stuck",
             "overrun",
             "pilot-stops-balancing",
+            "current-open",
+            "current-short",
         ] {
             assert!(a.iter().any(|r| r.fault.kind.name() == name), "{name}");
         }

@@ -29,8 +29,8 @@ pub enum NamedCase {
     /// has no other sensor of the torso's pitch (no IMU). A drive lost
     /// before that swing (weak, or stuck on a set value) counts too: its
     /// deficit is a share of the torque asked, which standing or swinging
-    /// that leg keeps under the residual's noise, so it is lost in the
-    /// swing that first loads it.
+    /// that leg can keep under the current check's band (0x0405) and the
+    /// residual's noise, so it is lost in the swing that first loads it.
     StanceHipInASwing,
 }
 
