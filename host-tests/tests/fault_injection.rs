@@ -316,16 +316,13 @@ fn missed_deadlines_in_a_swing_land_the_step_before_holding() {
     }
 }
 
-/// `kind` on every hip and knee, standing, early and late in the first
-/// swing, walking, climbing and descending (36 runs): how many braked the
-/// joint a braking fault was raised on first, how many of those ended
-/// driven again (a lost encoder's joint whose angle the closed chain
-/// gives: the angle control used then within half a degree of the
-/// truth), and the runs that fell.
-fn braked_joint_runs(kind: &str) -> (usize, usize, Vec<String>) {
+/// Plays `kind` on each hip and knee at 0.8 s (standing), 2.5 s and 3.0 s
+/// (the first swings) of a walk, a stair ascent and a descent (36 runs),
+/// two steps asked, 4 s after the fault; hands each run to `each` with its
+/// case's name, the struck joint and the time.
+fn each_joint_run(kind: &str, mut each: impl FnMut(&str, usize, f64, &sim::scenario::StepRun<'_>)) {
     let device = DeviceConfig::exogait().unwrap();
     let joints = ["left-hip", "left-knee", "right-hip", "right-knee"];
-    let (mut braked_right, mut driven_again, mut falls) = (0, 0, Vec::new());
     for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
         for (j, name) in joints.iter().enumerate() {
             for at in [0.8, 2.5, 3.0] {
@@ -340,35 +337,56 @@ fn braked_joint_runs(kind: &str) -> (usize, usize, Vec<String>) {
                     |rig| rig.schedule(injection),
                 )
                 .unwrap();
-                let o = outcome(&run.rig, run.ended_by.as_ref());
-                let case = format!("{gait:?}, {kind} on {name} at {at} s");
-                if o.fell.is_some() {
-                    falls.push(case.clone());
-                }
-                let first = run
-                    .rig
-                    .controller
-                    .supervisor()
-                    .log()
-                    .find(|r| r.code.brakes_joint())
-                    .map(|r| usize::from(r.channel));
-                let last = run.rig.trace.last().unwrap();
-                if first == Some(j) {
-                    braked_right += 1;
-                    assert!(last.report.motors_enabled, "{case}: the others hold");
-                    if last.report.command_nm[j] != 0.0 {
-                        driven_again += 1;
-                        let off =
-                            f64::from(last.report.joints_rad[j]) - last.state.joint_angles_rad[j];
-                        assert!(
-                            off.abs() < 0.5f64.to_radians(),
-                            "{case}: driven on an angle {off} rad off"
-                        );
-                    }
-                }
+                each(
+                    &format!("{gait:?}, {kind} on {name} at {at} s"),
+                    j,
+                    at,
+                    &run,
+                );
             }
         }
     }
+}
+
+/// `kind` on every hip and knee, standing, early and late in the first
+/// swing, walking, climbing and descending (36 runs): how many braked the
+/// joint a braking fault was raised on first, how many of those ended
+/// driven again (a lost encoder's joint whose angle the closed chain
+/// gives: the angle control used then within half a degree of the
+/// truth), and the runs that fell.
+/// The first fault of `run` that braked a joint.
+fn first_braking<'r>(
+    run: &'r sim::scenario::StepRun<'_>,
+) -> Option<&'r gait_control::supervisor::FaultRecord> {
+    run.rig
+        .controller
+        .supervisor()
+        .log()
+        .find(|r| r.code.brakes_joint())
+}
+
+fn braked_joint_runs(kind: &str) -> (usize, usize, Vec<String>) {
+    let (mut braked_right, mut driven_again, mut falls) = (0, 0, Vec::new());
+    each_joint_run(kind, |case, j, _, run| {
+        let o = outcome(&run.rig, run.ended_by.as_ref());
+        if o.fell.is_some() {
+            falls.push(case.to_string());
+        }
+        let first = first_braking(run).map(|r| usize::from(r.channel));
+        let last = run.rig.trace.last().unwrap();
+        if first == Some(j) {
+            braked_right += 1;
+            assert!(last.report.motors_enabled, "{case}: the others hold");
+            if last.report.command_nm[j] != 0.0 {
+                driven_again += 1;
+                let off = f64::from(last.report.joints_rad[j]) - last.state.joint_angles_rad[j];
+                assert!(
+                    off.abs() < 0.5f64.to_radians(),
+                    "{case}: driven on an angle {off} rad off"
+                );
+            }
+        }
+    });
     (braked_right, driven_again, falls)
 }
 
@@ -540,44 +558,20 @@ fn a_persistent_encoder_jump_is_taken_out_and_the_step_lands_before_the_hold() {
     }
 }
 
-/// For each gait, hip and knee, and time (standing, a first and a second
-/// swing): the first fault that brakes a joint ([`FirstBrake`]).
+/// Each run of [`each_joint_run`]: its case, the struck joint and the
+/// first fault that braked a joint ([`FirstBrake`]).
 /// The first fault that braked a joint: code, joint, seconds after the
 /// injection.
 type FirstBrake = (FaultCode, usize, f64);
 
-fn first_brakes(kind: &str) -> Vec<(String, Option<FirstBrake>)> {
-    let device = DeviceConfig::exogait().unwrap();
-    let joints = ["left-hip", "left-knee", "right-hip", "right-knee"];
+fn first_brakes(kind: &str) -> Vec<(String, usize, Option<FirstBrake>)> {
     let mut out = Vec::new();
-    for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
-        for name in joints {
-            for at in [0.8, 2.5, 3.0] {
-                let injection: Injection = format!("{kind}:{name}@{at}").parse().unwrap();
-                let run = run_tables_with(
-                    &device,
-                    flash_tables(),
-                    gait,
-                    strong_pilot(),
-                    at + 4.0,
-                    2,
-                    |rig| rig.schedule(injection),
-                )
-                .unwrap();
-                let first = run
-                    .rig
-                    .controller
-                    .supervisor()
-                    .log()
-                    .find(|r| r.code.brakes_joint())
-                    .map(|r| {
-                        let dt = f64::from(device.dt_s);
-                        (r.code, usize::from(r.channel), f64::from(r.tick) * dt - at)
-                    });
-                out.push((format!("{gait:?} {name}@{at}"), first));
-            }
-        }
-    }
+    each_joint_run(kind, |case, j, at, run| {
+        let dt = f64::from(run.rig.device().dt_s);
+        let first = first_braking(run)
+            .map(|r| (r.code, usize::from(r.channel), f64::from(r.tick) * dt - at));
+        out.push((case.to_string(), j, first));
+    });
     out
 }
 
@@ -588,13 +582,9 @@ fn a_drive_stuck_on_its_set_value_is_found_by_its_current_at_its_own_joint() {
     // after the injection (median 0.20 s), every time first at its own
     // joint. The residual alone (0x0404) found 5 of 36 first at a joint the
     // stuck one dragged, and the hold then braked a healthy joint.
-    for (case, first) in first_brakes("motor-stuck") {
+    for (case, stuck, first) in first_brakes("motor-stuck") {
         let (code, joint, after_s) = first.unwrap_or_else(|| panic!("{case}: never braked"));
         assert_eq!(code, FaultCode::DriveCurrentMismatch, "{case}");
-        let stuck = ["left-hip", "left-knee", "right-hip", "right-knee"]
-            .iter()
-            .position(|j| case.contains(&format!(" {j}@")))
-            .unwrap();
         assert_eq!(joint, stuck, "{case}");
         assert!(after_s < 2.0, "{case}: {after_s} s");
     }
