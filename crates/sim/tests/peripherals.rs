@@ -407,3 +407,44 @@ fn estop_reads_and_fails() {
     assert_eq!(pin.is_high(), Err(SimPinError));
     assert!(pin.is_high().unwrap());
 }
+
+/// The device's current monitors, end to end: the drive's bridge, the
+/// simulated monitor on its ADC channel, gait-control's driver reading it
+/// with the device's calibration, give back the torque the bridge puts
+/// out (within a count, 0.1 N·m), either sign, and nothing while the drive
+/// is disabled (its brake's current is not the amplifier's).
+#[test]
+fn the_device_s_current_monitors_read_the_bridges_torque_through_its_calibration() {
+    let device = exogait_device::DeviceConfig::exogait().unwrap();
+    let w = Wiring::for_device(&device);
+    let mut adc = Mcp3208::new(w.force_adc());
+    let per_count = 1.0 / f64::from(device.drive_current_monitor.counts_per_amp())
+        * f64::from(device.drives[0].joint_torque_per_amp());
+    for (j, m) in w.motors.iter().enumerate() {
+        let mut driver =
+            Motor::new(m.pwm(), m.direction_pin(), m.enable_pin(), device.motors[j]).unwrap();
+        driver.disable().unwrap();
+        driver.enable().unwrap();
+        let cal = device.controller.drive_current_calibration[j];
+        let channel = device.drive_current_channels[j];
+        let asked = if j % 2 == 0 { 120.0f32 } else { -75.0 };
+        for _ in 0..60 {
+            driver.update(asked).unwrap();
+        }
+        w.record_drive_currents();
+        let read = f64::from(adc.read_drive_torque(channel, &cal).unwrap());
+        assert!(
+            (read - m.torque_nm()).abs() <= per_count,
+            "joint {j}: read {read}, bridge {}",
+            m.torque_nm()
+        );
+        assert!((m.torque_nm() - f64::from(asked)).abs() < 0.1, "joint {j}");
+        driver.disable().unwrap();
+        // Moving, braked: the brake's torque is large, the amplifier's none.
+        m.set_joint_speed(0.5);
+        assert!(m.torque_nm().abs() > 50.0, "joint {j}: {}", m.torque_nm());
+        w.record_drive_currents();
+        let off = f64::from(adc.read_drive_torque(channel, &cal).unwrap());
+        assert!(off.abs() <= per_count, "joint {j} disabled: {off}");
+    }
+}
