@@ -98,8 +98,8 @@ impl CurrentMonitorSpec {
 
     /// The calibration the controller reads it with, as joint torque, for
     /// a drive giving `joint_nm_per_amp`; the same open and short
-    /// thresholds as the force channels (the output's full scale stays
-    /// inside them).
+    /// thresholds as the force channels (the amplifier's current limit
+    /// stays inside them: `parts::DRIVE_CURRENT_MONITOR`).
     pub fn calibration(
         &self,
         joint_nm_per_amp: f32,

@@ -414,7 +414,7 @@ impl<'t> Controller<'t> {
             swing_leg,
             airborne_leg: self.airborne_leg(s),
             chain_closed: s.chain_closed,
-            drive_current: s.drive_current,
+            drive_current: Some(s.drive_current),
         };
         let verdict = self.supervisor.check(&input);
         match verdict.reaction {

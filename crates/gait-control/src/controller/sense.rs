@@ -20,7 +20,7 @@ pub(super) struct Senses {
     /// Each force sensor's sample as the supervisor checks it.
     pub forces: [ForceSense; FORCES],
     /// This tick's drive-current sample.
-    pub drive_current: Option<DriveCurrentSense>,
+    pub drive_current: DriveCurrentSense,
     /// Debounced MODE and GO.
     pub mode: Sample,
     pub go: Sample,
@@ -64,7 +64,7 @@ impl Controller<'_> {
         let alpha = self.rate_alpha();
         let (encoders, taken) = self.read_encoders(hw, &lost, alpha);
         let forces = self.read_forces(hw);
-        let drive_current = Some(self.read_drive_current(hw));
+        let drive_current = self.read_drive_current(hw);
         let forces_n = forces.map(|f| f.newtons);
         let chain_closed = self.close_chain(&forces_n, &lost, alpha);
         let mode = hw.mode.tick();

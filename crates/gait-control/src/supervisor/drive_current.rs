@@ -28,8 +28,8 @@ pub struct DriveCurrentCheck {
     /// Mismatch allowed whatever the command, N·m (the monitor's noise and
     /// offset, the current loop's lag behind a slewing set value).
     pub band_nm: f32,
-    /// Mismatch allowed as a share of |command| (the amplifier's gain
-    /// tolerance, the torque constant's spread).
+    /// Mismatch allowed as a share of |command| (the tolerances of the
+    /// amplifier's set-value and monitor gains).
     pub band_share: f32,
     /// Consecutive mismatching samples of one drive that make 0x0405.
     pub samples: u8,
