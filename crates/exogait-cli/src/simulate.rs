@@ -69,8 +69,9 @@ pub struct SimulateArgs {
     /// encoder-stuck, encoder-jump=<counts>, encoder-glitch=<counts> (on
     /// left-/right-hip, -knee, -ankle); fsr-open, fsr-short,
     /// fsr-over-range, fsr-spike=<newtons> (on left-/right-foot, -crutch);
-    /// adc-bus; motor-weak=<fraction>, motor-stuck, pwm-fail, dir-fail,
-    /// current-open, current-short (on a hip or knee); estop, estop-read, button-read, overrun=<count>,
+    /// adc-bus; motor-weak=<fraction>, gear-slip=<fraction>, motor-stuck,
+    /// pwm-fail, dir-fail, current-open, current-short (on a hip or knee);
+    /// estop, estop-read, button-read, overrun=<count>,
     /// pilot-lean=<rad>, pilot-stops-balancing (no target).
     #[arg(long, value_name = "FAULT", value_parser = parse_injection)]
     pub inject: Vec<Injection>,

@@ -40,8 +40,12 @@ pub enum Kind {
     FsrSpike(f64),
     /// Every transaction with the force ADC fails on the bus.
     AdcBus,
-    /// The drive gives only this share of its torque.
+    /// The drive's amplifier gives only this share of the current asked
+    /// (its current monitor sees it).
     MotorWeak(f64),
+    /// The gearbox passes only this share of the motor's torque (the
+    /// current, and its monitor, stay what was asked).
+    GearSlip(f64),
     /// The bridge's output sticks at its present torque.
     MotorStuck,
     /// Every PWM write to the bridge fails.
@@ -136,6 +140,7 @@ impl Kind {
             Self::FsrSpike(_) => "fsr-spike",
             Self::AdcBus => "adc-bus",
             Self::MotorWeak(_) => "motor-weak",
+            Self::GearSlip(_) => "gear-slip",
             Self::MotorStuck => "motor-stuck",
             Self::PwmFail => "pwm-fail",
             Self::DirFail => "dir-fail",
@@ -161,6 +166,7 @@ impl Kind {
             | Self::EncoderGlitch(_) => Needs::Encoder,
             Self::FsrOpen | Self::FsrShort | Self::FsrOverRange | Self::FsrSpike(_) => Needs::Force,
             Self::MotorWeak(_)
+            | Self::GearSlip(_)
             | Self::MotorStuck
             | Self::PwmFail
             | Self::DirFail
@@ -178,7 +184,7 @@ impl Kind {
     }
 
     /// Every kind's name, for help texts and errors.
-    pub const NAMES: [&'static str; 24] = [
+    pub const NAMES: [&'static str; 25] = [
         "encoder-bus",
         "encoder-parity",
         "encoder-error-flag",
@@ -191,6 +197,7 @@ impl Kind {
         "fsr-spike=<newtons>",
         "adc-bus",
         "motor-weak=<fraction>",
+        "gear-slip=<fraction>",
         "motor-stuck",
         "pwm-fail",
         "dir-fail",
@@ -222,7 +229,11 @@ impl fmt::Display for Injection {
         f.write_str(self.kind.name())?;
         match self.kind {
             Kind::EncoderJump(c) | Kind::EncoderGlitch(c) => write!(f, "={c}")?,
-            Kind::FsrSpike(v) | Kind::MotorWeak(v) | Kind::PilotLean(v) | Kind::Panic(v) => {
+            Kind::FsrSpike(v)
+            | Kind::MotorWeak(v)
+            | Kind::GearSlip(v)
+            | Kind::PilotLean(v)
+            | Kind::Panic(v) => {
                 write!(f, "={v}")?;
             }
             Kind::Overrun(n) => write!(f, "={n}")?,
@@ -349,6 +360,7 @@ fn parse_kind(text: &str, name: &str, value: Option<&str>) -> Result<Kind, Parse
         "fsr-spike" => Kind::FsrSpike(number(-5_000.0, 5_000.0, "newtons")?),
         "adc-bus" => Kind::AdcBus,
         "motor-weak" => Kind::MotorWeak(number(0.0, 1.0, "a fraction")?),
+        "gear-slip" => Kind::GearSlip(number(0.0, 1.0, "a fraction")?),
         "motor-stuck" => Kind::MotorStuck,
         "pwm-fail" => Kind::PwmFail,
         "dir-fail" => Kind::DirFail,
@@ -383,6 +395,7 @@ fn parse_kind(text: &str, name: &str, value: Option<&str>) -> Result<Kind, Parse
             | Kind::EncoderGlitch(_)
             | Kind::FsrSpike(_)
             | Kind::MotorWeak(_)
+            | Kind::GearSlip(_)
             | Kind::Overrun(_)
             | Kind::PilotLean(_)
             | Kind::Panic(_)
@@ -409,6 +422,7 @@ mod tests {
             "encoder-glitch=-2000:left-ankle@0.5",
             "pilot-stops-balancing@3",
             "current-open:right-knee@1.5",
+            "gear-slip=0.3:left-hip@2.25",
         ] {
             let i: Injection = text.parse().unwrap_or_else(|e| panic!("{text}: {e}"));
             assert_eq!(i.to_string(), text);

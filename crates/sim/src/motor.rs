@@ -89,8 +89,12 @@ struct Bridge {
     reversals_under_duty: u32,
     writes: u64,
     drive: Option<Drive>,
-    /// Fault: share of the torque the drive still gives (1 healthy).
+    /// Fault: share of the current asked the amplifier still gives (1
+    /// healthy): its monitor reads it.
     strength: f64,
+    /// Fault: share of the motor's torque the gearbox passes to the joint
+    /// (1 healthy): a slipping gear; the current stays what was asked.
+    gear_share: f64,
     /// Fault: the set value stuck at this torque whatever is commanded
     /// (while enabled).
     stuck_nm: Option<f64>,
@@ -153,6 +157,12 @@ impl Bridge {
                 .drive
                 .map_or(0.0, |d| -d.brake_nm_s_per_rad * d.joint_speed_rad_s);
         }
+        self.amplifier_nm() * self.gear_share
+    }
+
+    /// The joint torque the amplifier's current gives while enabled, N·m
+    /// (before the gearbox's share).
+    fn amplifier_nm(&self) -> f64 {
         if let Some(t) = self.stuck_nm {
             return t;
         }
@@ -209,6 +219,7 @@ impl SimMotor {
             writes: 0,
             drive: None,
             strength: 1.0,
+            gear_share: 1.0,
             stuck_nm: None,
         })))
     }
@@ -310,7 +321,7 @@ impl SimMotor {
     /// current flows through the contactor, not the amplifier).
     pub fn amplifier_torque_nm(&self) -> f64 {
         let b = self.0.borrow();
-        if b.enable_high { b.torque_nm() } else { 0.0 }
+        if b.enable_high { b.amplifier_nm() } else { 0.0 }
     }
 
     /// (duty, direction high, enable high).
@@ -330,10 +341,23 @@ impl SimMotor {
         self.0.borrow().writes
     }
 
-    /// Fault: the drive gives only `fraction` (0 … 1) of the torque it
-    /// should (a worn gear, a failing winding, a current limit set low).
+    /// Fault: the amplifier gives only `fraction` (0 … 1) of the current
+    /// asked (a failing power stage, a lost phase, a current limit set
+    /// low): the joint gets that share of its torque, and the current
+    /// monitor reads it.
     pub fn weaken(&self, fraction: f64) {
         self.0.borrow_mut().strength = if fraction.is_finite() {
+            fraction.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+    }
+
+    /// Fault: the gearbox passes only `fraction` (0 … 1) of the motor's
+    /// torque (a strain-wave gear ratcheting, a slipping coupling): the
+    /// current, and so the current monitor, stay what was asked.
+    pub fn slip_gear(&self, fraction: f64) {
+        self.0.borrow_mut().gear_share = if fraction.is_finite() {
             fraction.clamp(0.0, 1.0)
         } else {
             0.0

@@ -49,7 +49,7 @@ impl NamedCase {
 fn loses_drive(kind: Kind) -> bool {
     matches!(
         kind,
-        Kind::MotorStuck | Kind::MotorWeak(_) | Kind::PwmFail | Kind::DirFail
+        Kind::MotorStuck | Kind::MotorWeak(_) | Kind::GearSlip(_) | Kind::PwmFail | Kind::DirFail
     )
 }
 
@@ -94,8 +94,10 @@ pub fn named_case(
     // A weak or stuck drive shows only under load: one lost before the
     // swing that loads its leg is lost in that swing (a lost encoder or
     // output stage is found at once, and no step starts after it).
-    let latent = matches!(kind, Kind::MotorStuck | Kind::MotorWeak(_))
-        && leg.is_some_and(|l| stance_after_strike.get(l.index()) == Some(&true));
+    let latent = matches!(
+        kind,
+        Kind::MotorStuck | Kind::MotorWeak(_) | Kind::GearSlip(_)
+    ) && leg.is_some_and(|l| stance_after_strike.get(l.index()) == Some(&true));
     // The knee carries the body unless its own foot is in the air.
     let knee_loaded = is_knee
         && (latent

@@ -172,6 +172,11 @@ impl Rig<'_> {
                     m.weaken(share);
                 }
             }
+            Kind::GearSlip(share) => {
+                if let Some(m) = &motor {
+                    m.slip_gear(share);
+                }
+            }
             Kind::MotorStuck => {
                 if let Some(m) = &motor {
                     m.stick();
