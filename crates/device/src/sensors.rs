@@ -39,14 +39,9 @@ impl LoadCellSpec {
     /// counts at the calibration points, the open and short thresholds and
     /// the rated range.
     pub fn calibration(&self) -> Result<ForceCalibration<FORCE_CAL_POINTS>, CalibrationError> {
-        let counts = self.calibration_points_n.map(|n| {
-            let c = self.counts(n);
-            if c.is_finite() {
-                (c.clamp(0.0, 4095.0) + 0.5) as u16
-            } else {
-                0
-            }
-        });
+        let counts = self
+            .calibration_points_n
+            .map(|n| adc_counts(self.counts(n)));
         ForceCalibration::new(
             counts,
             self.calibration_points_n,
@@ -104,17 +99,21 @@ impl CurrentMonitorSpec {
         &self,
         joint_nm_per_amp: f32,
     ) -> Result<DriveCurrentCalibration, CalibrationError> {
-        let zero = self.zero_counts();
-        let zero_counts = if zero.is_finite() {
-            (zero.clamp(0.0, 4095.0) + 0.5) as u16
-        } else {
-            0
-        };
         DriveCurrentCalibration::new(
-            zero_counts,
+            adc_counts(self.zero_counts()),
             joint_nm_per_amp / self.counts_per_amp(),
             OPEN_BELOW_COUNTS,
             SHORT_ABOVE_COUNTS,
         )
+    }
+}
+
+/// Unrounded counts as the ADC's 12-bit reading (rounded, clamped; not a
+/// number reads 0, which every calibration refuses).
+fn adc_counts(c: f32) -> u16 {
+    if c.is_finite() {
+        (c.clamp(0.0, 4095.0) + 0.5) as u16
+    } else {
+        0
     }
 }
