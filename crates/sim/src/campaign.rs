@@ -52,6 +52,9 @@ pub struct RunResult {
     /// what tells its stops crossed (a later swing cannot have taken a
     /// joint there).
     pub stance_before_stop: [bool; 2],
+    /// Per leg (left, right): its foot carried the larger share of the body
+    /// when the fault struck (the simulator's truth).
+    pub carrying_at_strike: [bool; 2],
 }
 
 impl RunResult {
@@ -62,10 +65,14 @@ impl RunResult {
 
     /// The named case this run's fall belongs to, if it fell in one.
     pub fn named_fall(&self) -> Option<NamedCase> {
-        self.outcome
-            .fell
-            .as_ref()
-            .and_then(|_| named_case(&self.run, self.struck_in, self.stance_after_strike))
+        self.outcome.fell.as_ref().and_then(|_| {
+            named_case(
+                &self.run,
+                self.struck_in,
+                self.stance_after_strike,
+                self.carrying_at_strike,
+            )
+        })
     }
 
     /// The pilot fell, and not in a named case: the device's to fix.
@@ -86,7 +93,12 @@ impl RunResult {
                 .zip(self.outcome.limit_margins)
                 .filter(|(_, (m, _))| *m < 0.0)
         };
-        let named = named_case(&self.run, self.struck_in, self.stance_before_stop);
+        let named = named_case(
+            &self.run,
+            self.struck_in,
+            self.stance_before_stop,
+            self.carrying_at_strike,
+        );
         named.filter(|_| self.past_a_stop()).filter(|&c| {
             crossed().all(|(j, (_, flexion))| {
                 let o = &self.outcome;
@@ -250,6 +262,10 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
             })
     };
     let struck_in = after_strike().next().map(|s| s.report.phase);
+    let carrying_at_strike = after_strike().next().map_or([false; 2], |s| {
+        let [left, right] = s.state.foot_forces_n;
+        [left > 0.0 && left >= right, right > 0.0 && right > left]
+    });
     let (outcome, injected, error) = judged(played.as_ref());
     // Only a swing before the fall, or before the first stop crossed, can
     // have taken the pilot or a joint there.
@@ -266,6 +282,7 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
         struck_in,
         stance_after_strike,
         stance_before_stop,
+        carrying_at_strike,
     }
 }
 

@@ -64,13 +64,15 @@ fn loses_encoder(kind: Kind) -> bool {
 /// The named case of `run`'s fault (its falls and, through
 /// [`explains_stop`], its stops crossed are told by it), given the phase
 /// the gait was in when its fault struck (`None`: not known, or not
-/// struck) and which legs (left, right) were the stance leg of a swing at
+/// struck), which legs (left, right) were the stance leg of a swing at
 /// or after it and before what is told (the fall, or the first stop
-/// crossed: [`RunResult`](super::RunResult)).
+/// crossed: [`RunResult`](super::RunResult)), and which leg's foot carried
+/// the larger share of the body when it struck.
 pub fn named_case(
     run: &CampaignRun,
     struck_in: Option<Phase>,
     stance_after_strike: [bool; 2],
+    carrying_at_strike: [bool; 2],
 ) -> Option<NamedCase> {
     let kind = run.fault.kind;
     if matches!(kind, Kind::PilotLean(_) | Kind::PilotStopsBalancing) {
@@ -98,10 +100,16 @@ pub fn named_case(
         kind,
         Kind::MotorStuck | Kind::MotorWeak(_) | Kind::GearSlip(_)
     ) && leg.is_some_and(|l| stance_after_strike.get(l.index()) == Some(&true));
-    // The knee carries the body unless its own foot is in the air.
+    // The knee carries the body unless its own foot is in the air: the
+    // stance leg's in a swing, or the swing leg's while its foot still
+    // carries most of the body (a descent's trailing foot, on its toe on
+    // the upper step, lowers the body on its bent knee through the first
+    // part of the swing: 580–830 N of about 940).
+    let carrying = leg.is_some_and(|l| carrying_at_strike.get(l.index()) == Some(&true));
     let knee_loaded = is_knee
         && (latent
-            || struck_in.is_some() && leg.is_some_and(|l| swing_stance.is_none_or(|s| s == l)));
+            || struck_in.is_some()
+                && (carrying || leg.is_some_and(|l| swing_stance.is_none_or(|s| s == l))));
     if run.gait == Gait::StairDown
         && (matches!(kind, Kind::EStop | Kind::EStopRead) || (loses_drive(kind) && knee_loaded))
     {
@@ -168,6 +176,12 @@ mod tests {
 
     const NONE_AFTER: [bool; 2] = [false; 2];
 
+    /// The named case when neither foot carried more at the strike than
+    /// its stance says.
+    fn named(run: &CampaignRun, at: Option<Phase>, after: [bool; 2]) -> Option<NamedCase> {
+        named_case(run, at, after, [false; 2])
+    }
+
     const SWING_RIGHT: Option<Phase> = Some(Phase::Swing {
         stance: Side::Right,
         t_s: 0.5,
@@ -181,12 +195,9 @@ mod tests {
     #[test]
     fn the_pilot_s_own_faults_are_named_whatever_the_phase() {
         let r = run(Gait::Walk, Kind::PilotStopsBalancing, None);
-        assert_eq!(named_case(&r, None, NONE_AFTER), Some(NamedCase::Pilot));
+        assert_eq!(named(&r, None, NONE_AFTER), Some(NamedCase::Pilot));
         let r = run(Gait::StairUp, Kind::PilotLean(0.1), None);
-        assert_eq!(
-            named_case(&r, SWING_LEFT, NONE_AFTER),
-            Some(NamedCase::Pilot)
-        );
+        assert_eq!(named(&r, SWING_LEFT, NONE_AFTER), Some(NamedCase::Pilot));
     }
 
     #[test]
@@ -196,34 +207,61 @@ mod tests {
         let stuck = |t| run(Gait::StairDown, Kind::MotorStuck, t);
         // The stance knee in a swing; either knee standing.
         assert_eq!(
-            named_case(&stuck(left_knee), SWING_LEFT, NONE_AFTER),
+            named(&stuck(left_knee), SWING_LEFT, NONE_AFTER),
             Some(NamedCase::DescentKneeWithoutDrive)
         );
         assert_eq!(
-            named_case(&stuck(right_knee), Some(Phase::Standing), NONE_AFTER),
+            named(&stuck(right_knee), Some(Phase::Standing), NONE_AFTER),
             Some(NamedCase::DescentKneeWithoutDrive)
         );
         // Not the swing knee, not a lost encoder, not in another gait.
-        assert_eq!(named_case(&stuck(right_knee), SWING_LEFT, NONE_AFTER), None);
+        assert_eq!(named(&stuck(right_knee), SWING_LEFT, NONE_AFTER), None);
         // Unless its leg then stands in a swing, which finds the drive.
         assert_eq!(
-            named_case(&stuck(right_knee), SWING_LEFT, [true, true]),
+            named(&stuck(right_knee), SWING_LEFT, [true, true]),
             Some(NamedCase::DescentKneeWithoutDrive)
         );
         let output_stage = run(Gait::StairDown, Kind::PwmFail, right_knee);
-        assert_eq!(named_case(&output_stage, SWING_LEFT, [true, true]), None);
+        assert_eq!(named(&output_stage, SWING_LEFT, [true, true]), None);
         let blind = run(Gait::StairDown, Kind::EncoderStuck, left_knee);
-        assert_eq!(named_case(&blind, SWING_LEFT, NONE_AFTER), None);
+        assert_eq!(named(&blind, SWING_LEFT, NONE_AFTER), None);
         let walk = run(Gait::Walk, Kind::MotorStuck, left_knee);
-        assert_eq!(named_case(&walk, SWING_LEFT, NONE_AFTER), None);
+        assert_eq!(named(&walk, SWING_LEFT, NONE_AFTER), None);
         // The e-stop brakes every drive.
         let estop = run(Gait::StairDown, Kind::EStop, None);
         assert_eq!(
-            named_case(&estop, Some(Phase::Standing), NONE_AFTER),
+            named(&estop, Some(Phase::Standing), NONE_AFTER),
             Some(NamedCase::DescentKneeWithoutDrive)
         );
         assert_eq!(
-            named_case(&run(Gait::Walk, Kind::EStop, None), None, NONE_AFTER),
+            named(&run(Gait::Walk, Kind::EStop, None), None, NONE_AFTER),
+            None
+        );
+    }
+
+    #[test]
+    fn a_descent_swing_knee_is_loaded_while_its_foot_carries_the_body() {
+        let right_knee = Some(Target::Joint(3));
+        let right_carries = [false, true];
+        for kind in [Kind::MotorStuck, Kind::PwmFail, Kind::MotorWeak(0.5)] {
+            let r = run(Gait::StairDown, kind, right_knee);
+            assert_eq!(
+                named_case(&r, SWING_LEFT, NONE_AFTER, right_carries),
+                Some(NamedCase::DescentKneeWithoutDrive)
+            );
+            // Once the stance foot has the body, the swing knee is not it.
+            assert_eq!(named_case(&r, SWING_LEFT, NONE_AFTER, [true, false]), None);
+        }
+        // Its encoder lost: the drive works, not this case.
+        let blind = run(Gait::StairDown, Kind::EncoderParity, right_knee);
+        assert_eq!(
+            named_case(&blind, SWING_LEFT, NONE_AFTER, right_carries),
+            None
+        );
+        // Nor a walk's or an ascent's.
+        let walk = run(Gait::Walk, Kind::MotorStuck, right_knee);
+        assert_eq!(
+            named_case(&walk, SWING_LEFT, NONE_AFTER, right_carries),
             None
         );
     }
@@ -234,17 +272,17 @@ mod tests {
         for kind in [Kind::MotorWeak(0.5), Kind::PwmFail, Kind::EncoderParity] {
             let r = run(Gait::StairUp, kind, left_hip);
             assert_eq!(
-                named_case(&r, SWING_LEFT, NONE_AFTER),
+                named(&r, SWING_LEFT, NONE_AFTER),
                 Some(NamedCase::StanceHipInASwing)
             );
             // Both feet down, the other leg holds the torso.
-            assert_eq!(named_case(&r, Some(Phase::Standing), NONE_AFTER), None);
+            assert_eq!(named(&r, Some(Phase::Standing), NONE_AFTER), None);
         }
         // The swing hip, or a jump (the encoder still reads).
         let swing_hip = run(Gait::StairUp, Kind::MotorWeak(0.5), Some(Target::Joint(2)));
-        assert_eq!(named_case(&swing_hip, SWING_LEFT, NONE_AFTER), None);
+        assert_eq!(named(&swing_hip, SWING_LEFT, NONE_AFTER), None);
         let jump = run(Gait::StairUp, Kind::EncoderJump(200), left_hip);
-        assert_eq!(named_case(&jump, SWING_LEFT, NONE_AFTER), None);
+        assert_eq!(named(&jump, SWING_LEFT, NONE_AFTER), None);
     }
 
     #[test]
@@ -256,11 +294,11 @@ mod tests {
             let r = run(Gait::Walk, kind, left_hip);
             for at in [Some(Phase::Standing), SWING_RIGHT] {
                 assert_eq!(
-                    named_case(&r, at, left_stance_later),
+                    named(&r, at, left_stance_later),
                     Some(NamedCase::StanceHipInASwing)
                 );
                 // No swing on it came: not this case.
-                assert_eq!(named_case(&r, at, [false, true]), None);
+                assert_eq!(named(&r, at, [false, true]), None);
             }
         }
         // A lost encoder or output stage is found at once, the knee is not
@@ -271,10 +309,7 @@ mod tests {
             (Kind::MotorWeak(0.5), Some(Target::Joint(1))),
         ] {
             let r = run(Gait::Walk, kind, target);
-            assert_eq!(
-                named_case(&r, Some(Phase::Standing), left_stance_later),
-                None
-            );
+            assert_eq!(named(&r, Some(Phase::Standing), left_stance_later), None);
         }
     }
 
