@@ -93,12 +93,33 @@ pub fn inverse_dynamics_at<T: Real>(
 ) -> TPhi<T> {
     let sc = &posture.sin_cos;
     let w2 = dphi.map(|w| w * w);
+    // cos(φi − φj) and sin(φi − φj) once per pair: the products commute
+    // exactly in floating point, so cos_ji = cos_ij and sin_ji = −sin_ij
+    // bit for bit, and the sums below are the ones of the full 5 × 5 loop.
+    let mut cos = [[T::zero(); LINKS]; LINKS];
+    let mut sin = [[T::zero(); LINKS]; LINKS];
+    for (i, &(si, ci)) in sc.iter().enumerate() {
+        for (j, &(sj, cj)) in sc.iter().enumerate().skip(i) {
+            let c = ci * cj + si * sj;
+            let s = si * cj - ci * sj;
+            let mut put = |m: &mut [[T; LINKS]; LINKS], a: usize, b: usize, v: T| {
+                if let Some(cell) = m.get_mut(a).and_then(|row| row.get_mut(b)) {
+                    *cell = v;
+                }
+            };
+            put(&mut cos, i, j, c);
+            put(&mut cos, j, i, c);
+            put(&mut sin, j, i, -s);
+            put(&mut sin, i, j, s);
+        }
+    }
     let mut out = [T::zero(); LINKS];
-    for (((o, &(si, ci)), prow), &gi) in out.iter_mut().zip(sc).zip(model.p()).zip(model.g()) {
+    let rows = out.iter_mut().zip(sc).zip(model.p()).zip(model.g());
+    for ((((o, &(si, _)), prow), &gi), (cos_i, sin_i)) in rows.zip(cos.iter().zip(&sin)) {
         let mut acc = -gi * si;
-        for (((&(sj, cj), &pij), &aj), &wj2) in sc.iter().zip(prow).zip(ddphi).zip(&w2) {
-            let cos_ij = ci * cj + si * sj;
-            let sin_ij = si * cj - ci * sj;
+        for ((((&pij, &aj), &wj2), &cos_ij), &sin_ij) in
+            prow.iter().zip(ddphi).zip(&w2).zip(cos_i).zip(sin_i)
+        {
             acc += pij * (cos_ij * aj + sin_ij * wj2);
         }
         *o = acc;
@@ -481,6 +502,34 @@ fn axpy<T: Real>(a: &Phi<T>, b: &Phi<T>, s: T) -> Phi<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        /// The pairs taken once give the plain 5 × 5 sum bit for bit (the
+        /// firmware's commands must not move with it).
+        #[test]
+        fn pairs_taken_once_equal_the_full_sum_bit_for_bit(
+            phi in proptest::array::uniform5(-4.0f32..4.0),
+            w in proptest::array::uniform5(-12.0f32..12.0),
+            a in proptest::array::uniform5(-80.0f32..80.0),
+        ) {
+            let m = BodyModel::<f64>::paper_table_iii().cast::<f32>();
+            let posture = Posture::new(&phi);
+            let mut plain = [0.0f32; LINKS];
+            for i in 0..LINKS {
+                let (si, ci) = posture.sin_cos[i];
+                let mut acc = -m.g()[i] * si;
+                for j in 0..LINKS {
+                    let (sj, cj) = posture.sin_cos[j];
+                    let cos_ij = ci * cj + si * sj;
+                    let sin_ij = si * cj - ci * sj;
+                    acc += m.p()[i][j] * (cos_ij * a[j] + sin_ij * (w[j] * w[j]));
+                }
+                plain[i] = acc;
+            }
+            let fast = inverse_dynamics_at(&m, &posture, &w, &a);
+            proptest::prop_assert_eq!(plain.map(f32::to_bits), fast.map(f32::to_bits));
+        }
+    }
 
     #[test]
     fn fast_path_equals_matrix_form() {
