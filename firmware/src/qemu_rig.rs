@@ -28,7 +28,11 @@ use exogait_device::{BoardIo, DeviceConfig};
 /// the fakes, once owned by the drivers, read it at every transfer.
 #[derive(Debug)]
 pub struct Panel {
-    /// Each encoder's counts (joint order, then the ankles).
+    /// Each encoder's angle frame: its counts (joint order, then the
+    /// ankles) with the parity bit the part sets. The part works the frame
+    /// out in its own logic, not the MCU's: it is worked out here, when
+    /// the panel is set between ticks, so the tick's instruction count
+    /// holds only the MCU's work.
     encoders: [AtomicU16; 6],
     /// Each ADC input's counts, CH0..CH7.
     adc: [AtomicU16; 8],
@@ -58,7 +62,7 @@ impl Panel {
     /// Sets encoder `channel`'s counts (low 14 bits).
     pub fn set_encoder(&self, channel: usize, counts: u16) {
         if let Some(c) = self.encoders.get(channel) {
-            c.store(counts & 0x3FFF, Ordering::Relaxed);
+            c.store(with_even_parity(counts & 0x3FFF), Ordering::Relaxed);
         }
     }
 
@@ -76,7 +80,8 @@ impl Panel {
         }
     }
 
-    fn encoder(&self, channel: usize) -> u16 {
+    /// Encoder `channel`'s angle frame, parity included.
+    fn encoder_frame(&self, channel: usize) -> u16 {
         self.encoders
             .get(channel)
             .map_or(0, |c| c.load(Ordering::Relaxed))
@@ -165,7 +170,7 @@ impl FakeAs5048a {
                 // OCF set, AGC mid-range, no CORDIC overflow, field in range.
                 as5048a_reg::DIAGNOSTICS_AGC => with_even_parity(0x0100 | 0x0080),
                 as5048a_reg::MAGNITUDE => with_even_parity(0x1000),
-                as5048a_reg::ANGLE => with_even_parity(PANEL.encoder(self.channel)),
+                as5048a_reg::ANGLE => PANEL.encoder_frame(self.channel),
                 _ => {
                     self.errors |= 0b010;
                     with_even_parity(0x4000)
