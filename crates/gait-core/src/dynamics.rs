@@ -98,15 +98,15 @@ pub fn inverse_dynamics_at<T: Real>(
     // bit for bit, and the sums below are the ones of the full 5 × 5 loop.
     let mut cos = [[T::zero(); LINKS]; LINKS];
     let mut sin = [[T::zero(); LINKS]; LINKS];
+    let put = |m: &mut [[T; LINKS]; LINKS], a: usize, b: usize, v: T| {
+        if let Some(cell) = m.get_mut(a).and_then(|row| row.get_mut(b)) {
+            *cell = v;
+        }
+    };
     for (i, &(si, ci)) in sc.iter().enumerate() {
         for (j, &(sj, cj)) in sc.iter().enumerate().skip(i) {
             let c = ci * cj + si * sj;
             let s = si * cj - ci * sj;
-            let mut put = |m: &mut [[T; LINKS]; LINKS], a: usize, b: usize, v: T| {
-                if let Some(cell) = m.get_mut(a).and_then(|row| row.get_mut(b)) {
-                    *cell = v;
-                }
-            };
             put(&mut cos, i, j, c);
             put(&mut cos, j, i, c);
             put(&mut sin, j, i, -s);
