@@ -186,7 +186,7 @@ pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
             };
             let force = Target::Force(d.below(4));
             let sign = if d.below(2) == 0 { -1 } else { 1 };
-            let (kind, target) = match d.below(23) {
+            let (kind, target) = match d.below(24) {
                 0 => (Kind::EncoderBus, Some(encoder)),
                 1 => (Kind::EncoderParity, Some(encoder)),
                 2 => (Kind::EncoderErrorFlag, Some(encoder)),
@@ -215,6 +215,7 @@ pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
                 19 => (Kind::PilotLean(d.range(0.05, 0.2)), None),
                 20 => (Kind::PilotStopsBalancing, None),
                 21 => (Kind::CurrentOpen, Some(joint)),
+                22 => (Kind::GearSlip(d.range(0.2, 0.8)), Some(joint)),
                 _ => (Kind::CurrentShort, Some(joint)),
             };
             // Standing before GO, then anywhere in the first two steps.
