@@ -13,7 +13,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
         .args([
             "faults",
             "--runs",
-            "40",
+            "60",
             "--seed",
             "7",
             "--healthy",
@@ -26,7 +26,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
     let v: serde_json::Value =
         serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"));
     let all = &v["all"];
-    assert_eq!(all["runs"], 40);
+    assert_eq!(all["runs"], 60);
     // Exit 0 only when no fall and no stop crossed is the device's.
     let goal_met = all["unnamed_falls"] == 0
         && all["unnamed_past_a_stop"] == 0
@@ -35,7 +35,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
         && all["errors"] == 0;
     assert_eq!(out.status.code(), Some(if goal_met { 0 } else { 1 }));
     let bad = v["bad_runs"].as_array().unwrap();
-    assert!(!bad.is_empty(), "seed 7's first 40 runs include bad ones");
+    assert!(!bad.is_empty(), "seed 7's first 60 runs include bad ones");
     let mut encoder_runs = 0;
     let mut estop_runs = 0;
     for run in bad {
