@@ -417,6 +417,11 @@ impl<'t> Controller<'t> {
             drive_current: Some(s.drive_current),
         };
         let verdict = self.supervisor.check(&input);
+        for (i, (&re, &m)) in verdict.rehold_joints.iter().zip(&s.joints).enumerate() {
+            if re {
+                self.seq.rehold_joint(i, m);
+            }
+        }
         match verdict.reaction {
             Reaction::None => {}
             Reaction::FinishStepThenHold => self.seq.block_new_steps(),

@@ -41,7 +41,7 @@ pub enum Reaction {
 /// generates [`FaultCode`] (variants, docs, codes), [`FaultCode::COUNT`],
 /// [`FaultCode::ALL`], [`FaultCode::index`], [`FaultCode::reaction`],
 /// [`FaultCode::name`], [`FaultCode::detection_bound`], [`FaultCode::brakes_joint`],
-/// [`FaultCode::loses_angle`] and
+/// [`FaultCode::held_in_place_first`], [`FaultCode::loses_angle`] and
 /// [`FaultCode::reset_rule`].
 macro_rules! fault_table {
     ($(
@@ -53,6 +53,7 @@ macro_rules! fault_table {
             reset_allowed_when: $reset:literal
             $(, in_swing: $swing:path)?
             $(, brakes_joint: $brakes:literal)?
+            $(, held_in_place_first: $held:literal)?
             $(, loses_angle: $lost:literal)? $(,)?
         }
     ),+ $(,)?) => {
@@ -142,6 +143,18 @@ macro_rules! fault_table {
                 }
             }
 
+            /// Whether, raised on a joint while another joint is already
+            /// braked (or blind), the fault first holds its joint where it
+            /// is, its drive on, and brakes it only when raised there again
+            /// (`false` unless the row says so): most likely the braked
+            /// joint dragged it (`docs/safety.md`, session 17).
+            #[must_use]
+            pub const fn held_in_place_first(self) -> bool {
+                match self {
+                    $(Self::$variant => fault_table!(@held $($held)?)),+
+                }
+            }
+
             /// Whether the fault means the joint's own encoder no longer
             /// tells its angle (`false` unless the row says so). Such a
             /// joint is braked only while the closed chain of double
@@ -156,6 +169,8 @@ macro_rules! fault_table {
             }
         }
     };
+    (@held) => { false };
+    (@held $held:literal) => { $held };
     (@lost) => { false };
     (@lost $lost:literal) => { $lost };
     (@brakes) => { false };
@@ -408,7 +423,8 @@ fault_table! {
     /// should: the torque reaching the joint is not the torque commanded
     /// (a drive stuck on an old set value, a weak drive, a slipping
     /// gearbox). The joint's drive is disabled, so its dynamic brake holds
-    /// it, and the others hold the posture.
+    /// it, and the others hold the posture; raised while another joint is
+    /// already braked, the joint is first held where it is with its drive.
     MotorResponse = 0x0404 {
         name: "motor not following its command",
         reaction: Reaction::SafeHold,
@@ -416,6 +432,7 @@ fault_table! {
             error of 125 N·m in about 170 ticks, 200 N·m in about 100",
         reset_allowed_when: "the residual is under the limit",
         brakes_joint: true,
+        held_in_place_first: true,
     },
     /// A hip or knee drive's current, read from its amplifier's monitor
     /// output, is not the torque it was given: a set value stuck, a share

@@ -599,6 +599,23 @@ impl<'t> Sequencer<'t> {
         self.blend_to = to;
     }
 
+    /// Holds joint `i` (joint order) at `measured` from now on, in a hold
+    /// (the supervisor's [`Verdict::rehold_joints`](crate::supervisor::Verdict)):
+    /// its blend starts and ends there. Nothing outside a hold, or for a
+    /// non-finite angle.
+    pub fn rehold_joint(&mut self, i: usize, measured: f32) {
+        if !matches!(self.phase, Phase::SafeHold { .. }) {
+            return;
+        }
+        if !measured.is_finite() {
+            return;
+        }
+        if let (Some(f), Some(t)) = (self.blend_from.get_mut(i), self.blend_to.get_mut(i)) {
+            *f = measured;
+            *t = measured;
+        }
+    }
+
     fn blended(&self, fraction: f32) -> [f32; JOINTS] {
         let s = smoothstep(fraction);
         let mut out = self.blend_from;

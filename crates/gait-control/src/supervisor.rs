@@ -170,6 +170,14 @@ pub struct Verdict {
     /// (0x0201–0x0204) while the closed chain does not give its angle
     /// (`SupervisorInput::chain_closed`).
     pub braked_joints: [bool; JOINTS],
+    /// Joints whose drive 0x0404 found not following while another joint
+    /// was already braked, this tick, for the first time: most likely
+    /// dragged by the braked one, not faulty (its current follows its
+    /// command, or 0x0405 would have braked it). Held where they are now
+    /// with their drive, not braked: braked, a loaded joint sinks, and
+    /// held at the hold's old reference its drive pushes the body (session
+    /// 16). A second trip on the same joint brakes it.
+    pub rehold_joints: [bool; JOINTS],
 }
 
 /// One post-mortem record: written when a fault latches, and again when
@@ -289,6 +297,8 @@ impl Supervisor {
                 log: RingLog::new(),
                 braked: [false; JOINTS],
                 angle_lost: [false; JOINTS],
+                held_in_place_once: [false; JOINTS],
+                hold_in_place: [false; JOINTS],
             },
             joints: [JointTrack::default(); JOINTS],
             ankles: [EncoderTrack::default(); ANKLES],
@@ -368,6 +378,7 @@ impl Supervisor {
         self.latch.logged_none = FaultSet::EMPTY;
         self.latch.braked = [false; JOINTS];
         self.latch.angle_lost = [false; JOINTS];
+        self.latch.held_in_place_once = [false; JOINTS];
         Ok(())
     }
 
@@ -408,6 +419,7 @@ impl Supervisor {
             latched: self.latch.latched,
             new: t.new,
             braked_joints: self.braked_joints(&input.chain_closed),
+            rehold_joints: core::mem::take(&mut self.latch.hold_in_place),
         }
     }
 }
@@ -429,14 +441,68 @@ struct Latch {
     /// Joints whose encoder a fault has lost ([`FaultCode::loses_angle`]),
     /// until a reset.
     angle_lost: [bool; JOINTS],
+    /// Joints 0x0404 has held in place instead of braking, until a reset.
+    held_in_place_once: [bool; JOINTS],
+    /// Those of them this tick ([`Verdict::rehold_joints`]).
+    hold_in_place: [bool; JOINTS],
 }
 
 impl Latch {
     /// Records that `code`'s condition holds now on `channel`: latches it,
     /// and logs it once per channel while latched.
     pub(super) fn raise(&mut self, t: &mut Tick, code: FaultCode, channel: u8, value: f32) {
+        self.raise_marking(t, code, channel, value, true);
+    }
+
+    /// `code` on `joint`, as [`Latch::raise`]; but a code
+    /// [`FaultCode::held_in_place_first`] raised while another joint is
+    /// already braked (or blind), on a joint not held in place before, is
+    /// latched and logged as ever and holds its joint where it is
+    /// ([`Verdict::rehold_joints`]) instead of braking it. Returns whether
+    /// it did.
+    pub(super) fn raise_on_joint(
+        &mut self,
+        t: &mut Tick,
+        code: FaultCode,
+        joint: usize,
+        value: f32,
+    ) -> bool {
+        let other_braked = self
+            .braked
+            .iter()
+            .zip(&self.angle_lost)
+            .enumerate()
+            .any(|(k, (&b, &l))| k != joint && (b || l));
+        let first = self.held_in_place_once.get(joint) == Some(&false);
+        let hold = code.held_in_place_first() && other_braked && first;
+        if hold {
+            if let (Some(once), Some(now)) = (
+                self.held_in_place_once.get_mut(joint),
+                self.hold_in_place.get_mut(joint),
+            ) {
+                *once = true;
+                *now = true;
+            }
+        }
+        let channel = u8::try_from(joint).unwrap_or(NO_CHANNEL);
+        self.raise_marking(t, code, channel, value, !hold);
+        hold
+    }
+
+    /// [`Latch::raise`]; a joint's brake or lost angle marked only with
+    /// `mark`.
+    fn raise_marking(
+        &mut self,
+        t: &mut Tick,
+        code: FaultCode,
+        channel: u8,
+        value: f32,
+        mark: bool,
+    ) {
         t.present.insert(code);
-        let marks = if code.loses_angle() {
+        let marks = if !mark {
+            None
+        } else if code.loses_angle() {
             Some(&mut self.angle_lost)
         } else if code.brakes_joint() {
             Some(&mut self.braked)

@@ -137,6 +137,9 @@ fn each_doc_row_matches_its_code_row() {
         if c.brakes_joint() {
             label.push_str(", THAT JOINT BRAKED");
         }
+        if c.held_in_place_first() {
+            label.push_str(" (ANOTHER ALREADY BRAKED: HELD IN PLACE FIRST)");
+        }
         assert_eq!(row.reaction, label, "{at}: reaction");
         assert_eq!(
             row.detection_bound,

@@ -759,6 +759,30 @@ fn a_safe_hold_standing_or_without_a_model_moves_no_foot() {
     }
 }
 
+/// A joint the supervisor holds in place (`Verdict::rehold_joints`) is
+/// held where it was measured from then on, the others as before; outside
+/// a hold, or for a non-finite angle, nothing changes.
+#[test]
+fn a_joint_held_in_place_keeps_its_measured_angle_in_the_hold() {
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.rehold_joint(1, 0.9);
+    assert_eq!(rig.step(&s), pose, "standing: not a hold, nothing moves");
+    rig.seq.enter_safe_hold(&pose, InSwing::HoldNow);
+    for _ in 0..50 {
+        rig.step(&s);
+    }
+    rig.seq.rehold_joint(1, 0.9);
+    rig.seq.rehold_joint(2, f32::NAN);
+    let mut want = pose;
+    want[1] = 0.9;
+    for _ in 0..2_000 {
+        assert_eq!(rig.step(&s), want);
+    }
+}
+
 #[test]
 fn after_a_restart_the_foot_found_unloaded_is_set_down() {
     let img = walk_image();

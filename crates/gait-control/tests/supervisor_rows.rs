@@ -502,6 +502,38 @@ fn row_motor_response() {
     assert_eq!(verdict.braked_joints, [false, true, false, false]);
 }
 
+/// 0x0404 on a joint while another is already braked: most likely the
+/// braked joint dragged it, so it is held where it is with its drive
+/// (latched and logged as ever, not braked), once; the residual still
+/// over its limit 10 ticks on brakes it.
+#[test]
+fn a_response_fault_while_another_joint_is_braked_holds_the_joint_in_place_once() {
+    let (sup, v) = inject(260, |_, input| {
+        input.motors[2].output_fault = true;
+        input.motors[1].commanded_nm = 130.0;
+        input.motors[1].applied_nm = 130.0;
+        input.motors[1].limit_nm = 150.0;
+        currents_follow(input);
+    });
+    let at = detected_at(&v, FaultCode::MotorResponse).unwrap() as usize;
+    assert!((150..=190).contains(&at), "detected at tick {at}");
+    let held: Vec<usize> = (1..=v.len())
+        .filter(|&k| v[k - 1].rehold_joints != [false; 4])
+        .collect();
+    assert_eq!(held, [at], "held in place once, when it latched");
+    assert_eq!(v[at - 1].rehold_joints, [false, true, false, false]);
+    assert_eq!(v[at - 1].braked_joints, [false, false, true, false]);
+    assert_eq!(v[at - 1].reaction, Reaction::SafeHold);
+    assert!(
+        sup.log()
+            .any(|r| r.code == FaultCode::MotorResponse && r.channel == 1),
+        "logged"
+    );
+    let braked_at = (1..=v.len()).find(|&k| v[k - 1].braked_joints[1]).unwrap();
+    assert_eq!(braked_at, at + 10, "the second trip brakes it");
+    // Alone, the same fault brakes the joint at once (row_motor_response).
+}
+
 /// The same push when the joint answers it as the model says (its error
 /// accelerates at u / J) is no fault; a disabled or ramping drive is not
 /// checked at all.

@@ -195,8 +195,13 @@ impl Supervisor {
                     } else {
                         track.residual.over_ticks = track.residual.over_ticks.saturating_add(1);
                     }
-                    if track.residual.over_ticks >= o.ticks {
-                        latch.raise(t, FaultCode::MotorResponse, ch, d);
+                    if track.residual.over_ticks >= o.ticks
+                        && latch.raise_on_joint(t, FaultCode::MotorResponse, i, d)
+                    {
+                        // Held in place: 10 more ticks over the limit brake
+                        // it (the observer restarted there measured the
+                        // same on the campaign's drive and encoder runs).
+                        track.residual.over_ticks = 0;
                     }
                     if !d.is_finite() {
                         track.residual.stop(motor.feedforward_nm);
