@@ -222,9 +222,7 @@ pub fn joint_through_toe(
         libm::sqrtf(now[0] * now[0] + now[1] * now[1]),
         libm::sqrtf(want[0] * want[0] + want[1] * want[1]),
     );
-    // NaN fails the comparison too.
-    let consistent = (r_now - r_want).abs() <= TOE_CHAIN_TOLERANCE_M;
-    if !consistent {
+    if !((r_now - r_want).abs() <= TOE_CHAIN_TOLERANCE_M) {
         return f32::NAN;
     }
     // The clockwise angle from `now` to `want`.

@@ -47,10 +47,7 @@ pub(super) struct ChainEstimate {
     /// descent's trailing foot stands on its toe and carries the body early
     /// in the sequencer's swing.
     on_ground: [bool; 2],
-    /// Ticks since each foot's sensor last read a contact.
-    since_contact: [u16; 2],
-    /// Where the toe stood when the joint was lost, if a foot stood on it
-    /// and both feet have stayed on the ground since.
+    /// Where the toe stood when the joint was lost, if a foot stood on it.
     toe: Option<ToeAnchor>,
     /// Every hip and knee was read last tick: a joint blind now has just
     /// been lost, and the others' readings with its last one still
@@ -74,9 +71,6 @@ struct ToeAnchor {
 const UNLOADED_N: f32 = 20.0;
 /// Ticks unloaded after which a foot is no longer taken as down (20 ms).
 const UNLOADED_TICKS: u16 = 20;
-/// Ticks since a contact within which a foot on its toe still pins the
-/// chain (5 ms: the sensor's noise around the contact threshold).
-const TOE_CONTACT_TICKS: u16 = 5;
 
 impl Controller<'_> {
     /// Forms the estimate of the one hip or knee whose angle control
@@ -96,14 +90,8 @@ impl Controller<'_> {
         let feet = [Side::Left, Side::Right].into_iter();
         let c = &mut self.chain;
         let per_foot = c.feet_down.iter_mut().zip(&mut c.on_ground);
-        let counts = c.unloaded_ticks.iter_mut().zip(&mut c.since_contact);
-        for ((side, (down, ground)), (unloaded, since)) in feet.zip(per_foot).zip(counts) {
+        for ((side, (down, ground)), unloaded) in feet.zip(per_foot).zip(&mut c.unloaded_ticks) {
             let load = forces_n.get(side.foot()).copied().unwrap_or(f32::NAN);
-            *since = if load >= contact {
-                0
-            } else {
-                since.saturating_add(1)
-            };
             *unloaded = if load < UNLOADED_N {
                 unloaded.saturating_add(1)
             } else {
@@ -128,14 +116,6 @@ impl Controller<'_> {
         if just_lost {
             let anchor = self.toe_anchor(joint);
             self.chain.toe = anchor;
-        }
-        // A toe that has left the ground lands elsewhere: its anchor is gone
-        // for good (the joint is not read to take another).
-        let c = &mut self.chain;
-        if c.toe
-            .is_some_and(|t| !c.on_ground.iter().all(|&g| g) || t.joint != joint)
-        {
-            c.toe = None;
         }
         let Some(estimate) = self
             .flat_chain_estimate(joint)
@@ -240,9 +220,6 @@ impl Controller<'_> {
             (true, true) if c.unloaded_ticks == [0, 0] => Side::Left,
             _ => return None,
         };
-        if !self.toe_carries(base.other()) {
-            return None;
-        }
         let model = &self.cfg.model;
         let foot = StanceFoot::for_model(model);
         let at_m = other_toe_from_flat_foot(model, &foot, &self.joint_angles(), ankles, base);
@@ -263,7 +240,7 @@ impl Controller<'_> {
             Side::Left => ankles[0] < self.flat_below(),
             Side::Right => ankles[1] < self.flat_below(),
         };
-        if !base_flat || !self.toe_carries(anchor.base.other()) {
+        if !base_flat {
             return None;
         }
         let model = &self.cfg.model;
@@ -278,22 +255,6 @@ impl Controller<'_> {
             joint,
         );
         self.within_range(joint, estimate)
-    }
-
-    /// The foot on its toe pins the chain only while it carries: its sensor
-    /// has read a contact within [`TOE_CONTACT_TICKS`]. A toe that leaves
-    /// the ground with the foot turns about the hip, mostly across the
-    /// anchor's radius, where [`crate::posture::TOE_CHAIN_TOLERANCE_M`]
-    /// cannot see it.
-    fn toe_carries(&self, side: Side) -> bool {
-        let at = match side {
-            Side::Left => 0,
-            Side::Right => 1,
-        };
-        self.chain
-            .since_contact
-            .get(at)
-            .is_some_and(|&n| n <= TOE_CONTACT_TICKS)
     }
 
     /// `estimate` if it lies within the joint's range (NaN does not).
