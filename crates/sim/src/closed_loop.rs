@@ -170,9 +170,6 @@ pub struct Rig<'t> {
     support_ticks: u64,
     pilot: PilotBehaviour,
     transfer_from_phi1: Option<f64>,
-    /// The plant's stance leg and its shank when the safe hold began (taken
-    /// again if the plant changes its stance foot in the hold).
-    held_phi1: Option<(Side, f64)>,
     pub(crate) faults: Injector,
     /// The tables the controller was built with (a reboot builds it again).
     tables: GaitTables<'t>,
@@ -310,7 +307,6 @@ impl<'t> Rig<'t> {
             support_ticks: setup.support_ticks,
             pilot: setup.pilot,
             transfer_from_phi1: None,
-            held_phi1: None,
             faults: Injector::default(),
             tables,
             recorded: None,
@@ -424,15 +420,6 @@ impl<'t> Rig<'t> {
             }
             _ => self.transfer_from_phi1 = None,
         }
-        let plant_stance = self.plant.stance();
-        match report.phase {
-            Phase::SafeHold { .. } => {
-                if self.held_phi1.is_none_or(|(side, _)| side != plant_stance) {
-                    self.held_phi1 = Some((plant_stance, self.plant.state().phi[0]));
-                }
-            }
-            _ => self.held_phi1 = None,
-        }
         let seq = self.controller.sequencer();
         let table = seq.tables().get(self.controller.planned_gait()).copied();
         // The plant may have put the swing foot down a few ticks before the
@@ -449,8 +436,7 @@ impl<'t> Rig<'t> {
             swapped,
             &report.phase,
             table.as_ref(),
-            self.transfer_from_phi1
-                .or(self.held_phi1.map(|(_, phi1)| phi1)),
+            self.transfer_from_phi1,
             self.device.controller.sequencer.transfer_s,
             self.plant.time_s(),
         );

@@ -29,16 +29,14 @@ pub enum PilotBehaviour {
 /// Where the pilot's stance shank should be, given the controller's phase
 /// and the table it plays: the table's stance shank during a swing; during
 /// the weight transfer a smooth move from where the shank was at landing to
-/// the table's start (as the controller's transfer plans it); in a safe
-/// hold, held where it was when the hold began; otherwise held at the
-/// table's start. `entered_at`: the stance shank when the present transfer
-/// or hold began.
+/// the table's start (as the controller's transfer plans it); otherwise
+/// held at the table's start.
 pub(crate) fn pilot_target(
     b: &PilotBehaviour,
     swapped: bool,
     phase: &Phase,
     table: Option<&GaitTable<'_>>,
-    entered_at: Option<f64>,
+    transfer_from: Option<f64>,
     transfer_s: f32,
     now_s: f64,
 ) -> PilotTarget {
@@ -46,7 +44,7 @@ pub(crate) fn pilot_target(
     match *b {
         PilotBehaviour::Fixed(t) => t,
         PilotBehaviour::FollowsPlan(profile) => {
-            follow(phase, profile.at(0.0), entered_at, transfer_s, |t_s| {
+            follow(phase, profile.at(0.0), transfer_from, transfer_s, |t_s| {
                 PilotTarget::Profile {
                     profile,
                     t0_s: now_s - t_s,
@@ -55,7 +53,7 @@ pub(crate) fn pilot_target(
         }
         PilotBehaviour::FollowsTable => {
             let to = start(0.0);
-            follow(phase, to, entered_at, transfer_s, |t_s| match table {
+            follow(phase, to, transfer_from, transfer_s, |t_s| match table {
                 Some(tb) => {
                     let (phi1, rate) = table_stance_shank(tb, t_s, swapped);
                     PilotTarget::Track {
@@ -96,22 +94,18 @@ pub fn table_stance_shank(table: &GaitTable<'_>, t_s: f64, swapped: bool) -> (f6
 
 /// The pilot's target in each phase: `swing(t)` during a swing `t` seconds
 /// in; the smoothstep from the landing's shank to `start` during the
-/// transfer; in a safe hold the shank where the hold found it: a pilot
-/// whose exoskeleton stops braces on the crutches where they are, and does
-/// not push the body back to the step's start posture (which a hold in a
-/// swing is far from: the shank went there at the crutches' full 120 N·m);
-/// `start` otherwise.
+/// transfer; `start` otherwise.
 fn follow(
     phase: &Phase,
     start: f64,
-    entered_at: Option<f64>,
+    transfer_from: Option<f64>,
     transfer_s: f32,
     swing: impl FnOnce(f64) -> PilotTarget,
 ) -> PilotTarget {
     match *phase {
         Phase::Swing { t_s, .. } => swing(f64::from(t_s)),
         Phase::Transfer { t_s, .. } => {
-            let from = entered_at.unwrap_or(start);
+            let from = transfer_from.unwrap_or(start);
             let x = if transfer_s > 0.0 {
                 f64::from(t_s / transfer_s).clamp(0.0, 1.0)
             } else {
@@ -122,9 +116,6 @@ fn follow(
                 phi1_rad: from + s * (start - from),
             }
         }
-        Phase::SafeHold { .. } => PilotTarget::Hold {
-            phi1_rad: entered_at.unwrap_or(start),
-        },
         _ => PilotTarget::Hold { phi1_rad: start },
     }
 }
