@@ -7,11 +7,8 @@
 //! torques on those coordinates (N·m). Ankles: 0 left, 1 right,
 //! dorsiflexion positive.
 
-use gait_core::foot::StanceFoot;
-use gait_core::kinematics::{Phi, Point, anatomical_angles, forward_kinematics, theta_from_phi};
-use gait_core::model::BodyModel;
-use gait_core::scalar::Real;
-use gait_core::{LINKS, scalar::sin_cos_f32};
+use gait_core::LINKS;
+use gait_core::kinematics::{Phi, anatomical_angles, theta_from_phi};
 
 pub use crate::layout::{JOINTS, Side};
 
@@ -122,116 +119,6 @@ pub fn joint_through_closed_chain(joints: &[f32; JOINTS], ankles: [f32; 2], lost
     -rest * sign
 }
 
-/// The chain from a flat foot to the other foot's toe pivot: the points
-/// [`joint_through_toe`] needs, from the `base` foot's ankle (origin) with
-/// its foot flat: every joint's position (the base knee, the hip, the
-/// other knee; joint order) and the other foot's toe pivot. The other
-/// foot's pitch follows from its shank and its ankle's reading: a foot on
-/// its toe has its ankle on the dorsiflexion stop, locked (`gait_core::foot`),
-/// so the reading still ties the foot to the shank.
-fn chain_to_other_toe(
-    model: &BodyModel<f32>,
-    foot: &StanceFoot<f32>,
-    joints: &[f32; JOINTS],
-    ankles: [f32; 2],
-    base: Side,
-) -> ([Point<f32>; JOINTS], Point<f32>) {
-    let [left, right] = ankles;
-    let (base_ankle, other_ankle) = match base {
-        Side::Left => (left, right),
-        Side::Right => (right, left),
-    };
-    let phi = phi_from_joints(joints, base_ankle, base);
-    let [knee, hip, _, other_knee, other_ankle_at] = forward_kinematics(model, &phi);
-    // The other shank leans φ5 − π; the foot pitches (heel up) by the lean
-    // beyond the ankle's reading, a clockwise turn of the flat foot's toe.
-    let pitch = phi[4] - core::f32::consts::PI - other_ankle;
-    let (s, c) = sin_cos_f32(pitch);
-    let [tx, ty] = foot.toe();
-    let toe = [
-        other_ankle_at[0] + tx * c + ty * s,
-        other_ankle_at[1] - tx * s + ty * c,
-    ];
-    let mut at = [[0.0; 2]; JOINTS];
-    let (b, o) = (base.hip(), base.other().hip());
-    for (i, p) in [(b, hip), (b + 1, knee), (o, hip), (o + 1, other_knee)] {
-        if let Some(a) = at.get_mut(i) {
-            *a = p;
-        }
-    }
-    (at, toe)
-}
-
-/// Where the other foot's toe pivot lies from the flat `base` foot's
-/// ankle, m, with every joint read ([`joint_through_toe`]'s anchor). Why:
-/// once a joint's encoder is lost that point is no longer seen, but a toe
-/// that carries load on the ground does not move.
-pub fn other_toe_from_flat_foot(
-    model: &BodyModel<f32>,
-    foot: &StanceFoot<f32>,
-    joints: &[f32; JOINTS],
-    ankles: [f32; 2],
-    base: Side,
-) -> Point<f32> {
-    chain_to_other_toe(model, foot, joints, ankles, base).1
-}
-
-/// How far the toe's distance from the lost joint may differ from the
-/// anchor's before the estimate is refused, m: the toe slid, the foot
-/// lifted, or the anchor was taken from a stale angle.
-pub const TOE_CHAIN_TOLERANCE_M: f32 = 0.02;
-
-/// Joint `lost`'s angle through the chain of double support with one foot
-/// flat (`base`) and the other on its toe at `toe_anchor` (from the base
-/// ankle, [`other_toe_from_flat_foot`] taken while every joint was read).
-/// The lost joint splits the chain into two rigid pieces: the one from the
-/// base foot fixes the joint's position; the one beyond it (the other
-/// joints' and the other ankle's readings fix its shape) turns about the
-/// joint until its toe lies on the anchor: the joint's angle is the guess
-/// in `joints` plus that turn, exact in one step. Why: a descent's
-/// trailing foot stands on its toe while it still carries the body, so the
-/// flat chain ([`joint_through_closed_chain`]) does not close, yet the toe
-/// pins it. NaN when `lost` is not a joint, an input is NaN, or the toe's
-/// distance from the joint differs from the anchor's by more than
-/// [`TOE_CHAIN_TOLERANCE_M`].
-pub fn joint_through_toe(
-    model: &BodyModel<f32>,
-    foot: &StanceFoot<f32>,
-    joints: &[f32; JOINTS],
-    ankles: [f32; 2],
-    base: Side,
-    toe_anchor: Point<f32>,
-    lost: usize,
-) -> f32 {
-    let (at, toe) = chain_to_other_toe(model, foot, joints, ankles, base);
-    let Some(&[px, py]) = at.get(lost) else {
-        return f32::NAN;
-    };
-    // How the pieces beyond the joint turn with its flexion (clockwise
-    // positive, as Φ): the base knee's flexion turns them back (φ2 = φ1 −
-    // knee), the base hip's forward (φ3 = φ2 + hip), the other hip's back
-    // (φ4 = π + φ3 − hip), the other knee's forward (φ5 = φ4 + knee).
-    let turn = if lost == base.hip() || lost == base.other().hip() + 1 {
-        1.0
-    } else {
-        -1.0
-    };
-    let now = [toe[0] - px, toe[1] - py];
-    let want = [toe_anchor[0] - px, toe_anchor[1] - py];
-    let (r_now, r_want) = (
-        libm::sqrtf(now[0] * now[0] + now[1] * now[1]),
-        libm::sqrtf(want[0] * want[0] + want[1] * want[1]),
-    );
-    if !((r_now - r_want).abs() <= TOE_CHAIN_TOLERANCE_M) {
-        return f32::NAN;
-    }
-    // The clockwise angle from `now` to `want`.
-    let cross = now[1] * want[0] - now[0] * want[1];
-    let dot = now[0] * want[0] + now[1] * want[1];
-    let q = joints.get(lost).copied().unwrap_or(f32::NAN);
-    q + turn * cross.atan2_portable(dot)
-}
-
 /// The stance shank's angle φ1 from the ankle encoder's `reading`: the
 /// reading itself while the foot is flat; once the reading is at the
 /// dorsiflexion `stop` (within 0.5°), the heel may be up (toe rocker,
@@ -311,82 +198,6 @@ mod tests {
             assert!(joint_through_closed_chain(&joints, [f32::NAN, 0.0], 0).is_nan());
         }
         assert!(joint_through_closed_chain(&[0.0; JOINTS], [0.0, 0.0], JOINTS).is_nan());
-    }
-
-    /// A descent's double support: the leading (base) foot flat, its shank
-    /// leaning 0.1 rad; the trailing foot on its toe, its shank leaning
-    /// 0.6 rad, 0.25 rad past the ankle's 0.35 rad stop. Joints and ankle
-    /// readings (left, right) with `base` as that leading leg.
-    fn on_a_toe(base: Side, stop: f32) -> ([f32; JOINTS], [f32; 2], Phi<f32>) {
-        let pi = core::f32::consts::PI;
-        let phi = [0.10, -0.35, 0.05, pi - 0.3, pi + 0.6];
-        let joints = joints_from_phi(&phi, base);
-        let ankles = match base {
-            Side::Left => [phi[0], stop],
-            Side::Right => [stop, phi[0]],
-        };
-        (joints, ankles, phi)
-    }
-
-    #[test]
-    fn the_toe_anchor_is_where_the_toe_rocker_puts_the_toe() {
-        // Independently, from the toe's side: the trailing leg as gait-core's
-        // stance leg on its toe rocker (pivot fixed at the toe, ankle on a
-        // circle about it); the leading ankle is then its swing ankle.
-        let model = BodyModel::<f32>::paper_table_iii();
-        let foot = StanceFoot::device(0.35f32);
-        for base in [Side::Left, Side::Right] {
-            let (joints, ankles, phi) = on_a_toe(base, foot.heel_off_rad);
-            let anchor = other_toe_from_flat_foot(&model, &foot, &joints, ankles, base);
-            let from_toe = gait_core::kinematics::swap_legs(&phi);
-            assert!(foot.on_toe(from_toe[0]));
-            let points = foot.points(&model, &from_toe);
-            let toe = foot.toe();
-            let expect = [toe[0] - points[4][0], toe[1] - points[4][1]];
-            for k in 0..2 {
-                assert!(
-                    (anchor[k] - expect[k]).abs() < 1e-4,
-                    "{base:?}: {anchor:?} {expect:?}"
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn the_toe_gives_any_one_lost_joint() {
-        let model = BodyModel::<f32>::paper_table_iii();
-        let foot = StanceFoot::device(0.35f32);
-        for base in [Side::Left, Side::Right] {
-            let (joints, ankles, _) = on_a_toe(base, foot.heel_off_rad);
-            let anchor = other_toe_from_flat_foot(&model, &foot, &joints, ankles, base);
-            for lost in 0..JOINTS {
-                for wrong in [-0.4f32, -0.05, 0.2, 0.7] {
-                    let mut guess = joints;
-                    guess[lost] += wrong;
-                    let est = joint_through_toe(&model, &foot, &guess, ankles, base, anchor, lost);
-                    assert!(
-                        (est - joints[lost]).abs() < 1e-4,
-                        "{base:?} {lost} {wrong}: {est}"
-                    );
-                }
-            }
-            // A toe 3 cm further from the joint (it slid, or the foot
-            // lifted): refused, not bent to fit; nor a joint that is not
-            // one, nor NaN.
-            let (at, toe) = chain_to_other_toe(&model, &foot, &joints, ankles, base);
-            for (lost, p) in at.iter().enumerate() {
-                let r = [toe[0] - p[0], toe[1] - p[1]];
-                let n = libm::sqrtf(r[0] * r[0] + r[1] * r[1]);
-                let moved = [toe[0] + 0.03 * r[0] / n, toe[1] + 0.03 * r[1] / n];
-                let est = joint_through_toe(&model, &foot, &joints, ankles, base, moved, lost);
-                assert!(est.is_nan(), "{base:?} {lost}: {est}");
-            }
-            assert!(
-                joint_through_toe(&model, &foot, &joints, ankles, base, anchor, JOINTS).is_nan()
-            );
-            let nan = [f32::NAN, ankles[1]];
-            assert!(joint_through_toe(&model, &foot, &joints, nan, base, anchor, 0).is_nan());
-        }
     }
 
     #[test]

@@ -254,7 +254,11 @@ impl Controller<'_> {
         let on_stop = stop - crate::posture::ON_STOP_TOLERANCE_RAD;
         let stance = JOINTS + r.stance.ankle();
         let other = JOINTS + r.stance.other().ankle();
-        let blind = |i: usize| self.blind(i);
+        let blind = |i: usize| {
+            self.untaken
+                .get(i)
+                .is_none_or(|&n| n >= super::BLIND_AFTER_FRAMES)
+        };
         let reading = |i: usize| self.last_angle.get(i).copied().unwrap_or(f32::NAN);
         let planned = r
             .ankle_plan_rad

@@ -233,9 +233,8 @@ impl Controller<'_> {
         }
     }
 
-    /// Last good joint angles (joint order); a lost joint's is stale
-    /// until the closed chain gives it.
-    pub(super) fn joint_angles(&self) -> [f32; JOINTS] {
+    /// Last good joint angles (joint order).
+    fn joint_angles(&self) -> [f32; JOINTS] {
         [0, 1, 2, 3].map(|i| self.last_angle.get(i).copied().unwrap_or(f32::NAN))
     }
 }
