@@ -119,3 +119,48 @@ fn follow(
         _ => PilotTarget::Hold { phi1_rad: start },
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gait_control::posture::Side;
+
+    fn held(t: PilotTarget) -> f64 {
+        match t {
+            PilotTarget::Hold { phi1_rad } => phi1_rad,
+            other => panic!("not a hold: {other:?}"),
+        }
+    }
+
+    /// What the campaign's figures rest on (session 18 measured them
+    /// moving from 369 to 450 or 644 falls with the pilot's aim in a safe
+    /// hold, `docs/safety.md`): a change here must be deliberate.
+    #[test]
+    fn the_pilot_aims_at_the_step_s_start_but_in_a_swing_and_a_transfer() {
+        let (start, landed) = (0.05, 0.30);
+        let swing_target = PilotTarget::Hold { phi1_rad: 9.0 };
+        let aim =
+            |phase: Phase, from: Option<f64>| follow(&phase, start, from, 0.5, |_| swing_target);
+        // A swing: the table's shank (here a marker).
+        let swing = Phase::Swing {
+            stance: Side::Left,
+            t_s: 0.2,
+        };
+        assert_eq!(aim(swing, None), swing_target);
+        // A transfer: from the landing's shank to the start, smoothstep.
+        let transfer = |t_s| Phase::Transfer {
+            stance: Side::Right,
+            t_s,
+        };
+        assert_eq!(held(aim(transfer(0.0), Some(landed))), landed);
+        assert!((held(aim(transfer(0.25), Some(landed))) - 0.5 * (start + landed)).abs() < 1e-6);
+        assert!((held(aim(transfer(0.5), Some(landed))) - start).abs() < 1e-12);
+        assert!((held(aim(transfer(2.0), Some(landed))) - start).abs() < 1e-12);
+        // A safe hold, standing, waiting: the step's start posture, at
+        // once (the crutches' full 120 N·m if the shank is far from it).
+        assert_eq!(held(aim(Phase::SafeHold { t_s: 0.0 }, Some(landed))), start);
+        assert_eq!(held(aim(Phase::Standing, None)), start);
+        let waiting = Phase::WaitingReady { stance: Side::Left };
+        assert_eq!(held(aim(waiting, None)), start);
+    }
+}
