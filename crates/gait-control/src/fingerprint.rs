@@ -59,6 +59,7 @@ impl_fingerprint!(SequencerConfig {
     landing_confirm_s,
     landing_window_fraction,
     landing_timeout_s,
+    blind_landing_settle_s,
     ground_search_after_s,
     ground_search_depth_m,
     ground_search_s,

@@ -690,8 +690,10 @@ impl<'t> Sequencer<'t> {
                 self.in_landing_window = in_window;
                 // A foot whose sensor has failed (NaN) cannot report the
                 // contact: the step ends on the table's own timing, where
-                // the table has put the foot down.
+                // the table has put the foot down, once the foot has had
+                // the time to follow it there.
                 let blind = !swing_foot.is_finite();
+                let blind_landed = blind && t >= duration + cfg.blind_landing_settle_s;
                 // Contact counts once it has held `landing_confirm_s`: a
                 // spike of a few ticks is not the ground.
                 self.contact_s = if in_window && swing_foot >= cfg.landing_contact_n {
@@ -701,7 +703,7 @@ impl<'t> Sequencer<'t> {
                 };
                 let touched =
                     self.contact_s > 0.0 && self.contact_s >= cfg.landing_confirm_s - 0.5 * dt_s;
-                let landed = in_window && (touched || (blind && t >= duration));
+                let landed = in_window && (touched || blind_landed);
                 other_share = Some(share);
                 let reference = phi_t.map_or(self.reference, |p| joints_from_phi(&p, stance));
                 if landed {

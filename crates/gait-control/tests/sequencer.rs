@@ -313,6 +313,47 @@ fn landing_timeout_holds_the_posture() {
     assert_eq!(rig.seq.phase(), Phase::Standing);
 }
 
+#[test]
+fn a_blind_swing_foot_lands_once_it_has_had_time_to_follow_the_table() {
+    // The swing foot's sensor is lost (NaN) from mid-swing: the step counts
+    // as landed `blind_landing_settle_s` after the table's end, not at the
+    // end itself (the foot lags its reference and was still above a stair's
+    // tread), holding the table's last posture in between.
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    let mut blind = s;
+    blind.feet_n[Side::Right.foot()] = f32::NAN;
+    let duration = rig.table.duration_s();
+    let settle = SequencerConfig::DEFAULT.blind_landing_settle_s;
+    assert!(settle > 0.1, "{settle}");
+    let last = joints_from_phi(&rig.table.at_time(duration), Side::Left);
+    let mut landed_at = None;
+    let mut n = 0usize;
+    while landed_at.is_none() && n < 5000 {
+        let sensed_now = if n < 1000 { s } else { blind };
+        let r = rig.step(&sensed_now);
+        n += 1;
+        let t = n as f32 * DT;
+        if matches!(rig.seq.phase(), Phase::Swing { .. }) && t > duration + 0.01 {
+            for i in 0..JOINTS {
+                assert!((r[i] - last[i]).abs() < 1e-4, "at {t} s joint {i}");
+            }
+        }
+        if rig.events.contains(&SeqEvent::Landed) {
+            landed_at = Some(t);
+        }
+    }
+    let t = landed_at.expect("never landed");
+    assert!(
+        (t - (duration + settle)).abs() <= 2.5 * DT,
+        "landed at {t} s, the table ends at {duration} s"
+    );
+    assert!(matches!(rig.seq.phase(), Phase::Transfer { .. }));
+}
+
 /// A walk started from its start posture and played 0.7 s into its first
 /// swing; the sensed readings it was started with.
 fn walking_in_a_swing(img: &[u8]) -> (Rig<'_>, Sensed) {

@@ -2,6 +2,8 @@
 //! height, the true joints, reference − true, commands, motor torques, foot
 //! and crutch forces, faults. For diagnosing a run `exogait faults --json`
 //! lists: `cargo run --release -p sim --example fault_trace -- GAIT FAULT NOISE_SEED [EVERY_MS]`.
+//! Feet and crutches are [left, right]; `FULL=1` prints the phase whole
+//! (its time into a swing, to time a landing).
 
 use std::str::FromStr;
 
@@ -65,7 +67,7 @@ fn main() {
         println!(
             "{:.3} {:<28} | {:.3} | {} | {} | {} | {} | {:5.0} {:5.0} | {:4.0} {:4.0} | {:?} {:?} en={}",
             st.time_s,
-            &phase[..phase.len().min(28)],
+            &phase[..phase.len().min(std::env::var("FULL").map_or(28, |_| 60))],
             st.points_m[1][1],
             f4(st.joint_angles_rad),
             f4(core::array::from_fn(

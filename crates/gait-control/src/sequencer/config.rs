@@ -25,6 +25,14 @@ pub struct SequencerConfig {
     /// After the table ends, how long to wait for contact before giving up
     /// and holding the posture, s.
     pub landing_timeout_s: f32,
+    /// A swing foot whose force sensor is lost (or the whole ADC) cannot
+    /// report its contact: the step counts as landed this long after the
+    /// table's end, s. The foot reaches the tread behind its reference (on
+    /// the shipped tables, healthy landings are sensed 0.08–0.24 s after
+    /// the table's end): counted at the end itself, the weight transfer
+    /// started with the foot still above a stair's tread and moved the body
+    /// onto a leg that was not yet on the ground.
+    pub blind_landing_settle_s: f32,
     /// After the table ends without a landing, the swing foot is left this
     /// long to settle onto the ground by itself (a foot that ends a
     /// millimetre above the tread, still moving, drifts back onto its
@@ -66,7 +74,8 @@ impl SequencerConfig {
     /// foot to be "ready", 80 N of swing-foot force for contact, held 8 ms
     /// (a landing's force, once there, stays; the campaign's spikes last
     /// 3 ms) for a landing,
-    /// accepted after 60 % of the step, 1.5 s timeout, a ground search from
+    /// accepted after 60 % of the step (a blind one 0.3 s after the
+    /// table's end), 1.5 s timeout, a ground search from
     /// 0.5 s after the table's end of up to 5 cm over 0.8 s (at most 9.4
     /// cm/s, slower the nearer the ground is), 0.15 rad start
     /// tolerance, 0.4 s transfer, stance ankle within 0.05 rad (2.9°) of
@@ -79,6 +88,7 @@ impl SequencerConfig {
         landing_confirm_s: 0.008,
         landing_window_fraction: 0.6,
         landing_timeout_s: 1.5,
+        blind_landing_settle_s: 0.3,
         ground_search_after_s: 0.5,
         ground_search_depth_m: 0.05,
         ground_search_s: 0.8,
