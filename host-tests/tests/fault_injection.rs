@@ -522,6 +522,66 @@ fn a_stop_crossed_is_the_device_s_unless_a_named_case_s_reason_took_the_joint_th
 }
 
 #[test]
+fn a_joint_whose_working_drive_gave_all_it_has_is_the_named_case_s() {
+    // Seed 1's campaign (session 19). An ascent's stance hip loses its PWM
+    // in the first swing: the torso turns on it, the set-down's foot lands
+    // ahead and the body's weight goes in front of that leg's straightened
+    // knee, which meets its extension stop with its drive at its full
+    // 150 N·m against it: the stance hip's case reaches it.
+    let hip = campaign_run(Gait::StairUp, "pwm-fail:left-hip@2.224", 471_508);
+    let o = &hip.outcome;
+    assert!(o.limit_margins[3].0 < 0.0 && !o.limit_margins[3].1, "{o:?}");
+    assert!(o.resisted_at_limit[3], "{o:?}");
+    assert!(o.braked_joints[3], "braked after it crossed: {o:?}");
+    assert_eq!(
+        hip.named_stop(),
+        Some(sim::campaign::NamedCase::StanceHipInASwing)
+    );
+    // A descent's stance knee whose gear slips: the other knee takes the
+    // body as the set-down's foot lands, at its drive's full torque, and
+    // sinks onto its flexion stop; the residual brakes it only later.
+    let slip = campaign_run(
+        Gait::StairDown,
+        "gear-slip=0.29826299163274117:right-knee@4.036",
+        8_167,
+    );
+    let o = &slip.outcome;
+    assert!(o.limit_margins[1].0 < 0.0 && o.limit_margins[1].1, "{o:?}");
+    assert!(o.resisted_at_limit[1] && o.braked_joints[1], "{o:?}");
+    assert_eq!(
+        slip.named_stop(),
+        Some(sim::campaign::NamedCase::DescentKneeWithoutDrive)
+    );
+    // A knee the residual braked before the torso's turn took it onto its
+    // stop did not resist it: the device's.
+    let braked = campaign_run(Gait::StairUp, "encoder-stuck:left-hip@2.041", 567_272);
+    let o = &braked.outcome;
+    assert!(o.limit_margins[3].0 < 0.0 && !o.limit_margins[3].1, "{o:?}");
+    assert!(!o.resisted_at_limit[3], "{o:?}");
+    assert!(braked.unnamed_stop());
+}
+
+#[test]
+fn a_blind_landing_waits_for_the_foot_to_reach_the_tread() {
+    // Seed 1's campaign: the ADC (or the landing foot's sensor) lost as an
+    // ascent's first swing ends. Landed on the table's end, the transfer
+    // began with the foot still above the upper tread and put the body on
+    // the leading leg, whose hip sank 0.6° past its flexion stop; landed
+    // 0.3 s later, the foot is on the tread first.
+    for (fault, seed) in [
+        ("adc-bus@3.712", 515_577),
+        ("adc-bus@3.758", 36_852),
+        ("fsr-over-range:right-foot@3.724", 307_044),
+    ] {
+        let r = campaign_run(Gait::StairUp, fault, seed);
+        let o = &r.outcome;
+        assert!(o.fell.is_none(), "{fault}: {o:?}");
+        assert!(o.worst_limit_margin_rad > 0.0, "{fault}: {o:?}");
+        assert!(!o.faults.is_empty(), "{fault}: not detected");
+    }
+}
+
+#[test]
 fn a_persistent_encoder_jump_is_taken_out_and_the_step_lands_before_the_hold() {
     // Seed 1's campaign: stair descents whose jump dropped the pilot when
     // the reading stayed offset (the first three, session 14) or when the

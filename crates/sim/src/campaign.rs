@@ -102,8 +102,7 @@ impl RunResult {
         named.filter(|_| self.past_a_stop()).filter(|&c| {
             crossed().all(|(j, (_, flexion))| {
                 let o = &self.outcome;
-                let gave_all = o.saturated_joints.get(j) == Some(&true)
-                    && o.braked_joints.get(j) == Some(&false);
+                let gave_all = o.resisted_at_limit.get(j) == Some(&true);
                 explains_stop(c, &self.run, j, flexion, gave_all)
             })
         })
@@ -480,6 +479,7 @@ fn no_outcome() -> Outcome {
         fell_s: None,
         braked_joints: [false; 4],
         saturated_joints: [false; 4],
+        resisted_at_limit: [false; 4],
         fell: None,
         faults: Vec::new(),
     }

@@ -63,6 +63,11 @@ pub struct Outcome {
     pub braked_joints: [bool; 4],
     /// Per joint: its drive was saturated (0x0401: it gave all it has).
     pub saturated_joints: [bool; 4],
+    /// Per joint: when it first crossed a stop, its drive had been given
+    /// its full torque against that stop for the [`RESISTED_TICKS`] ticks
+    /// before (so not braked either): a load beyond the device took it
+    /// there. 0x0401's own record comes later, after its debounce.
+    pub resisted_at_limit: [bool; 4],
     /// Why the pilot fell, if they did.
     pub fell: Option<String>,
     /// The faults latched, in the order they were.
@@ -84,8 +89,9 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
     let mut worst = (f64::INFINITY, 0);
     let mut margins = [(f64::INFINITY, false); 4];
     let mut first_crossed: Option<f64> = None;
+    let mut crossed_at: [Option<usize>; 4] = [None; 4];
     let mut torso: Option<f64> = None;
-    for s in trace {
+    for (k, s) in trace.iter().enumerate() {
         for j in 0..4 {
             let q = s.state.joint_angles_rad[j];
             let e = f64::from(s.report.reference_rad[j]) - q;
@@ -103,6 +109,9 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
             }
             if margin < 0.0 && first_crossed.is_none() {
                 first_crossed = Some(s.state.time_s);
+            }
+            if margin < 0.0 && crossed_at[j].is_none() {
+                crossed_at[j] = Some(k);
             }
         }
         let pitch = s.state.phi[2];
@@ -128,12 +137,45 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
         worst_limit_joint: worst.1,
         braked_joints: logged_on_joint(rig, FaultCode::brakes_joint),
         saturated_joints: logged_on_joint(rig, |c| c == FaultCode::MotorSaturated),
+        resisted_at_limit: core::array::from_fn(|j| {
+            crossed_at[j].is_some_and(|k| resisted_at_limit(rig, j, k, margins[j].1))
+        }),
         limit_margins: margins.map(|(m, f)| (if m.is_finite() { m } else { 0.0 }, f)),
         first_stop_crossed_s: first_crossed,
         fell_s,
         fell,
         faults: fault_outcomes(rig, dt),
     }
+}
+
+/// How long a drive must have been at its full torque against a stop
+/// before its joint crossed it to count as having resisted it, ticks.
+pub const RESISTED_TICKS: usize = 10;
+
+/// Joint `j` crossed its flexion (`flexion`) or extension stop at trace
+/// sample `k` with its drive commanded its full torque against the stop
+/// (towards extension for the flexion stop) on each of the
+/// [`RESISTED_TICKS`] samples up to it.
+fn resisted_at_limit(rig: &Rig<'_>, j: usize, k: usize, flexion: bool) -> bool {
+    let Some(limit) = rig
+        .controller
+        .config()
+        .gains
+        .get(j)
+        .map(|g| g.torque_limit_nm)
+    else {
+        return false;
+    };
+    let against = |t: f32| {
+        let t = if flexion { -t } else { t };
+        t >= 0.99 * limit
+    };
+    k >= RESISTED_TICKS
+        && limit > 0.0
+        && rig.trace.get(k + 1 - RESISTED_TICKS..=k).is_some_and(|w| {
+            w.iter()
+                .all(|s| s.report.command_nm.get(j).is_some_and(|&t| against(t)))
+        })
 }
 
 /// Per joint: the supervisor's log holds a record of a code `which` picks

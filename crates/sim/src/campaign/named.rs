@@ -24,7 +24,8 @@ pub enum NamedCase {
     /// before the swing that loads it): braked, a bent loaded knee sinks at
     /// load / brake damping, and only a working drive holds it still.
     DescentKneeWithoutDrive,
-    /// In a swing, the stance hip loses its drive or its encoder: the torso
+    /// In a swing, the stance hip loses its drive or its encoder (or every
+    /// drive with the e-stop, outside a descent): the torso
     /// rests on that hip alone until the other foot is down, and the board
     /// has no other sensor of the torso's pitch (no IMU). A drive lost
     /// before that swing (weak, or stuck on a set value) counts too: its
@@ -120,18 +121,25 @@ pub fn named_case(
     if is_hip && (stance_hip_lost || latent) {
         return Some(NamedCase::StanceHipInASwing);
     }
+    // The e-stop takes every drive, the stance hip's among them.
+    if swing_stance.is_some() && matches!(kind, Kind::EStop | Kind::EStopRead) {
+        return Some(NamedCase::StanceHipInASwing);
+    }
     None
 }
 
 /// Whether `case` (the named case of `run`) is the physical reason for
 /// its joint `joint` crossing its flexion (`flexion`) or extension stop,
-/// the joint's drive having given all it has (`gave_all`: saturated and
-/// never braked): the pilot's push may take any joint there; a descent's
+/// the joint's drive having given all it has (`gave_all`: its full torque
+/// against that stop when it crossed it, `Outcome::resisted_at_limit`):
+/// the pilot's push may take any joint there; a descent's
 /// braked loaded knee sinks onto its flexion stop (any knee for the
 /// e-stop, which brakes them all; the faulted one otherwise), and the body
 /// sinking with it loads the other bent knee past what its working drive
-/// gives; a stance hip without its drive or encoder lets the torso turn
-/// on it.
+/// gives; a stance hip without its drive or encoder (any hip's flexion
+/// stop with the e-stop, which brakes both) lets the torso turn on it,
+/// and the torso turning loads another joint past what its working drive
+/// gives.
 pub fn explains_stop(
     case: NamedCase,
     run: &CampaignRun,
@@ -153,7 +161,12 @@ pub fn explains_stop(
                     || target == Some(joint)
                     || gave_all)
         }
-        NamedCase::StanceHipInASwing => target == Some(joint),
+        NamedCase::StanceHipInASwing => {
+            let is_hip = joint == Side::Left.hip() || joint == Side::Right.hip();
+            target == Some(joint)
+                || gave_all
+                || (is_hip && flexion && matches!(run.fault.kind, Kind::EStop | Kind::EStopRead))
+        }
     }
 }
 
@@ -369,6 +382,36 @@ mod tests {
         let hip = run(Gait::StairUp, Kind::MotorWeak(0.5), Some(Target::Joint(0)));
         assert!(explains_stop(StanceHipInASwing, &hip, 0, true, false));
         assert!(explains_stop(StanceHipInASwing, &hip, 0, false, false));
-        assert!(!explains_stop(StanceHipInASwing, &hip, 1, true, true));
+        // Another joint only when its drive was at its full torque against
+        // the stop as the torso's turn took it there; not when braked.
+        assert!(!explains_stop(StanceHipInASwing, &hip, 1, false, false));
+        assert!(explains_stop(StanceHipInASwing, &hip, 3, false, true));
+        // The e-stop in a swing: either hip's flexion stop (both braked),
+        // no knee, no extension.
+        let estop = run(Gait::StairUp, Kind::EStopRead, None);
+        assert!(explains_stop(StanceHipInASwing, &estop, 0, true, false));
+        assert!(explains_stop(StanceHipInASwing, &estop, 2, true, false));
+        assert!(!explains_stop(StanceHipInASwing, &estop, 2, false, false));
+        assert!(!explains_stop(StanceHipInASwing, &estop, 1, true, false));
+    }
+
+    #[test]
+    fn an_e_stop_in_a_swing_is_the_stance_hip_s_case_but_in_a_descent() {
+        for gait in [Gait::Walk, Gait::StairUp] {
+            for kind in [Kind::EStop, Kind::EStopRead] {
+                let r = run(gait, kind, None);
+                assert_eq!(
+                    named(&r, SWING_LEFT, NONE_AFTER),
+                    Some(NamedCase::StanceHipInASwing)
+                );
+                // Standing or in a transfer both feet carry the torso.
+                assert_eq!(named(&r, Some(Phase::Standing), NONE_AFTER), None);
+            }
+        }
+        let descent = run(Gait::StairDown, Kind::EStop, None);
+        assert_eq!(
+            named(&descent, SWING_LEFT, NONE_AFTER),
+            Some(NamedCase::DescentKneeWithoutDrive)
+        );
     }
 }
