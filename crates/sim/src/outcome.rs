@@ -63,8 +63,9 @@ pub struct Outcome {
     pub braked_joints: [bool; 4],
     /// Per joint: its drive was saturated (0x0401: it gave all it has).
     pub saturated_joints: [bool; 4],
-    /// Per joint: when it first crossed a stop, its drive had been given
-    /// its full torque against that stop for the [`RESISTED_TICKS`] ticks
+    /// Per joint: when it first crossed the stop of its smallest margin
+    /// ([`Outcome::limit_margins`]), its drive had been given its full
+    /// torque against that stop for the [`RESISTED_TICKS`] ticks
     /// before (so not braked either): a load beyond the device took it
     /// there. 0x0401's own record comes later, after its debounce.
     pub resisted_at_limit: [bool; 4],
@@ -89,7 +90,9 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
     let mut worst = (f64::INFINITY, 0);
     let mut margins = [(f64::INFINITY, false); 4];
     let mut first_crossed: Option<f64> = None;
-    let mut crossed_at: [Option<usize>; 4] = [None; 4];
+    // Per joint, the sample at which it first crossed its extension (0)
+    // and its flexion stop (1).
+    let mut crossed_at: [[Option<usize>; 2]; 4] = [[None; 2]; 4];
     let mut torso: Option<f64> = None;
     for (k, s) in trace.iter().enumerate() {
         for j in 0..4 {
@@ -110,8 +113,11 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
             if margin < 0.0 && first_crossed.is_none() {
                 first_crossed = Some(s.state.time_s);
             }
-            if margin < 0.0 && crossed_at[j].is_none() {
-                crossed_at[j] = Some(k);
+            if margin < 0.0 {
+                let stop = usize::from(hi - q < q - lo);
+                if let Some(at @ None) = crossed_at[j].get_mut(stop) {
+                    *at = Some(k);
+                }
             }
         }
         let pitch = s.state.phi[2];
@@ -138,7 +144,9 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
         braked_joints: logged_on_joint(rig, FaultCode::brakes_joint),
         saturated_joints: logged_on_joint(rig, |c| c == FaultCode::MotorSaturated),
         resisted_at_limit: core::array::from_fn(|j| {
-            crossed_at[j].is_some_and(|k| resisted_at_limit(rig, j, k, margins[j].1))
+            let flexion = margins[j].1;
+            crossed_at[j][usize::from(flexion)]
+                .is_some_and(|k| resisted_at_limit(rig, j, k, flexion))
         }),
         limit_margins: margins.map(|(m, f)| (if m.is_finite() { m } else { 0.0 }, f)),
         first_stop_crossed_s: first_crossed,
