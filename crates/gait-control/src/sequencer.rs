@@ -693,7 +693,9 @@ impl<'t> Sequencer<'t> {
                 // the table has put the foot down, once the foot has had
                 // the time to follow it there.
                 let blind = !swing_foot.is_finite();
-                let blind_landed = blind && t >= duration + cfg.blind_landing_settle_s;
+                // Never past the landing timeout (a NaN setting is the timeout).
+                let settle = cfg.blind_landing_settle_s.min(cfg.landing_timeout_s);
+                let blind_landed = blind && t >= duration + settle;
                 // Contact counts once it has held `landing_confirm_s`: a
                 // spike of a few ticks is not the ground.
                 self.contact_s = if in_window && swing_foot >= cfg.landing_contact_n {

@@ -329,6 +329,8 @@ fn a_blind_swing_foot_lands_once_it_has_had_time_to_follow_the_table() {
     let duration = rig.table.duration_s();
     let settle = SequencerConfig::DEFAULT.blind_landing_settle_s;
     assert!(settle > 0.1, "{settle}");
+    // The ground search has not begun: the table's last posture is held.
+    assert!(SequencerConfig::DEFAULT.ground_search_after_s > settle);
     let last = joints_from_phi(&rig.table.at_time(duration), Side::Left);
     let mut landed_at = None;
     let mut n = 0usize;

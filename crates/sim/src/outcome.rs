@@ -67,7 +67,9 @@ pub struct Outcome {
     /// ([`Outcome::limit_margins`]), its drive had been given its full
     /// torque against that stop for the [`RESISTED_TICKS`] ticks
     /// before (so not braked either): a load beyond the device took it
-    /// there. 0x0401's own record comes later, after its debounce.
+    /// there (still not slowing towards the stop: a load beyond the
+    /// drive, not momentum). 0x0401's own record comes later, after its
+    /// debounce.
     pub resisted_at_limit: [bool; 4],
     /// Why the pilot fell, if they did.
     pub fell: Option<String>,
@@ -163,7 +165,10 @@ pub const RESISTED_TICKS: usize = 10;
 /// Joint `j` crossed its flexion (`flexion`) or extension stop at trace
 /// sample `k` with its drive commanded its full torque against the stop
 /// (towards extension for the flexion stop) on each of the
-/// [`RESISTED_TICKS`] samples up to it.
+/// [`RESISTED_TICKS`] samples up to it, and still not slowing towards the
+/// stop over them (the true motion's speed towards it at the window's end
+/// at least that at its start): a load beyond the drive's torque took it
+/// there, not the momentum the drive was braking.
 fn resisted_at_limit(rig: &Rig<'_>, j: usize, k: usize, flexion: bool) -> bool {
     let Some(limit) = rig
         .controller
@@ -178,7 +183,18 @@ fn resisted_at_limit(rig: &Rig<'_>, j: usize, k: usize, flexion: bool) -> bool {
         let t = if flexion { -t } else { t };
         t >= 0.99 * limit
     };
-    k >= RESISTED_TICKS
+    // Speed towards the stop over the window's first and last halves.
+    let toward = |a: usize, b: usize| {
+        let q = |i: usize| rig.trace.get(i).map(|s| s.state.joint_angles_rad[j]);
+        q(a).zip(q(b))
+            .map(|(qa, qb)| if flexion { qb - qa } else { qa - qb })
+    };
+    let half = RESISTED_TICKS / 2;
+    let not_slowing = k >= RESISTED_TICKS
+        && toward(k - RESISTED_TICKS, k - half)
+            .zip(toward(k - half, k))
+            .is_some_and(|(early, late)| late >= early);
+    not_slowing
         && limit > 0.0
         && rig.trace.get(k + 1 - RESISTED_TICKS..=k).is_some_and(|w| {
             w.iter()

@@ -31,7 +31,8 @@ pub struct SequencerConfig {
     /// the shipped tables, healthy landings are sensed 0.08–0.24 s after
     /// the table's end): counted at the end itself, the weight transfer
     /// started with the foot still above a stair's tread and moved the body
-    /// onto a leg that was not yet on the ground.
+    /// onto a leg that was not yet on the ground. At most
+    /// `landing_timeout_s` (a larger or NaN value is taken as it).
     pub blind_landing_settle_s: f32,
     /// After the table ends without a landing, the swing foot is left this
     /// long to settle onto the ground by itself (a foot that ends a
