@@ -526,7 +526,7 @@ fn a_joint_whose_working_drive_gave_all_it_has_is_the_named_case_s() {
     // Seed 1's campaign (session 19). A descent's stance knee whose gear
     // slips: the other knee takes the body as the set-down's foot lands,
     // its drive at its full torque against the flexion stop and the knee
-    // still not slowing towards it (a load beyond the drive), and crosses;
+    // not being stopped by it (a load the drive cannot overcome), and crosses;
     // the residual brakes it only later. A descent's knee without its
     // drive reaches it.
     let slip = campaign_run(
@@ -544,13 +544,12 @@ fn a_joint_whose_working_drive_gave_all_it_has_is_the_named_case_s() {
     // An ascent's stance hip loses its PWM in the first swing; as the
     // torso turns on it the set-down's foot lands ahead and that leg's
     // straightened knee meets its extension stop, its drive at +150 N·m
-    // against it but slowing it: momentum, not a load proven beyond the
-    // drive; and where the hold put that foot is the device's choice. The
-    // device's.
+    // against it and not stopping it; but where the hold put that foot is
+    // the device's choice: the stance hip's case does not reach the knee.
     let hip = campaign_run(Gait::StairUp, "pwm-fail:left-hip@2.224", 471_508);
     let o = &hip.outcome;
     assert!(o.limit_margins[3].0 < 0.0 && !o.limit_margins[3].1, "{o:?}");
-    assert!(!o.resisted_at_limit[3], "{o:?}");
+    assert!(o.resisted_at_limit[3], "{o:?}");
     assert!(hip.unnamed_stop());
     // A knee the residual braked before it reached its stop did not
     // resist it.

@@ -67,9 +67,8 @@ pub struct Outcome {
     /// ([`Outcome::limit_margins`]), its drive had been given its full
     /// torque against that stop for the [`RESISTED_TICKS`] ticks
     /// before (so not braked either): a load beyond the device took it
-    /// there (still not slowing towards the stop: a load beyond the
-    /// drive, not momentum). 0x0401's own record comes later, after its
-    /// debounce.
+    /// there (the drive not stopping it: [`NOT_SLOWING_SHARE`]). 0x0401's
+    /// own record comes later, after its debounce.
     pub resisted_at_limit: [bool; 4],
     /// Why the pilot fell, if they did.
     pub fell: Option<String>,
@@ -158,6 +157,14 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
     }
 }
 
+/// The joint's speed towards the stop over the window's last half, as a
+/// share of that over its first half, at or above which the drive at its
+/// full torque is not stopping it: a 5 ms half loses less than a tenth of
+/// its speed (for a loaded knee, some 3 kg·m² about it, sinking at
+/// 0.6 rad/s: the drive beats the load by under 35 N·m of its 150; a
+/// joint the drive is stopping loses far more).
+pub const NOT_SLOWING_SHARE: f64 = 0.9;
+
 /// How long a drive must have been at its full torque against a stop
 /// before its joint crossed it to count as having resisted it, ticks.
 pub const RESISTED_TICKS: usize = 10;
@@ -165,10 +172,10 @@ pub const RESISTED_TICKS: usize = 10;
 /// Joint `j` crossed its flexion (`flexion`) or extension stop at trace
 /// sample `k` with its drive commanded its full torque against the stop
 /// (towards extension for the flexion stop) on each of the
-/// [`RESISTED_TICKS`] samples up to it, and still not slowing towards the
-/// stop over them (the true motion's speed towards it at the window's end
-/// at least that at its start): a load beyond the drive's torque took it
-/// there, not the momentum the drive was braking.
+/// [`RESISTED_TICKS`] samples up to it, and not being stopped by it: its
+/// true speed towards the stop over the window's last half at least
+/// [`NOT_SLOWING_SHARE`] of that over its first half (a load the drive
+/// cannot overcome took it there, not momentum the drive was braking).
 fn resisted_at_limit(rig: &Rig<'_>, j: usize, k: usize, flexion: bool) -> bool {
     let Some(limit) = rig
         .controller
@@ -193,7 +200,7 @@ fn resisted_at_limit(rig: &Rig<'_>, j: usize, k: usize, flexion: bool) -> bool {
     let not_slowing = k >= RESISTED_TICKS
         && toward(k - RESISTED_TICKS, k - half)
             .zip(toward(k - half, k))
-            .is_some_and(|(early, late)| late >= early);
+            .is_some_and(|(early, late)| early > 0.0 && late >= NOT_SLOWING_SHARE * early);
     not_slowing
         && limit > 0.0
         && rig.trace.get(k + 1 - RESISTED_TICKS..=k).is_some_and(|w| {
