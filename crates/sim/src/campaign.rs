@@ -478,7 +478,6 @@ fn no_outcome() -> Outcome {
         first_stop_crossed_s: None,
         fell_s: None,
         braked_joints: [false; 4],
-        saturated_joints: [false; 4],
         resisted_at_limit: [false; 4],
         fell: None,
         faults: Vec::new(),

@@ -61,8 +61,6 @@ pub struct Outcome {
     /// Per joint: a fault braked its drive (the supervisor's log, newest
     /// 32 records).
     pub braked_joints: [bool; 4],
-    /// Per joint: its drive was saturated (0x0401: it gave all it has).
-    pub saturated_joints: [bool; 4],
     /// Per joint: when it first crossed the stop of its smallest margin
     /// ([`Outcome::limit_margins`]), its drive had been given its full
     /// torque against that stop for the [`RESISTED_TICKS`] ticks
@@ -143,7 +141,6 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
         worst_limit_margin_rad: if worst.0.is_finite() { worst.0 } else { 0.0 },
         worst_limit_joint: worst.1,
         braked_joints: logged_on_joint(rig, FaultCode::brakes_joint),
-        saturated_joints: logged_on_joint(rig, |c| c == FaultCode::MotorSaturated),
         resisted_at_limit: core::array::from_fn(|j| {
             let flexion = margins[j].1;
             crossed_at[j][usize::from(flexion)]
