@@ -271,12 +271,13 @@ fault_table! {
         brakes_joint: true,
         loses_angle: true,
     },
-    /// Joint encoder: raw counts unchanged while the joint is driven.
+    /// Joint encoder: raw counts unchanged over the ticks the joint is
+    /// driven.
     EncoderFrozen = 0x0204 {
         name: "encoder frozen",
         reaction: Reaction::SafeHold,
-        detection_bound: "100 ticks",
-        reset_allowed_when: "the counts change, or the joint is not driven",
+        detection_bound: "100 driven ticks",
+        reset_allowed_when: "the counts change",
         brakes_joint: true,
         loses_angle: true,
     },

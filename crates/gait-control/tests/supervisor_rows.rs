@@ -242,6 +242,33 @@ fn frozen_under_a_large_command_too() {
 }
 
 #[test]
+fn frozen_counts_add_up_over_driven_stretches_with_still_ones_between() {
+    // Driven for 40 ticks (reference at 0.5 rad/s), still for 60, and so
+    // on: an encoder frozen throughout trips on its 100th driven tick, in
+    // the third stretch. A still stretch neither counts nor forgives (a hip
+    // frozen at the end of its swing sat through the weight transfer's
+    // still reference and, with the count restarted, dropped the pilot in
+    // the next step).
+    let frozen = healthy_input(WARMUP - 1).joints[0];
+    let driven = |k: u32| (k - 1) % 100 < 40;
+    let drive = |k: u32, input: &mut SupervisorInput| {
+        input.joints[0] = frozen;
+        let moving = (1..=k).filter(|&i| driven(i)).count() as f32;
+        input.joint_reference_rad[0] = STAND_JOINTS[0] + 0.0005 * moving;
+    };
+    let (_, v) = inject(260, drive);
+    assert_row(&v, FaultCode::EncoderFrozen, Reaction::SafeHold, 220);
+    // Counts that move in a still stretch restart the count: nothing.
+    let (_, v) = inject(260, |k, input| {
+        drive(k, input);
+        if k == 150 {
+            input.joints[0] = encoder(frozen.angle_rad + 2.0 * RAD_PER_COUNT);
+        }
+    });
+    assert!(v.iter().all(|v| v.latched.is_empty()));
+}
+
+#[test]
 fn row_encoder_jump() {
     let jumped = encoder(STAND_JOINTS[1] + 2000.0 * RAD_PER_COUNT);
     let (_, v) = inject(10, |_, input| input.joints[1] = jumped);

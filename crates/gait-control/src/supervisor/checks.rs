@@ -151,10 +151,10 @@ impl Supervisor {
                         track.velocity_rad_s +=
                             cfg.velocity_filter_alpha * (raw_velocity - track.velocity_rad_s);
                         track.velocity_valid = true;
-                        if counts == 0 && driven {
-                            track.frozen_ticks = track.frozen_ticks.saturating_add(1);
-                        } else {
+                        if counts != 0 {
                             track.frozen_ticks = 0;
+                        } else if driven {
+                            track.frozen_ticks = track.frozen_ticks.saturating_add(1);
                         }
                     }
                     None => {

@@ -99,8 +99,9 @@ pub struct SupervisorConfig {
     /// The same for the passive ankles, which slap onto the ground at a
     /// landing far faster than a driven joint moves.
     pub max_ankle_jump_counts_per_tick: u16,
-    /// Consecutive ticks of unchanged raw counts while driven that make a
-    /// frozen-encoder fault.
+    /// Driven ticks of unchanged raw counts that make a frozen-encoder
+    /// fault; ticks not driven between them neither count nor restart
+    /// the count, only changed counts do.
     pub frozen_ticks: u32,
     /// The joint counts as driven when its reference moves at least this
     /// fast, rad/s …
