@@ -527,8 +527,9 @@ fn a_joint_whose_working_drive_gave_all_it_has_is_the_named_case_s() {
     // slips: the other knee takes the body as the set-down's foot lands,
     // its drive at its full torque against the flexion stop and the knee
     // not being stopped by it (a load the drive cannot overcome), and crosses;
-    // the residual brakes it only later. A descent's knee without its
-    // drive reaches it.
+    // only later does the residual trip on it, and, the other knee already
+    // braked, hold it in place: it is never braked (the log's 0x0404 on it
+    // does not make it so). A descent's knee without its drive reaches it.
     let slip = campaign_run(
         Gait::StairDown,
         "gear-slip=0.29826299163274117:right-knee@4.036",
@@ -536,7 +537,8 @@ fn a_joint_whose_working_drive_gave_all_it_has_is_the_named_case_s() {
     );
     let o = &slip.outcome;
     assert!(o.limit_margins[1].0 < 0.0 && o.limit_margins[1].1, "{o:?}");
-    assert!(o.resisted_at_limit[1] && o.braked_joints[1], "{o:?}");
+    assert!(o.resisted_at_limit[1] && !o.braked_joints[1], "{o:?}");
+    assert!(o.braked_joints[3], "{o:?}");
     assert_eq!(
         slip.named_stop(),
         Some(sim::campaign::NamedCase::DescentKneeWithoutDrive)
@@ -688,4 +690,21 @@ fn a_slipping_gear_is_found_by_its_residual_not_its_current() {
         own += usize::from(joint == slipping);
     }
     assert!(own >= 28, "{own} of 36 at their own joint");
+}
+
+#[test]
+fn a_hip_encoder_frozen_as_its_swing_ends_is_found_in_the_next_step() {
+    // Seed 1's campaign (session 19's device fall): a walk's right hip
+    // encoder freezes as its swing ends. The weight transfer barely moves
+    // that hip's reference, and the frozen count used to restart on every
+    // such still tick: 0x0204 never came, and as the next step's stance hip
+    // it tipped the torso past 60°. Counted over the driven ticks only, it
+    // is found as that step drives the hip, which is braked, and the
+    // pilot stays up.
+    let r = campaign_run(Gait::Walk, "encoder-stuck:right-hip@3.447", 918_063);
+    let o = &r.outcome;
+    assert!(o.fell.is_none(), "{o:?}");
+    let frozen = o.faults.iter().find(|f| f.code == FaultCode::EncoderFrozen);
+    assert!(frozen.is_some_and(|f| f.channel == Some(2)), "{o:?}");
+    assert!(o.braked_joints[2], "{o:?}");
 }

@@ -243,6 +243,12 @@ impl<'t> Controller<'t> {
         &self.supervisor
     }
 
+    /// Joints whose drive is disabled and braked on the supervisor's word
+    /// (not those the e-stop disables, nor those 0x0404 holds in place).
+    pub const fn braked_joints(&self) -> [bool; JOINTS] {
+        self.braked
+    }
+
     /// The crutch-load log.
     pub fn crutch_load(&self) -> &CrutchLoad {
         &self.crutch

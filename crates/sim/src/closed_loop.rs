@@ -138,6 +138,8 @@ pub struct Sample {
     pub report: TickReport,
     /// The plant's true state after the tick.
     pub state: TrueState,
+    /// Joints the controller had braked after the tick.
+    pub braked: [bool; 4],
 }
 
 /// The closed loop.
@@ -455,6 +457,7 @@ impl<'t> Rig<'t> {
         self.trace.push(Sample {
             report,
             state: self.plant.state(),
+            braked: self.controller.braked_joints(),
         });
         self.trace.last().ok_or(SimError::NonFinite)
     }

@@ -58,8 +58,9 @@ pub struct Outcome {
     /// When the pilot fell, s (`None`: they did not): the hips' fall ends
     /// the run, the torso's pitch past 60° is found in the trace.
     pub fell_s: Option<f64>,
-    /// Per joint: a fault braked its drive (the supervisor's log, newest
-    /// 32 records).
+    /// Per joint: the controller braked its drive at some tick of the run
+    /// (a joint 0x0404 only held in place is not; the e-stop's brake on
+    /// every drive is the e-stop's, not counted here).
     pub braked_joints: [bool; 4],
     /// Per joint: when it first crossed the stop of its smallest margin
     /// ([`Outcome::limit_margins`]), its drive had been given its full
@@ -140,7 +141,7 @@ pub fn outcome(rig: &Rig<'_>, ended_by: Option<&SimError>) -> Outcome {
         tracking_peak_rad: peak,
         worst_limit_margin_rad: if worst.0.is_finite() { worst.0 } else { 0.0 },
         worst_limit_joint: worst.1,
-        braked_joints: logged_on_joint(rig, FaultCode::brakes_joint),
+        braked_joints: core::array::from_fn(|j| trace.iter().any(|s| s.braked[j])),
         resisted_at_limit: core::array::from_fn(|j| {
             let flexion = margins[j].1;
             crossed_at[j][usize::from(flexion)]
@@ -204,13 +205,6 @@ fn resisted_at_limit(rig: &Rig<'_>, j: usize, k: usize, flexion: bool) -> bool {
             w.iter()
                 .all(|s| s.report.command_nm.get(j).is_some_and(|&t| against(t)))
         })
-}
-
-/// Per joint: the supervisor's log holds a record of a code `which` picks
-/// on that joint's channel.
-fn logged_on_joint(rig: &Rig<'_>, which: impl Fn(FaultCode) -> bool) -> [bool; 4] {
-    let log = || rig.controller.supervisor().log();
-    core::array::from_fn(|j| log().any(|r| usize::from(r.channel) == j && which(r.code)))
 }
 
 fn fault_outcomes(rig: &Rig<'_>, dt: f64) -> Vec<FaultOutcome> {
