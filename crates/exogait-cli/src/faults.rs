@@ -81,8 +81,9 @@ struct BadRunJson {
     /// The case whose reason took every joint that crossed a stop past it
     /// (`None`: none crossed, or the device's).
     named_stop: Option<&'static str>,
-    /// The joints a fault braked, in joint order (the supervisor's newest
-    /// 32 records; the e-stop's motors disabled are not listed): for a hip
+    /// The joints the controller braked at some tick, in joint order (not
+    /// one 0x0404 only held in place; the e-stop's motors disabled are not
+    /// listed): for a hip
     /// or knee fault, more than its joint is the residual's cascade
     /// (`docs/safety.md`, session 13).
     braked_joints: Vec<&'static str>,

@@ -157,8 +157,9 @@ pub struct Controller<'t> {
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
     /// Joints whose drive the supervisor has disabled, braked
-    /// (`FaultCode::brakes_joint`: a lost encoder, an output-stage fault,
-    /// 0x0404), until a reset.
+    /// (`FaultCode::brakes_joint`: an output-stage fault, 0x0404 until a
+    /// reset; a lost encoder while the closed chain does not give its
+    /// angle).
     braked: [bool; JOINTS],
     primed: bool,
     /// A clinician reset waiting for the supervisor.

@@ -277,7 +277,7 @@ fault_table! {
         name: "encoder frozen",
         reaction: Reaction::SafeHold,
         detection_bound: "100 driven ticks",
-        reset_allowed_when: "the counts change",
+        reset_allowed_when: "the counts change, or the joint has been still 0.5 s",
         brakes_joint: true,
         loses_angle: true,
     },

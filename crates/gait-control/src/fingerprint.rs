@@ -100,6 +100,7 @@ impl_fingerprint!(SupervisorConfig {
     frozen_ticks,
     frozen_reference_speed_rad_s,
     frozen_command_fraction,
+    frozen_still_reset_ticks,
     force_debounce,
     force_min_n,
     force_max_n,

@@ -245,27 +245,75 @@ fn frozen_under_a_large_command_too() {
 fn frozen_counts_add_up_over_driven_stretches_with_still_ones_between() {
     // Driven for 40 ticks (reference at 0.5 rad/s), still for 60, and so
     // on: an encoder frozen throughout trips on its 100th driven tick, in
-    // the third stretch. A still stretch neither counts nor forgives (a hip
-    // frozen at the end of its swing sat through the weight transfer's
-    // still reference and, with the count restarted, dropped the pilot in
-    // the next step).
+    // the third stretch. A short still stretch neither counts nor forgives
+    // (a hip frozen at the end of its swing sat through the weight
+    // transfer's still reference and, with the count restarted, dropped the
+    // pilot in the next step).
     let frozen = healthy_input(WARMUP - 1).joints[0];
-    let driven = |k: u32| (k - 1) % 100 < 40;
-    let drive = |k: u32, input: &mut SupervisorInput| {
-        input.joints[0] = frozen;
-        let moving = (1..=k).filter(|&i| driven(i)).count() as f32;
-        input.joint_reference_rad[0] = STAND_JOINTS[0] + 0.0005 * moving;
+    let drive = |still: u32| {
+        move |k: u32, input: &mut SupervisorInput| {
+            let driven = |i: u32| (i - 1) % (40 + still) < 40;
+            input.joints[0] = frozen;
+            let moving = (1..=k).filter(|&i| driven(i)).count() as f32;
+            input.joint_reference_rad[0] = STAND_JOINTS[0] + 0.0005 * moving;
+        }
     };
-    let (_, v) = inject(260, drive);
+    let (_, v) = inject(260, drive(60));
     assert_row(&v, FaultCode::EncoderFrozen, Reaction::SafeHold, 220);
     // Counts that move in a still stretch restart the count: nothing.
     let (_, v) = inject(260, |k, input| {
-        drive(k, input);
+        drive(60)(k, input);
         if k == 150 {
             input.joints[0] = encoder(frozen.angle_rad + 2.0 * RAD_PER_COUNT);
         }
     });
     assert!(v.iter().all(|v| v.latched.is_empty()));
+    // A still stretch of `frozen_still_reset_ticks` (longer than a weight
+    // transfer) restarts it too: driven ticks scattered over a long rest
+    // never add up.
+    let rest = SupervisorConfig::paper().frozen_still_reset_ticks;
+    let (_, v) = inject(3 * (40 + rest), drive(rest));
+    assert!(v.iter().all(|v| v.latched.is_empty()));
+    let (_, v) = inject(3 * (40 + rest), drive(rest - 1));
+    assert!(detected_at(&v, FaultCode::EncoderFrozen).is_some());
+}
+
+#[test]
+fn a_frozen_encoder_is_reset_once_its_counts_change_or_it_has_rested() {
+    // Latched while driven, then still with the reference on the reading:
+    // the condition stays while the counts do, up to a still stretch of
+    // `frozen_still_reset_ticks` (then the next driven stretch judges the
+    // encoder again); counts that move clear it at once.
+    let rest = SupervisorConfig::paper().frozen_still_reset_ticks;
+    let frozen = healthy_input(WARMUP - 1).joints[0];
+    let latched = || {
+        let (sup, v) = inject(150, |k, input| {
+            input.joints[0] = frozen;
+            input.joint_reference_rad[0] = STAND_JOINTS[0] + 0.0005 * k as f32;
+        });
+        assert!(detected_at(&v, FaultCode::EncoderFrozen).is_some());
+        sup
+    };
+    let still = |sup: &mut Supervisor, angle: f32, ticks: u32| {
+        for tick in 0..ticks {
+            let mut input = healthy_input(WARMUP + 150 + tick);
+            input.joints[0] = encoder(angle);
+            input.joint_reference_rad[0] = encoder(angle).angle_rad;
+            sup.check(&input);
+        }
+    };
+    let refused = Err(ResetRefused::ConditionPresent(only(
+        FaultCode::EncoderFrozen,
+    )));
+    // The first still tick's reference jumps onto the reading: driven.
+    let mut sup = latched();
+    still(&mut sup, frozen.angle_rad, rest);
+    assert_eq!(sup.request_reset(true), refused);
+    still(&mut sup, frozen.angle_rad + 2.0 * RAD_PER_COUNT, 5);
+    assert_eq!(sup.request_reset(true), Ok(()));
+    let mut sup = latched();
+    still(&mut sup, frozen.angle_rad, 1 + rest);
+    assert_eq!(sup.request_reset(true), Ok(()));
 }
 
 #[test]

@@ -153,8 +153,15 @@ impl Supervisor {
                         track.velocity_valid = true;
                         if counts != 0 {
                             track.frozen_ticks = 0;
+                            track.still_ticks = 0;
                         } else if driven {
                             track.frozen_ticks = track.frozen_ticks.saturating_add(1);
+                            track.still_ticks = 0;
+                        } else {
+                            track.still_ticks = track.still_ticks.saturating_add(1);
+                            if track.still_ticks >= cfg.frozen_still_reset_ticks {
+                                track.frozen_ticks = 0;
+                            }
                         }
                     }
                     None => {

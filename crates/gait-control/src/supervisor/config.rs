@@ -100,8 +100,9 @@ pub struct SupervisorConfig {
     /// landing far faster than a driven joint moves.
     pub max_ankle_jump_counts_per_tick: u16,
     /// Driven ticks of unchanged raw counts that make a frozen-encoder
-    /// fault; ticks not driven between them neither count nor restart
-    /// the count, only changed counts do.
+    /// fault; ticks not driven between them do not count, and restart the
+    /// count only as a still stretch of
+    /// [`SupervisorConfig::frozen_still_reset_ticks`]; changed counts do.
     pub frozen_ticks: u32,
     /// The joint counts as driven when its reference moves at least this
     /// fast, rad/s …
@@ -111,6 +112,12 @@ pub struct SupervisorConfig {
     /// body, or a joint held against its stop, legitimately reads constant
     /// counts under a large command.
     pub frozen_command_fraction: f32,
+    /// A still stretch this long (not driven, counts unchanged) restarts
+    /// the frozen count: longer than a weight transfer (0.4 s), whose still
+    /// reference a joint frozen as its swing ends sits through, so that
+    /// driven ticks scattered over a long rest (a command that now and
+    /// then reaches the limit's 0.9 on a still joint) never add up.
+    pub frozen_still_reset_ticks: u32,
     /// Bad force samples (bus, open, shorted, out of range) that make a
     /// fault.
     pub force_debounce: Debounce,
@@ -199,6 +206,7 @@ impl SupervisorConfig {
             frozen_ticks: 100,
             frozen_reference_speed_rad_s: 0.1,
             frozen_command_fraction: 0.9,
+            frozen_still_reset_ticks: 500,
             force_debounce: Debounce {
                 count: 3,
                 window_ticks: 100,
@@ -268,6 +276,7 @@ impl SupervisorConfig {
             || self.deadline_window_ticks == 0
             || self.tracking_error_ticks == 0
             || self.frozen_ticks == 0
+            || self.frozen_still_reset_ticks == 0
             || self.saturation_ticks == 0
             || self.heel_off_ticks == 0
             || self.max_jump_counts_per_tick == 0

@@ -317,6 +317,7 @@ pub(super) struct JointTrack {
     pub(super) velocity_valid: bool,
     pub(super) tracking_ticks: u32,
     pub(super) frozen_ticks: u32,
+    pub(super) still_ticks: u32,
     pub(super) saturated_ticks: u32,
     pub(super) residual: super::response::Residual,
 }
