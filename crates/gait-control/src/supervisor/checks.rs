@@ -151,13 +151,14 @@ impl Supervisor {
                         track.velocity_rad_s +=
                             cfg.velocity_filter_alpha * (raw_velocity - track.velocity_rad_s);
                         track.velocity_valid = true;
+                        // A still stretch is timed only while there is a
+                        // count to restart (a driven tick starts it at 0).
                         if counts != 0 {
                             track.frozen_ticks = 0;
-                            track.still_ticks = 0;
                         } else if driven {
                             track.frozen_ticks = track.frozen_ticks.saturating_add(1);
                             track.still_ticks = 0;
-                        } else {
+                        } else if track.frozen_ticks > 0 {
                             track.still_ticks = track.still_ticks.saturating_add(1);
                             if track.still_ticks >= cfg.frozen_still_reset_ticks {
                                 track.frozen_ticks = 0;
