@@ -706,5 +706,9 @@ fn a_hip_encoder_frozen_as_its_swing_ends_is_found_in_the_next_step() {
     assert!(o.fell.is_none(), "{o:?}");
     let frozen = o.faults.iter().find(|f| f.code == FaultCode::EncoderFrozen);
     assert!(frozen.is_some_and(|f| f.channel == Some(2)), "{o:?}");
+    // After the 0.4 s weight transfer (the swing ended at 3.5 s), within
+    // the next step's first 0.3 s.
+    let at = frozen.map_or(0.0, |f| f.detected_s);
+    assert!(at > 3.447 + 0.4 && at < 3.447 + 1.0, "{o:?}");
     assert!(o.braked_joints[2], "{o:?}");
 }
