@@ -84,6 +84,11 @@ fn bad_configurations_are_refused() {
     let mut c = good;
     c.deadline_miss_count = 9;
     assert_eq!(Supervisor::new(c).err(), Some(ConfigError::BadWindow));
+    // A still stretch of 0 ticks would restart the frozen count on every
+    // still tick: the rule that missed a frozen hip.
+    let mut c = good;
+    c.frozen_still_reset_ticks = 0;
+    assert_eq!(Supervisor::new(c).err(), Some(ConfigError::BadWindow));
 }
 
 // -------------------------------------------------- latching and reset
