@@ -110,9 +110,6 @@ struct Drive {
     i2t_a2s: f64,
     /// The joint's speed, rad/s (flexion positive).
     joint_speed_rad_s: f64,
-    /// Damping the dynamic brake gives while the bridge is disabled, as the
-    /// plant's step sees it, N·m·s/rad ([`SimMotor::discretise_brake`]).
-    brake_nm_s_per_rad: f64,
 }
 
 impl Drive {
@@ -147,17 +144,30 @@ impl Bridge {
         sign * f64::from(self.duty) / f64::from(self.max_duty) * self.full_scale_torque_nm
     }
 
-    /// The torque it puts out, N·m.
+    /// The torque it puts out at the joint's last published speed, N·m:
+    /// the driven torque, or the brake's.
     fn torque_nm(&self) -> f64 {
+        let speed = self.drive.map_or(0.0, |d| d.joint_speed_rad_s);
+        self.driven_nm() - self.brake_damping() * speed
+    }
+
+    /// The torque the power stage drives, N·m: none while disabled (the
+    /// enable line switches it off whatever the set value, a stuck one
+    /// included: the ESCON's enable input).
+    fn driven_nm(&self) -> f64 {
         if !self.enable_high {
-            // Disabled: the dynamic brake (if the drive has one) damps. The
-            // enable line switches the power stage off whatever the set
-            // value, a stuck one included (the ESCON's enable input).
-            return self
-                .drive
-                .map_or(0.0, |d| -d.brake_nm_s_per_rad * d.joint_speed_rad_s);
+            return 0.0;
         }
         self.amplifier_nm() * self.gear_share
+    }
+
+    /// The dynamic brake's damping now, N·m·s/rad: the drive's while the
+    /// bridge is disabled (its contactor closes), none while enabled.
+    fn brake_damping(&self) -> f64 {
+        match self.drive {
+            Some(d) if !self.enable_high => f64::from(d.spec.brake_damping_nm_s_per_rad()),
+            _ => 0.0,
+        }
     }
 
     /// The joint torque the amplifier's current gives while enabled, N·m
@@ -233,28 +243,8 @@ impl SimMotor {
             limits,
             i2t_a2s: 0.0,
             joint_speed_rad_s: 0.0,
-            brake_nm_s_per_rad: 0.0,
         });
         m
-    }
-
-    /// Sets the brake's damping as the plant's fixed-torque step of `dt_s`
-    /// can apply it to a joint of inertia `inertia_kgm2`: the damping b of
-    /// the drive's brake, held over a step, is explicit and unstable once
-    /// b·dt/I > 2 (b is some 375 N·m·s/rad, a shank about the knee 0.3
-    /// kg·m²); b / (1 + b·dt/I) is the implicit step's, stable for any b
-    /// and no stronger than the brake (so the simulated pilot is, if
-    /// anything, caught later than on the device).
-    pub fn discretise_brake(&self, inertia_kgm2: f64, dt_s: f64) {
-        if let Some(d) = self.0.borrow_mut().drive.as_mut() {
-            let b = f64::from(d.spec.brake_damping_nm_s_per_rad());
-            let stiffness = if inertia_kgm2 > 0.0 {
-                b * dt_s / inertia_kgm2
-            } else {
-                0.0
-            };
-            d.brake_nm_s_per_rad = b / (1.0 + stiffness);
-        }
     }
 
     /// The joint's speed now, rad/s (the torque–speed line uses it).
@@ -311,9 +301,25 @@ impl SimMotor {
         }
     }
 
-    /// The joint torque the bridge produces now, N·m.
+    /// The joint torque the bridge produces now, N·m: what it drives, or
+    /// while disabled its brake's at the joint's last published speed.
     pub fn torque_nm(&self) -> f64 {
         self.0.borrow().torque_nm()
+    }
+
+    /// The torque the power stage drives now, N·m (none while disabled);
+    /// the plant takes it with [`SimMotor::brake_damping_nm_s_per_rad`].
+    pub fn driven_torque_nm(&self) -> f64 {
+        self.0.borrow().driven_nm()
+    }
+
+    /// The dynamic brake's damping now, N·m·s/rad: the drive's full
+    /// damping while the bridge is disabled, none while enabled or without
+    /// a drive. The plant applies it at every stage of its integration
+    /// ([`crate::plant::Plant::set_brakes`]), as the contactor does
+    /// continuously.
+    pub fn brake_damping_nm_s_per_rad(&self) -> f64 {
+        self.0.borrow().brake_damping()
     }
 
     /// The joint torque the amplifier's own current gives now, N·m: what

@@ -133,6 +133,10 @@ pub struct Plant {
     /// The swing foot's ground force at the present state (x, y), N.
     contact_n: [f64; 2],
     motor_nm: [f64; 4],
+    /// The joints' dynamic-brake damping, N·m·s/rad (order of [`joint`]).
+    brakes: [f64; 4],
+    /// The brakes' torques at the present state, N·m.
+    brake_nm: [f64; 4],
     pilot_nm: f64,
     spring_nm: f64,
     stops_nm: [f64; 4],
@@ -182,6 +186,8 @@ impl Plant {
             contact_anchor_x: None,
             contact_n: [0.0; 2],
             motor_nm: [0.0; 4],
+            brakes: [0.0; 4],
+            brake_nm: [0.0; 4],
             pilot_nm: 0.0,
             spring_nm: 0.0,
             stops_nm: [0.0; 4],
@@ -224,6 +230,15 @@ impl Plant {
         self.pilot_target
     }
 
+    /// Sets each joint's brake damping, N·m·s/rad (order of [`joint`]; 0
+    /// for none): a torque −b·ω the plant evaluates at every stage of its
+    /// integration, as a shorted winding brakes continuously (a torque held
+    /// over the step would be unstable at a drive brake's b; negative or
+    /// non-finite values are taken as 0).
+    pub fn set_brakes(&mut self, damping_nm_s_per_rad: [f64; 4]) {
+        self.brakes = damping_nm_s_per_rad.map(|b| if b.is_finite() { b.max(0.0) } else { 0.0 });
+    }
+
     /// Advances one control period under the four motor torques (anatomical,
     /// flexion positive, N·m, order of [`joint`]). Returns the landing if the
     /// swing foot touched down in this period (the legs are then swapped).
@@ -253,9 +268,9 @@ impl Plant {
     }
 
     /// One classical RK4 step of `h` seconds. The ankle spring and the
-    /// pilot are evaluated at every stage (they depend on the state, so
-    /// holding them over the step would cost RK4 its accuracy); the motor
-    /// torques are held.
+    /// pilot and the brakes are evaluated at every stage (they depend on the
+    /// state, so holding them over the step would cost RK4 its accuracy);
+    /// the motor torques are held.
     fn rk4(&mut self, h: f64) -> Result<(), SimError> {
         let t0 = self.time_s;
         let q0 = self.phi;
@@ -289,6 +304,7 @@ impl Plant {
         self.contact_n = f.contact_n;
         self.spring_nm = f.spring_nm;
         self.stops_nm = f.stops_nm;
+        self.brake_nm = f.brake_nm;
         self.ddphi = self.forward(&self.phi, &self.dphi, &f.t_phi)?;
         Ok(())
     }

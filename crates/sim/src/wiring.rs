@@ -142,10 +142,7 @@ impl Wiring {
             joint_angles: Default::default(),
             forces: Default::default(),
             motors: std::array::from_fn(|j| {
-                let (spec, limits) = (cfg.drives[j], cfg.motors[j]);
-                let m = SimMotor::with_drive(MAX_DUTY, spec, limits);
-                m.discretise_brake(BRAKED_JOINT_INERTIA_KGM2, f64::from(cfg.dt_s));
-                m
+                SimMotor::with_drive(MAX_DUTY, cfg.drives[j], cfg.motors[j])
             }),
             clock: SimClock::new(),
             encoder_mounts: [e0, e1, e2, e3].map(|c| mount_of(&c)),
@@ -217,7 +214,8 @@ impl Wiring {
     /// clock. The controller's tick goes between two calls.
     pub fn step(&self, plant: &mut Plant) -> Result<Option<Landing>, SimError> {
         self.record_drive_currents();
-        let landing = plant.step(self.motor_torques_nm())?;
+        plant.set_brakes(self.brake_dampings());
+        let landing = plant.step(self.driven_torques_nm())?;
         self.integrate_thermal(plant.config().dt_s);
         self.publish(&plant.state());
         self.clock.tick();
@@ -239,17 +237,33 @@ impl Wiring {
         }
     }
 
-    /// The torques the motor bridges produce now (input of
-    /// [`crate::plant::Plant::step`]), N·m.
+    /// The torques the motor bridges produce now, N·m: driven, or a
+    /// disabled bridge's brake at the joint's last published speed.
     pub fn motor_torques_nm(&self) -> [f64; 4] {
         std::array::from_fn(|j| self.motors.get(j).map_or(0.0, SimMotor::torque_nm))
     }
-}
 
-/// The smallest inertia a braked hip or knee moves, kg·m² (a shank and
-/// foot about the knee; the brake's damping is discretised for it,
-/// `SimMotor::discretise_brake`).
-pub const BRAKED_JOINT_INERTIA_KGM2: f64 = 0.3;
+    /// The torques the power stages drive now (input of
+    /// [`crate::plant::Plant::step`]), N·m; the brakes are separate
+    /// ([`Wiring::brake_dampings`]).
+    pub fn driven_torques_nm(&self) -> [f64; 4] {
+        std::array::from_fn(|j| {
+            self.motors
+                .get(j)
+                .map_or(0.0, SimMotor::driven_torque_nm)
+        })
+    }
+
+    /// Every joint's dynamic-brake damping now, N·m·s/rad (input of
+    /// [`crate::plant::Plant::set_brakes`]).
+    pub fn brake_dampings(&self) -> [f64; 4] {
+        std::array::from_fn(|j| {
+            self.motors
+                .get(j)
+                .map_or(0.0, SimMotor::brake_damping_nm_s_per_rad)
+        })
+    }
+}
 
 /// A bus error kind for fault injection that no healthy bus produces.
 pub const INJECTED_SPI_ERROR: spi::ErrorKind = spi::ErrorKind::ChipSelectFault;

@@ -51,6 +51,8 @@ pub(super) struct Forces {
     /// Ankle spring plus the ankle's stop.
     pub(super) spring_nm: f64,
     pub(super) stops_nm: [f64; 4],
+    /// The brakes' torques by joint (order of [`joint`]), N·m.
+    pub(super) brake_nm: [f64; 4],
 }
 
 /// Anatomical angles and rates by role: ankle dorsiflexion, stance knee
@@ -152,11 +154,17 @@ impl Plant {
             // The dorsiflexion stop is the toe rocker's heel-off.
             stops[0] = stops[0].max(0.0);
         }
-        let m = self.motor_nm;
-        let (st_hip, st_knee, sw_hip, sw_knee) = match self.stance {
-            Side::Left => (m[0], m[1], m[2], m[3]),
-            Side::Right => (m[2], m[3], m[0], m[1]),
+        let (hip_s, knee_s, hip_w, knee_w) = match self.stance {
+            Side::Left => (0, 1, 2, 3),
+            Side::Right => (2, 3, 0, 1),
         };
+        // The brakes oppose each joint's anatomical rate.
+        let mut brake_nm = [0.0; 4];
+        for (j, role) in [(knee_s, 1), (hip_s, 2), (hip_w, 3), (knee_w, 4)] {
+            brake_nm[j] = -self.brakes[j] * dq[role];
+        }
+        let m: [f64; 4] = core::array::from_fn(|j| self.motor_nm[j] + brake_nm[j]);
+        let (st_hip, st_knee, sw_hip, sw_knee) = (m[hip_s], m[knee_s], m[hip_w], m[knee_w]);
         // Torques on the role coordinates [ankle dorsiflexion, stance knee
         // flexion, stance hip flexion, swing hip flexion, swing knee flexion]
         // = s·θ with s = (−1, +1, −1, +1, −1), so T_θ = s·τ.
@@ -169,10 +177,6 @@ impl Plant {
         ];
         let t_theta = [-role[0], role[1], -role[2], role[3], -role[4]];
         let mut stops_nm = [0.0; 4];
-        let (hip_s, knee_s, hip_w, knee_w) = match self.stance {
-            Side::Left => (0, 1, 2, 3),
-            Side::Right => (2, 3, 0, 1),
-        };
         stops_nm[hip_s] = stops[2];
         stops_nm[knee_s] = stops[1];
         stops_nm[hip_w] = stops[3];
@@ -196,6 +200,7 @@ impl Plant {
             pilot_nm: pilot,
             spring_nm: spring + stops[0],
             stops_nm,
+            brake_nm,
         }
     }
 

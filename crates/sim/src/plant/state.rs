@@ -42,7 +42,8 @@ pub struct TrueState {
     pub spring_torque_nm: f64,
     /// The joint stops' torques (order of [`joint`], flexion positive), N·m.
     pub stop_torques_nm: [f64; 4],
-    /// The motor torques applied in the last step, N·m (order of [`joint`]).
+    /// The motor torques at the present state, N·m (order of [`joint`]):
+    /// those applied in the last step plus the brakes' at the present rates.
     pub motor_torques_nm: [f64; 4],
     /// Mechanical energy: kinetic + gravity (world heights) + ankle spring, J.
     pub energy_j: f64,
@@ -142,7 +143,7 @@ impl Plant {
             pilot_torque_nm: self.pilot_nm,
             spring_torque_nm: self.spring_nm,
             stop_torques_nm: self.stops_nm,
-            motor_torques_nm: self.motor_nm,
+            motor_torques_nm: core::array::from_fn(|j| self.motor_nm[j] + self.brake_nm[j]),
             energy_j,
             swing_lifted: self.lifted,
         }
