@@ -49,7 +49,7 @@ fn main() {
     };
     println!("{:?}", run);
     println!(
-        "t phase | hipY | joints(4) | ref-true(4) | cmd(4) | motor(4) | feet | crutches | faults"
+        "t phase | hipY | joints(4) | ref-true(4) | cmd(4) | motor(4) | feet | crutches | ankles | faults"
     );
     for (k, s) in r.rig.trace.iter().enumerate() {
         if k % every != 0 {
@@ -65,7 +65,7 @@ fn main() {
         };
         let phase = format!("{:?}", rep.phase);
         println!(
-            "{:.3} {:<28} | {:.3} | {} | {} | {} | {} | {:5.0} {:5.0} | {:4.0} {:4.0} | {:?} {:?} en={}",
+            "{:.3} {:<28} | {:.3} | {} | {} | {} | {} | {:5.0} {:5.0} | {:4.0} {:4.0} | {:+.3} {:+.3} | {:?} {:?} en={}",
             st.time_s,
             &phase[..phase.len().min(std::env::var("FULL").map_or(28, |_| 60))],
             st.points_m[1][1],
@@ -87,6 +87,8 @@ fn main() {
             st.foot_forces_n[1],
             st.crutch_forces_n[0],
             st.crutch_forces_n[1],
+            st.ankle_dorsiflexion_rad[0].unwrap_or(f64::NAN),
+            st.ankle_dorsiflexion_rad[1].unwrap_or(f64::NAN),
             rep.reaction,
             rep.faults,
             rep.motors_enabled,
