@@ -249,12 +249,16 @@ fn a_panic_resets_the_board_into_a_hold_of_the_posture_it_finds() {
 
 #[test]
 fn motors_disabled_brake_the_joints_instead_of_letting_them_go_limp() {
-    // The e-stop in mid-swing and late in it, on every gait: with the
-    // device's dynamic brake nobody falls and no hip or knee goes more than
-    // 0.02 rad past its stop (stair ascent at 2.4 s: 0.011, the swing knee
-    // carried by its momentum); the same device without the brake lets the
-    // joints go limp: 3 of these 9 runs fall and every one crosses a stop,
-    // by 0.047–0.154 rad.
+    // The e-stop in mid-swing and late in it, on every gait. With the
+    // device's dynamic brake (its full 375 N·m·s/rad) no hip or knee
+    // reaches a stop: the worst margin is 0.017 rad (a descent knee at
+    // 2.0 s); the same device without the brake lets the joints go limp,
+    // and every one of these runs crosses a stop, by 0.043–0.090 rad.
+    // Nobody falls but in a stair descent's mid-swing (2.4 s): braked,
+    // the swing foot stays above the lower tread on its bent knee and the
+    // stiff body tips over the stance foot (the named case of a descent
+    // knee without its drive, `docs/safety.md`; limp, the swing leg
+    // drops onto the tread, its joints past their stops).
     let braked = DeviceConfig::exogait().unwrap();
     let mut limp = braked;
     for d in &mut limp.drives {
@@ -276,24 +280,19 @@ fn motors_disabled_brake_the_joints_instead_of_letting_them_go_limp() {
         .unwrap();
         outcome(&run.rig, run.ended_by.as_ref())
     };
-    let mut limp_worst = f64::INFINITY;
-    let mut braked_worst = f64::INFINITY;
+    let mut braked_falls = Vec::new();
     for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
-        for at in [1.6, 2.4, 3.2] {
+        for at in [1.6, 2.0, 2.4, 3.2] {
             let b = play(&braked, gait, at);
-            assert!(
-                b.fell.is_none(),
-                "{gait:?}, e-stop at {at} s, braked: {b:?}"
-            );
-            assert!(b.worst_limit_margin_rad > -0.02, "{gait:?}, {at} s: {b:?}");
-            braked_worst = braked_worst.min(b.worst_limit_margin_rad);
-            limp_worst = limp_worst.min(play(&limp, gait, at).worst_limit_margin_rad);
+            if b.fell.is_some() {
+                braked_falls.push((gait, at));
+            }
+            assert!(b.worst_limit_margin_rad > 0.0, "{gait:?}, {at} s: {b:?}");
+            let l = play(&limp, gait, at);
+            assert!(l.worst_limit_margin_rad < -0.03, "{gait:?}, {at} s: {l:?}");
         }
     }
-    assert!(
-        limp_worst < braked_worst - 0.03,
-        "limp {limp_worst} rad, braked {braked_worst} rad"
-    );
+    assert_eq!(braked_falls, [(Gait::StairDown, 2.4)]);
 }
 
 #[test]
