@@ -6,8 +6,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 use exogait_device::DeviceConfig;
-use gait_control::faults::FaultCode;
+use gait_control::faults::{FaultCode, Reaction};
 use gait_control::operator::Gait;
+use gait_control::sequencer::Phase;
 use sim::inject::Injection;
 use sim::outcome::outcome;
 use sim::scenario::{flash_tables, run_tables_with, strong_pilot};
@@ -249,16 +250,13 @@ fn a_panic_resets_the_board_into_a_hold_of_the_posture_it_finds() {
 
 #[test]
 fn motors_disabled_brake_the_joints_instead_of_letting_them_go_limp() {
-    // The e-stop in mid-swing and late in it, on every gait. With the
-    // device's dynamic brake (its full 375 N·m·s/rad) no hip or knee
-    // reaches a stop: the worst margin is 0.017 rad (a descent knee at
-    // 2.0 s); the same device without the brake lets the joints go limp,
-    // and every one of these runs crosses a stop, by 0.043–0.090 rad.
-    // Nobody falls but in a stair descent's mid-swing (2.4 s): braked,
-    // the swing foot stays above the lower tread on its bent knee and the
-    // stiff body tips over the stance foot (the named case of a descent
-    // knee without its drive, `docs/safety.md`; limp, the swing leg
-    // drops onto the tread, its joints past their stops).
+    // The e-stop in mid-swing and late in it, on every gait (in a swing
+    // the swing foot is set down first, then the drives are disabled).
+    // With the device's dynamic brake (its full 375 N·m·s/rad) nobody
+    // falls and no hip or knee reaches a stop: the worst margin is 0.017
+    // rad (a descent knee at 2.0 s); the same device without the brake
+    // lets the joints go limp: 2 of these 12 runs fall, and 11 cross a
+    // stop, by 0.055–0.082 rad.
     let braked = DeviceConfig::exogait().unwrap();
     let mut limp = braked;
     for d in &mut limp.drives {
@@ -280,7 +278,7 @@ fn motors_disabled_brake_the_joints_instead_of_letting_them_go_limp() {
         .unwrap();
         outcome(&run.rig, run.ended_by.as_ref())
     };
-    let mut braked_falls = Vec::new();
+    let (mut braked_falls, mut limp_falls, mut limp_crossed) = (Vec::new(), 0, 0);
     for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
         for at in [1.6, 2.0, 2.4, 3.2] {
             let b = play(&braked, gait, at);
@@ -289,10 +287,86 @@ fn motors_disabled_brake_the_joints_instead_of_letting_them_go_limp() {
             }
             assert!(b.worst_limit_margin_rad > 0.0, "{gait:?}, {at} s: {b:?}");
             let l = play(&limp, gait, at);
-            assert!(l.worst_limit_margin_rad < -0.03, "{gait:?}, {at} s: {l:?}");
+            limp_falls += usize::from(l.fell.is_some());
+            limp_crossed += usize::from(l.worst_limit_margin_rad < -0.05);
         }
     }
-    assert_eq!(braked_falls, [(Gait::StairDown, 2.4)]);
+    assert!(
+        limp_falls >= 1 && limp_crossed >= 10,
+        "limp: {limp_falls} falls, {limp_crossed} past a stop"
+    );
+    assert!(braked_falls.is_empty(), "falls: {braked_falls:?}");
+}
+
+/// The e-stop in a swing: the drives set the swing foot down first and
+/// are disabled as its sensor feels the ground, or once the set-down's
+/// time is up (a stop of category 1); standing, at once (category 0,
+/// `e_stop_disables_the_motors_in_the_same_tick_and_latches`).
+#[test]
+fn an_e_stop_in_a_swing_sets_the_foot_down_before_it_disables_the_drives() {
+    let device = DeviceConfig::exogait().unwrap();
+    let contact = f64::from(device.controller.sequencer.landing_contact_n);
+    let set_down_s = f64::from(device.controller.sequencer.set_down_s);
+    let play = |device: &DeviceConfig| {
+        let injection: Injection = "estop@2.4".parse().unwrap();
+        run_tables_with(
+            device,
+            flash_tables(),
+            Gait::StairDown,
+            strong_pilot(),
+            6.4,
+            2,
+            |rig| {
+                rig.schedule(injection);
+            },
+        )
+        .unwrap()
+    };
+    let run = play(&device);
+    let o = outcome(&run.rig, run.ended_by.as_ref());
+    assert!(o.fell.is_none(), "{o:?}");
+    let trace = &run.rig.trace;
+    let pressed = trace
+        .iter()
+        .position(|s| s.report.faults.contains(FaultCode::EStopPressed))
+        .unwrap();
+    let at = &trace[pressed];
+    assert!(
+        matches!(trace[pressed - 1].report.phase, Phase::Swing { .. }),
+        "struck in a swing"
+    );
+    assert_eq!(at.report.reaction, Reaction::SafeHold);
+    assert!(at.report.motors_enabled);
+    assert!(matches!(at.report.phase, Phase::SafeHold { .. }));
+    // The swing (right) foot finds the ground, and on that tick the drives
+    // go off, for good.
+    let off = trace.iter().position(|s| !s.report.motors_enabled).unwrap();
+    let landed = (pressed..trace.len())
+        .find(|&k| trace[k].report.forces_n[1] >= contact as f32)
+        .unwrap();
+    assert!(off <= landed + 1, "disabled {off}, foot down {landed}");
+    assert!(off > pressed + 100, "set down for {} ticks", off - pressed);
+    assert!((off - pressed) as f64 * 1e-3 <= set_down_s + 2e-3);
+    for s in &trace[off..] {
+        assert!(!s.report.motors_enabled && s.report.command_nm == [0.0; 4]);
+        assert_eq!(s.report.reaction, Reaction::DisableMotors);
+    }
+    // However far the foot has to go, the drives are off once the
+    // set-down's time is up.
+    let mut short = device;
+    short.controller.sequencer.set_down_s = 0.05;
+    let run = play(&short);
+    let trace = &run.rig.trace;
+    let pressed = trace
+        .iter()
+        .position(|s| s.report.faults.contains(FaultCode::EStopPressed))
+        .unwrap();
+    let off = trace.iter().position(|s| !s.report.motors_enabled).unwrap();
+    assert!(
+        (49..=51).contains(&(off - pressed)),
+        "disabled {} ticks after the e-stop",
+        off - pressed
+    );
 }
 
 #[test]

@@ -18,6 +18,7 @@
 
 mod act;
 mod chain;
+mod estop;
 mod sense;
 
 use embedded_hal::digital::{InputPin, OutputPin};
@@ -166,6 +167,9 @@ pub struct Controller<'t> {
     pending_reset: Option<PendingReset>,
     /// Integral of the other foot's load error in double support, N.
     other_foot_integral_n: f32,
+    /// The e-stop's stop: whether it has been seen since it last
+    /// cleared, and the set-down of a swing it struck in.
+    estop: estop::EStopStop,
     tick: u32,
 }
 
@@ -215,6 +219,7 @@ impl<'t> Controller<'t> {
             primed: false,
             pending_reset: None,
             other_foot_integral_n: 0.0,
+            estop: estop::EStopStop::default(),
             tick: 0,
         })
     }
@@ -423,7 +428,8 @@ impl<'t> Controller<'t> {
             chain_closed: s.chain_closed,
             drive_current: Some(s.drive_current),
         };
-        let verdict = self.supervisor.check(&input);
+        let mut verdict = self.supervisor.check(&input);
+        self.stop_for_estop(&mut verdict, &s.joints);
         for (i, (&re, &m)) in verdict.rehold_joints.iter().zip(&s.joints).enumerate() {
             if re {
                 self.seq.rehold_joint(i, m);

@@ -32,7 +32,10 @@ pub enum Reaction {
     /// swing, first to the landing where the faults allow ([`InSwing`]).
     SafeHold,
     /// Only for the emergency stop (pressed, or its input lost): disable
-    /// every motor output now.
+    /// every motor output now, their dynamic brakes holding the joints; in
+    /// a swing once the swing foot is set down (at most
+    /// `SequencerConfig::set_down_s`: a stop of category 1, the
+    /// controller's `estop` module).
     DisableMotors,
 }
 

@@ -543,6 +543,12 @@ impl<'t> Sequencer<'t> {
         self.set_down = Some(sd);
     }
 
+    /// A safe hold's set-down of the swing foot is under way (the foot has
+    /// not yet found the ground).
+    pub fn set_down_pending(&self) -> bool {
+        matches!(self.phase, Phase::SafeHold { .. }) && self.set_down.is_some_and(|sd| !sd.done)
+    }
+
     /// In a safe hold, holds joint `joint` at `angle_rad` from now on
     /// instead of where the hold found it: a joint braked while nothing
     /// told its angle has moved since, and its drive, back on, must hold
