@@ -67,10 +67,10 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
             "pwm-fail:",
             "dir-fail:",
         ]
-            .iter()
-            .find_map(|kind| fault.strip_prefix(kind))
-            .and_then(|rest| rest.split('@').next())
-            .filter(|target| JOINTS.contains(target));
+        .iter()
+        .find_map(|kind| fault.strip_prefix(kind))
+        .and_then(|rest| rest.split('@').next())
+        .filter(|target| JOINTS.contains(target));
         if let Some(target) = lost {
             own_joint_runs += 1;
             assert!(braked.contains(&target), "{run}");

@@ -247,11 +247,7 @@ impl Wiring {
     /// [`crate::plant::Plant::step`]), N·m; the brakes are separate
     /// ([`Wiring::brake_dampings`]).
     pub fn driven_torques_nm(&self) -> [f64; 4] {
-        std::array::from_fn(|j| {
-            self.motors
-                .get(j)
-                .map_or(0.0, SimMotor::driven_torque_nm)
-        })
+        std::array::from_fn(|j| self.motors.get(j).map_or(0.0, SimMotor::driven_torque_nm))
     }
 
     /// Every joint's dynamic-brake damping now, N·m·s/rad (input of

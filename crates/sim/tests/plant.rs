@@ -113,7 +113,9 @@ fn braked_joints_dissipate_what_their_brakes_take_and_stay_stable() {
         p.set_brakes(brakes);
         let e0 = p.state().energy_j;
         let power = |s: &sim::TrueState| -> f64 {
-            (0..4).map(|j| brakes[j] * s.joint_rates_rad_s[j].powi(2)).sum()
+            (0..4)
+                .map(|j| brakes[j] * s.joint_rates_rad_s[j].powi(2))
+                .sum()
         };
         let (mut taken, mut last_power) = (0.0, power(&p.state()));
         let mut fastest = 0.0f64;
@@ -133,12 +135,18 @@ fn braked_joints_dissipate_what_their_brakes_take_and_stay_stable() {
             }
         }
         let lost = e0 - p.state().energy_j;
-        assert!(lost > 0.1, "{brakes:?}: the brakes should take energy, lost {lost} J");
+        assert!(
+            lost > 0.1,
+            "{brakes:?}: the brakes should take energy, lost {lost} J"
+        );
         assert!(
             (lost - taken).abs() < 0.02 * taken,
             "{brakes:?}: lost {lost} J, brakes took {taken} J"
         );
-        assert!(fastest < 5.0, "{brakes:?}: a braked joint ran at {fastest} rad/s");
+        assert!(
+            fastest < 5.0,
+            "{brakes:?}: a braked joint ran at {fastest} rad/s"
+        );
     }
     // No brake is bit for bit no brake set.
     let (mut a, mut z) = (start(), start());
