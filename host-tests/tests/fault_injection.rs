@@ -599,7 +599,7 @@ fn a_stop_crossed_is_the_device_s_unless_a_named_case_s_reason_took_the_joint_th
     // off and braked, the bent knee that carries the body sinks at load /
     // brake damping onto its flexion stop: a descent knee without its
     // drive, named.
-    let estop = campaign_run(Gait::StairDown, "estop@4.869", 874458);
+    let estop = campaign_run(Gait::StairDown, "estop@4.733", 526_588);
     assert!(estop.past_a_stop(), "{:?}", estop.outcome);
     assert_eq!(estop.outcome.worst_limit_joint, 1);
     assert!(estop.outcome.limit_margins[1].1, "the flexion stop");
