@@ -168,13 +168,20 @@ fn e_stop_disables_the_motors_in_the_same_tick_and_latches() {
     // Every bridge is off; what the joints feel is the dynamic brake alone,
     // which only ever opposes their motion.
     assert!(rig.wiring.motors.iter().all(|m| !m.outputs().2));
-    let rates = rig.plant.state().joint_rates_rad_s;
-    for (t, w) in rig.wiring.motor_torques_nm().iter().zip(rates) {
+    // The plant's own joint torques: the brake's −b ω at the joints'
+    // rates, b the drive's 375 N·m·s/rad.
+    let state = rig.plant.state();
+    for (t, w) in state.motor_torques_nm.iter().zip(state.joint_rates_rad_s) {
         assert!(
-            t * w <= 0.0 && t.abs() <= 400.0 * w.abs(),
+            (t + 375.0 * w).abs() <= 1e-9 + 0.01 * t.abs(),
             "brake {t} N·m at {w} rad/s"
         );
     }
+    assert!(
+        state.joint_rates_rad_s.iter().any(|w| w.abs() > 1e-4),
+        "the joints move under the brake: {:?}",
+        state.joint_rates_rad_s
+    );
     assert!(rig.faults().contains(FaultCode::EStopPressed));
     // Released, the fault stays latched until a clinician reset.
     rig.e_stop.set_pressed(false);

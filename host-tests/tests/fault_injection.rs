@@ -344,13 +344,57 @@ fn an_e_stop_in_a_swing_sets_the_foot_down_before_it_disables_the_drives() {
     let landed = (pressed..trace.len())
         .find(|&k| trace[k].report.forces_n[1] >= contact as f32)
         .unwrap();
-    assert!(off <= landed + 1, "disabled {off}, foot down {landed}");
+    assert!(
+        landed <= off && off <= landed + 1,
+        "disabled {off}, foot down {landed}"
+    );
     assert!(off > pressed + 100, "set down for {} ticks", off - pressed);
     assert!((off - pressed) as f64 * 1e-3 <= set_down_s + 2e-3);
     for s in &trace[off..] {
         assert!(!s.report.motors_enabled && s.report.command_nm == [0.0; 4]);
         assert_eq!(s.report.reaction, Reaction::DisableMotors);
     }
+    // A fault's set-down already under way when the e-stop comes goes on
+    // to the tread, the faulted joint still braked, and the drives are
+    // off as the foot lands.
+    let both =
+        ["encoder-parity:left-hip@2.35", "estop@2.4"].map(|f| f.parse::<Injection>().unwrap());
+    let run = run_tables_with(
+        &device,
+        flash_tables(),
+        Gait::StairDown,
+        strong_pilot(),
+        6.4,
+        2,
+        |rig| {
+            for f in both {
+                rig.schedule(f);
+            }
+        },
+    )
+    .unwrap();
+    let trace = &run.rig.trace;
+    let pressed = trace
+        .iter()
+        .position(|s| s.report.faults.contains(FaultCode::EStopPressed))
+        .unwrap();
+    assert!(matches!(
+        trace[pressed - 1].report.phase,
+        Phase::SafeHold { .. }
+    ));
+    let off = trace.iter().position(|s| !s.report.motors_enabled).unwrap();
+    let landed = (pressed..trace.len())
+        .find(|&k| trace[k].report.forces_n[1] >= contact as f32)
+        .unwrap();
+    assert!(
+        off > pressed + 50 && landed <= off && off <= landed + 1,
+        "e-stop {pressed}, disabled {off}, foot down {landed}"
+    );
+    assert!(
+        trace[pressed..off]
+            .iter()
+            .all(|s| s.braked[0] && s.report.command_nm[0] == 0.0)
+    );
     // However far the foot has to go, the drives are off once the
     // set-down's time is up.
     let mut short = device;

@@ -256,7 +256,9 @@ impl SimMotor {
 
     /// Advances the drive's winding model by `dt_s` at the present output.
     pub fn integrate_thermal(&self, dt_s: f64) {
-        let out = self.torque_nm();
+        // The amplifier's own I²t counts the current it drives; the
+        // brake's flows through the contactor, which it does not see.
+        let out = self.driven_torque_nm();
         let mut b = self.0.borrow_mut();
         if let Some(d) = b.drive.as_mut() {
             let i = out / f64::from(d.spec.joint_torque_per_amp());

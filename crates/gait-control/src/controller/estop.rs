@@ -4,10 +4,12 @@
 //! brakes hold the joints. In a swing the foot is in the air, and a body
 //! braked stiff on one leg tips over it (a stair descent's mid-swing fell
 //! so, `docs/safety.md`): the drives first set the swing foot down, as the
-//! safe hold does, and are disabled once its sensor feels the ground, or
-//! after `SequencerConfig::set_down_s` (0.8 s) whatever happens. Every
-//! other check stays armed meanwhile: a joint whose drive a fault brakes
-//! stays braked.
+//! safe hold does (or go on with a safe hold's set-down already under
+//! way), and are disabled once its sensor feels the ground, or after
+//! `SequencerConfig::set_down_s` (0.8 s; 1 s at most whatever the
+//! configuration) whatever happens. Every other check stays armed
+//! meanwhile: a joint whose drive a fault brakes stays braked. Drives
+//! already off stay off.
 
 use crate::faults::{InSwing, Reaction};
 use crate::posture::JOINTS;
@@ -26,15 +28,17 @@ pub(super) struct EStopStop {
     set_down_ticks: u16,
 }
 
-/// The longest set-down the e-stop allows, ticks (5 s at 1 kHz; the
-/// configured `set_down_s` is far shorter).
-const MAX_SET_DOWN_TICKS: f32 = 5000.0;
+/// The longest set-down the e-stop allows whatever the configuration,
+/// s (the configured `set_down_s` is 0.8).
+const MAX_SET_DOWN_S: f32 = 1.0;
 
 impl Controller<'_> {
     /// Turns the verdict's `DisableMotors` into a safe hold while the
     /// e-stop's set-down of a swing foot lasts (see the module
-    /// documentation); the hold starts, with its set-down, on the tick the
-    /// e-stop is first seen in a swing.
+    /// documentation): from the tick the e-stop is first seen, in a swing
+    /// (the hold and its set-down start then) or in a safe hold whose
+    /// set-down is under way (it goes on), with the drives on. Never turns
+    /// a drive on: with the drives off the e-stop disables at once.
     pub(super) fn stop_for_estop(&mut self, verdict: &mut Verdict, measured: &[f32; JOINTS]) {
         if verdict.reaction != Reaction::DisableMotors {
             self.estop = EStopStop::default();
@@ -42,17 +46,20 @@ impl Controller<'_> {
         }
         if !self.estop.seen {
             self.estop.seen = true;
-            if matches!(self.seq.phase(), Phase::Swing { .. }) {
+            if self.motors_enabled && matches!(self.seq.phase(), Phase::Swing { .. }) {
                 self.seq.enter_safe_hold(measured, InSwing::HoldNow);
-                let ticks = self.cfg.sequencer.set_down_s / self.cfg.dt_s;
+            }
+            if self.motors_enabled && self.seq.set_down_pending() {
+                let s = self.cfg.sequencer.set_down_s.min(MAX_SET_DOWN_S);
+                let ticks = s / self.cfg.dt_s;
                 self.estop.set_down_ticks = if ticks.is_finite() {
-                    ticks.clamp(0.0, MAX_SET_DOWN_TICKS) as u16
+                    ticks.clamp(0.0, f32::from(u16::MAX)) as u16
                 } else {
                     0
                 };
             }
         }
-        if self.estop.set_down_ticks > 0 && self.seq.set_down_pending() {
+        if self.estop.set_down_ticks > 0 && self.motors_enabled && self.seq.set_down_pending() {
             self.estop.set_down_ticks -= 1;
             verdict.reaction = Reaction::SafeHold;
         } else {
