@@ -11,6 +11,7 @@ mod named;
 pub use named::{NamedCase, explains_stop, named_case};
 
 use exogait_device::DeviceConfig;
+use gait_control::faults::FaultCode;
 use gait_control::operator::Gait;
 use gait_control::sequencer::Phase;
 
@@ -72,7 +73,30 @@ impl RunResult {
                 self.stance_after_strike,
                 self.carrying_at_strike,
             )
+            .filter(|_| self.drives_off_by(self.outcome.fell_s))
         })
+    }
+
+    /// Whether an e-stop run's drives were off (its safe state reached)
+    /// by `at_s`, when what is told happened: the e-stop's cases rest on
+    /// every drive disabled and braked, and in a swing the drives first set
+    /// the foot down (`docs/safety.md`, "The e-stop in a swing"), which is
+    /// the device's doing. True for every other kind.
+    fn drives_off_by(&self, at_s: Option<f64>) -> bool {
+        if !matches!(self.run.fault.kind, Kind::EStop | Kind::EStopRead) {
+            return true;
+        }
+        let off_s = self
+            .outcome
+            .faults
+            .iter()
+            .filter(|f| matches!(f.code, FaultCode::EStopPressed | FaultCode::EStopInputFault))
+            .filter_map(|f| f.safe_state_s)
+            .reduce(f64::min);
+        match (off_s, at_s) {
+            (Some(off), Some(at)) => at >= off - 1e-9,
+            _ => false,
+        }
     }
 
     /// The pilot fell, and not in a named case: the device's to fix.
@@ -99,13 +123,16 @@ impl RunResult {
             self.stance_before_stop,
             self.carrying_at_strike,
         );
-        named.filter(|_| self.past_a_stop()).filter(|&c| {
-            crossed().all(|(j, (_, flexion))| {
-                let o = &self.outcome;
-                let gave_all = o.resisted_at_limit.get(j) == Some(&true);
-                explains_stop(c, &self.run, j, flexion, gave_all)
+        named
+            .filter(|_| self.past_a_stop())
+            .filter(|_| self.drives_off_by(self.outcome.first_stop_crossed_s))
+            .filter(|&c| {
+                crossed().all(|(j, (_, flexion))| {
+                    let o = &self.outcome;
+                    let gave_all = o.resisted_at_limit.get(j) == Some(&true);
+                    explains_stop(c, &self.run, j, flexion, gave_all)
+                })
             })
-        })
     }
 
     /// A joint crossed its stop, and not for a named case's reason: the
@@ -605,6 +632,59 @@ mod tests {
         // came too late for it.
         assert_eq!(legs(Some(1.5)), [false, false]);
         assert_eq!(legs(Some(3.0)), [true, true]);
+    }
+
+    /// A descent's e-stop run that fell (or crossed a knee's flexion stop)
+    /// at `at_s`, its drives off at `off_s`.
+    fn estop_run(at_s: f64, off_s: Option<f64>) -> RunResult {
+        let mut outcome = no_outcome();
+        outcome.fell = Some("fell: hip 0.400 m high".into());
+        outcome.fell_s = Some(at_s);
+        outcome.worst_limit_margin_rad = -0.01;
+        outcome.worst_limit_joint = 1;
+        outcome.limit_margins[1] = (-0.01, true);
+        outcome.first_stop_crossed_s = Some(at_s);
+        outcome.faults.push(crate::outcome::FaultOutcome {
+            code: FaultCode::EStopPressed,
+            injected_s: Some(2.0),
+            detected_s: 2.0,
+            latency_ticks: Some(0),
+            reaction: gait_control::faults::Reaction::DisableMotors,
+            channel: None,
+            safe_state_s: off_s,
+        });
+        RunResult {
+            run: CampaignRun {
+                gait: Gait::StairDown,
+                fault: "estop@2".parse().unwrap_or_else(|e| panic!("{e}")),
+                noise_seed: 1,
+            },
+            outcome,
+            false_trip: false,
+            detected: true,
+            error: None,
+            struck_in: Some(Phase::Swing {
+                stance: Side::Left,
+                t_s: 0.5,
+            }),
+            stance_after_strike: [true, false],
+            stance_before_stop: [true, false],
+            carrying_at_strike: [true, false],
+        }
+    }
+
+    #[test]
+    fn an_e_stop_s_case_names_only_what_happened_once_the_drives_were_off() {
+        // Off at 2.5 s (the swing foot set down first): a fall or a stop
+        // crossed from then on is the case's, before it the device's.
+        let after = estop_run(3.0, Some(2.5));
+        assert_eq!(after.named_fall(), Some(NamedCase::DescentKneeWithoutDrive));
+        assert_eq!(after.named_stop(), Some(NamedCase::DescentKneeWithoutDrive));
+        let during = estop_run(2.3, Some(2.5));
+        assert_eq!(during.named_fall(), None);
+        assert!(during.unnamed_fall() && during.unnamed_stop());
+        // Drives never off: the device's.
+        assert!(estop_run(3.0, None).unnamed_fall());
     }
 
     #[test]
