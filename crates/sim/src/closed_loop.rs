@@ -447,10 +447,8 @@ impl<'t> Rig<'t> {
             self.plant.set_pilot(target);
         }
         self.wiring.record_drive_currents();
-        let torques = self.wiring.driven_torques_nm();
         if self.now() >= self.support_ticks {
-            self.plant.set_brakes(self.wiring.brake_dampings());
-            self.plant.step(torques)?;
+            self.wiring.drive_plant(&mut self.plant)?;
         }
         self.wiring.integrate_thermal(self.plant.config().dt_s);
         self.publish();

@@ -214,12 +214,18 @@ impl Wiring {
     /// clock. The controller's tick goes between two calls.
     pub fn step(&self, plant: &mut Plant) -> Result<Option<Landing>, SimError> {
         self.record_drive_currents();
-        plant.set_brakes(self.brake_dampings());
-        let landing = plant.step(self.driven_torques_nm())?;
+        let landing = self.drive_plant(plant)?;
         self.integrate_thermal(plant.config().dt_s);
         self.publish(&plant.state());
         self.clock.tick();
         Ok(landing)
+    }
+
+    /// Steps the plant one control period under what the bridges do now:
+    /// the torques the enabled ones drive, the brakes of the disabled ones.
+    pub fn drive_plant(&self, plant: &mut Plant) -> Result<Option<Landing>, SimError> {
+        plant.set_brakes(self.brake_dampings());
+        plant.step(self.driven_torques_nm())
     }
 
     /// Sets what the current monitors report for the plant step about to
