@@ -870,3 +870,57 @@ fn a_hip_encoder_frozen_as_its_swing_ends_is_found_in_the_next_step() {
     assert!(at > 3.447 + 0.4 && at < 3.447 + 1.0, "{o:?}");
     assert!(o.braked_joints[2], "{o:?}");
 }
+
+#[test]
+fn a_simulated_pilot_can_react_to_a_hold_late_and_slowly() {
+    // The campaign's pilot meets a hold at once with the crutches' full
+    // torque; one with a reaction time goes on with the step's shank for
+    // that time, then eases it to the hold's aim (`docs/safety.md`, "The
+    // pilot's reaction to a hold").
+    let device = DeviceConfig::exogait().unwrap();
+    let fault: Injection = "dir-fail:right-hip@2.497".parse().unwrap();
+    let crutches_after_hold = |pilot: sim::pilot::PilotConfig| {
+        let run = run_tables_with(
+            &device,
+            flash_tables(),
+            Gait::StairDown,
+            pilot,
+            fault.at_s + 1.0,
+            2,
+            |rig| {
+                rig.set_sensor_noise(3, 10, 730_010);
+                rig.schedule(fault);
+            },
+        )
+        .unwrap();
+        let trace = &run.rig.trace;
+        let held = trace
+            .iter()
+            .position(|s| matches!(s.report.phase, Phase::SafeHold { .. }))
+            .unwrap();
+        let before = trace[held - 1].state.crutch_forces_n[0];
+        let peak = |ms: usize| {
+            trace[held..held + ms]
+                .iter()
+                .map(|s| s.state.crutch_forces_n[0])
+                .fold(0.0, f64::max)
+        };
+        (before, peak(10), peak(140), peak(400))
+    };
+    let instant = strong_pilot();
+    let most =
+        0.5 * (instant.torque_limit_nm / instant.crutch_lever_m + instant.baseline_crutch_load_n);
+    let (_, first_10ms, _, _) = crutches_after_hold(instant);
+    assert!(first_10ms > 0.95 * most, "{first_10ms} N of {most}");
+    let reacting = sim::pilot::PilotConfig {
+        hold_reaction_s: 0.15,
+        hold_recovery_s: 1.5,
+        ..instant
+    };
+    let (before, _, reaction, later) = crutches_after_hold(reacting);
+    assert!(
+        reaction < before + 60.0,
+        "{reaction} N within the reaction time, {before} N before"
+    );
+    assert!(later > reaction + 20.0, "then it pushes: {later} N");
+}

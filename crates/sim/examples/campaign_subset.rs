@@ -2,7 +2,9 @@
 //! with one of the given prefixes, on every core, and prints each device
 //! fall and the tally: for trying a reaction on the kinds it is for.
 //! `cargo run --release -p sim --example campaign_subset -- SEED RUNS PREFIX...`
-//! (`EXO_SET_DOWN=SECONDS,METRES` tries another set-down), or the runs
+//! (`EXO_SET_DOWN=SECONDS,METRES` tries another set-down,
+//! `EXO_PILOT_REACTION=SECONDS,SECONDS` a pilot who reacts to a hold
+//! later and moves slower), or the runs
 //! listed in a file, one `GAIT FAULT NOISE_SEED` a line (as `fault_trace`
 //! takes them): `... campaign_subset -- file PATH`.
 
@@ -79,7 +81,18 @@ fn main() {
             })
             .collect(),
     };
-    let results = sim::campaign::play_all(&plan, &device, &|| {});
+    // EXO_PILOT_REACTION="SECONDS,SECONDS": a pilot who acts on a hold
+    // after that reaction time, and moves the shank to its aim over the
+    // second (`PilotConfig::hold_reaction_s`, `hold_recovery_s`).
+    let mut pilot = sim::scenario::strong_pilot();
+    if let Some((r, v)) = std::env::var("EXO_PILOT_REACTION").ok().and_then(|v| {
+        let (a, b) = v.split_once(',')?;
+        Some((a.parse::<f64>().ok()?, b.parse::<f64>().ok()?))
+    }) {
+        pilot.hold_reaction_s = r;
+        pilot.hold_recovery_s = v;
+    }
+    let results = sim::campaign::play_all_with_pilot(&plan, &device, pilot, &|| {});
     let mut falls = 0;
     let mut past = 0;
     let mut missed = 0;

@@ -17,6 +17,7 @@ use gait_control::sequencer::Phase;
 
 use crate::inject::{Injection, Kind, Target};
 use crate::outcome::{Outcome, outcome};
+use crate::pilot::PilotConfig;
 use crate::scenario::{flash_tables, run_tables_with, strong_pilot};
 
 /// One planned run.
@@ -257,13 +258,20 @@ pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
 
 /// Plays one run: two steps asked, the run ends 4 s after the fault.
 pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
+    play_with_pilot(run, device, strong_pilot())
+}
+
+/// [`play`] with another simulated pilot (the campaign's is
+/// [`strong_pilot`]): how the figures depend on what only the simulation
+/// has, e.g. the pilot's reaction to a hold (`docs/safety.md`).
+pub fn play_with_pilot(run: &CampaignRun, device: &DeviceConfig, pilot: PilotConfig) -> RunResult {
     let fault = run.fault;
     let seed = run.noise_seed;
     let played = run_tables_with(
         device,
         flash_tables(),
         run.gait,
-        strong_pilot(),
+        pilot,
         fault.at_s + 4.0,
         2,
         |rig| {
@@ -358,7 +366,17 @@ pub fn play_all(
     device: &DeviceConfig,
     done: &(dyn Fn() + Sync),
 ) -> Vec<RunResult> {
-    on_every_core(runs, |r| play(r, device), done)
+    play_all_with_pilot(runs, device, strong_pilot(), done)
+}
+
+/// [`play_all`] with another simulated pilot ([`play_with_pilot`]).
+pub fn play_all_with_pilot(
+    runs: &[CampaignRun],
+    device: &DeviceConfig,
+    pilot: PilotConfig,
+    done: &(dyn Fn() + Sync),
+) -> Vec<RunResult> {
+    on_every_core(runs, |r| play_with_pilot(r, device, pilot), done)
 }
 
 /// `each` over `items` on the machine's cores (at most 8 threads), calling

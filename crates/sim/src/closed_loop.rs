@@ -172,6 +172,8 @@ pub struct Rig<'t> {
     support_ticks: u64,
     pilot: PilotBehaviour,
     transfer_from_phi1: Option<f64>,
+    /// The pilot's reaction to a safe hold.
+    hold_reaction: pilot_aim::HoldReaction,
     pub(crate) faults: Injector,
     /// The tables the controller was built with (a reboot builds it again).
     tables: GaitTables<'t>,
@@ -309,6 +311,7 @@ impl<'t> Rig<'t> {
             support_ticks: setup.support_ticks,
             pilot: setup.pilot,
             transfer_from_phi1: None,
+            hold_reaction: pilot_aim::HoldReaction::default(),
             faults: Injector::default(),
             tables,
             recorded: None,
@@ -441,6 +444,15 @@ impl<'t> Rig<'t> {
             self.transfer_from_phi1,
             self.device.controller.sequencer.transfer_s,
             self.plant.time_s(),
+        );
+        let pilot_cfg = self.plant.config().pilot;
+        let plant = &self.plant;
+        let target = self.hold_reaction.aim(
+            &pilot_cfg,
+            matches!(report.phase, Phase::SafeHold { .. }),
+            target,
+            || plant.state().phi[0],
+            plant.time_s(),
         );
         let target = leaned(target, self.faults.pilot_lean_rad);
         if target != self.plant.pilot() {

@@ -68,6 +68,13 @@ pub struct PilotConfig {
     pub crutch_lever_m: f64,
     /// Load the pilot always leans on the crutches with (both together), N.
     pub baseline_crutch_load_n: f64,
+    /// The time the pilot takes to act on a safe hold the controller
+    /// started, s: until then the pilot goes on with the shank's motion
+    /// as it was (a hold comes unannounced). 0: at once.
+    pub hold_reaction_s: f64,
+    /// Then the time the pilot takes to bring the shank from where it is
+    /// to the hold's aim, s (eased in and out). 0: a step of the aim.
+    pub hold_recovery_s: f64,
 }
 
 impl Default for PilotConfig {
@@ -82,6 +89,8 @@ impl Default for PilotConfig {
             torque_limit_nm: 120.0,
             crutch_lever_m: 0.45,
             baseline_crutch_load_n: 100.0,
+            hold_reaction_s: 0.0,
+            hold_recovery_s: 0.0,
         }
     }
 }

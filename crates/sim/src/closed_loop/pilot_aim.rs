@@ -7,7 +7,7 @@ use gait_control::sequencer::Phase;
 use gait_core::gait::StanceAnkleProfile;
 use gait_core::tables::GaitTable;
 
-use crate::pilot::PilotTarget;
+use crate::pilot::{PilotConfig, PilotTarget};
 
 /// How the simulated pilot uses the crutches.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,6 +64,61 @@ pub(crate) fn pilot_target(
                 }
                 None => PilotTarget::Hold { phi1_rad: to },
             })
+        }
+    }
+}
+
+/// The pilot's reaction to a safe hold ([`PilotConfig::hold_reaction_s`],
+/// [`PilotConfig::hold_recovery_s`]): what the pilot aimed at before the
+/// hold, kept for the reaction time, then a move from where the shank is
+/// to the hold's aim.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct HoldReaction {
+    /// The aim of the last tick outside a hold.
+    before: Option<PilotTarget>,
+    /// When the hold began, s.
+    struck_s: Option<f64>,
+    /// Where the shank was when the pilot began to move it, rad.
+    from_phi1: Option<f64>,
+}
+
+impl HoldReaction {
+    /// The pilot's aim this tick, `aim` being where the phase alone puts
+    /// it, `phi1` what tells the shank's angle now, `now_s` the time.
+    pub(crate) fn aim(
+        &mut self,
+        cfg: &PilotConfig,
+        in_hold: bool,
+        aim: PilotTarget,
+        phi1: impl FnOnce() -> f64,
+        now_s: f64,
+    ) -> PilotTarget {
+        if !in_hold {
+            *self = Self {
+                before: Some(aim),
+                ..Self::default()
+            };
+            return aim;
+        }
+        let since = now_s - *self.struck_s.get_or_insert(now_s);
+        if since < cfg.hold_reaction_s {
+            return self.before.unwrap_or(aim);
+        }
+        let (Some((to, _)), true) = (aim.desired(now_s, 0.0), cfg.hold_recovery_s > 0.0) else {
+            return aim;
+        };
+        let from = *self.from_phi1.get_or_insert_with(phi1);
+        let x = ((since - cfg.hold_reaction_s) / cfg.hold_recovery_s).clamp(0.0, 1.0);
+        let s = x * x * (3.0 - 2.0 * x);
+        let ds = if x < 1.0 {
+            6.0 * x * (1.0 - x) / cfg.hold_recovery_s
+        } else {
+            0.0
+        };
+        PilotTarget::Track {
+            phi1_rad: from + s * (to - from),
+            rate_rad_s: ds * (to - from),
+            t0_s: now_s,
         }
     }
 }
@@ -130,6 +185,55 @@ mod tests {
             PilotTarget::Hold { phi1_rad } => phi1_rad,
             other => panic!("not a hold: {other:?}"),
         }
+    }
+
+    /// The pilot's reaction to a hold: the aim before it for the reaction
+    /// time, then an eased move from where the shank is to the hold's
+    /// aim; none at all with both times 0; and it starts again at the
+    /// next hold.
+    #[test]
+    fn a_hold_is_met_after_the_pilot_s_reaction_time_by_an_eased_move() {
+        let cfg = PilotConfig {
+            hold_reaction_s: 0.15,
+            hold_recovery_s: 0.6,
+            ..PilotConfig::default()
+        };
+        let swing = PilotTarget::Track {
+            phi1_rad: 0.3,
+            rate_rad_s: 0.5,
+            t0_s: 1.0,
+        };
+        let hold = PilotTarget::Hold { phi1_rad: -0.1 };
+        let mut r = HoldReaction::default();
+        assert_eq!(r.aim(&cfg, false, swing, || 0.3, 1.0), swing);
+        // Through the reaction time: what the pilot was doing.
+        for t in [1.001, 1.1, 1.15] {
+            assert_eq!(r.aim(&cfg, true, hold, || panic!("not yet"), t), swing);
+        }
+        // Then from where the shank is (0.35) to the aim, eased.
+        let at = |r: &mut HoldReaction, t: f64| match r.aim(&cfg, true, hold, || 0.35, t) {
+            PilotTarget::Track {
+                phi1_rad,
+                rate_rad_s,
+                ..
+            } => (phi1_rad, rate_rad_s),
+            other => panic!("not a move: {other:?}"),
+        };
+        let (start, v0) = at(&mut r, 1.151);
+        assert!((start - 0.35).abs() < 1e-9 && v0.abs() < 1e-9);
+        let (mid, v) = at(&mut r, 1.451);
+        assert!((mid - 0.5 * (0.35 - 0.1)).abs() < 1e-6, "{mid}");
+        assert!((v - 1.5 * (-0.1 - 0.35) / 0.6).abs() < 1e-6, "{v}");
+        let (end, v_end) = at(&mut r, 2.0);
+        assert!((end + 0.1).abs() < 1e-9 && v_end == 0.0, "{end} {v_end}");
+        // A new hold after leaving this one reacts again.
+        assert_eq!(r.aim(&cfg, false, swing, || 0.3, 3.0), swing);
+        assert_eq!(r.aim(&cfg, true, hold, || 0.3, 3.01), swing);
+        // Times 0: the hold's aim at once.
+        let instant = PilotConfig::default();
+        let mut r = HoldReaction::default();
+        r.aim(&instant, false, swing, || 0.3, 1.0);
+        assert_eq!(r.aim(&instant, true, hold, || 0.3, 1.001), hold);
     }
 
     /// What the campaign's figures rest on (session 18 measured them
