@@ -109,7 +109,7 @@ impl HoldReaction {
         };
         let from = *self.from_phi1.get_or_insert_with(phi1);
         let x = ((since - cfg.hold_reaction_s) / cfg.hold_recovery_s).clamp(0.0, 1.0);
-        let s = x * x * (3.0 - 2.0 * x);
+        let s = smoothstep(x);
         let ds = if x < 1.0 {
             6.0 * x * (1.0 - x) / cfg.hold_recovery_s
         } else {
@@ -166,13 +166,18 @@ fn follow(
             } else {
                 1.0
             };
-            let s = x * x * (3.0 - 2.0 * x);
+            let s = smoothstep(x);
             PilotTarget::Hold {
                 phi1_rad: from + s * (start - from),
             }
         }
         _ => PilotTarget::Hold { phi1_rad: start },
     }
+}
+
+/// 3x² − 2x³ for x in [0, 1]: an eased move, at rest at both ends.
+fn smoothstep(x: f64) -> f64 {
+    x * x * (3.0 - 2.0 * x)
 }
 
 #[cfg(test)]
