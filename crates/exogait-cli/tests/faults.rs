@@ -15,7 +15,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
             "--runs",
             "60",
             "--seed",
-            "37",
+            "33",
             "--healthy",
             "0",
             "--json",
@@ -35,7 +35,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
         && all["errors"] == 0;
     assert_eq!(out.status.code(), Some(if goal_met { 0 } else { 1 }));
     let bad = v["bad_runs"].as_array().unwrap();
-    assert!(!bad.is_empty(), "seed 37's first 60 runs include bad ones");
+    assert!(!bad.is_empty(), "seed 33's first 60 runs include bad ones");
     let mut own_joint_runs = 0;
     let mut estop_runs = 0;
     for run in bad {
@@ -76,8 +76,12 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
             assert!(braked.contains(&target), "{run}");
         }
     }
+    // Since the campaign's pilot meets a hold 0.15 s late (session 23) an
+    // e-stop run is rarely a bad one (3 of 824 on seed 1's 10,000): checked
+    // above when one is.
+    eprintln!("{estop_runs} e-stop runs among the bad ones");
     assert!(
-        own_joint_runs > 0 && estop_runs > 0,
-        "the runs include a joint's own fault and an e-stop: {text}"
+        own_joint_runs > 0,
+        "the runs include a joint's own fault: {text}"
     );
 }

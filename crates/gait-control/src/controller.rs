@@ -441,9 +441,12 @@ impl<'t> Controller<'t> {
             Reaction::SafeHold if verdict.latched.contains(FaultCode::RestartedAfterPanic) => {
                 self.seq.enter_safe_hold_after_restart(&s.joints, &s.sensed);
             }
-            Reaction::SafeHold => self
-                .seq
-                .enter_safe_hold(&s.joints, verdict.latched.in_swing()),
+            Reaction::SafeHold => {
+                let in_swing = self
+                    .seq
+                    .in_swing_now(verdict.latched.in_swing(), &verdict.braked_joints);
+                self.seq.enter_safe_hold(&s.joints, in_swing);
+            }
             Reaction::DisableMotors => {
                 self.seq.follow_measured(&s.joints);
                 self.loops.iter_mut().for_each(JointLoop::reset);

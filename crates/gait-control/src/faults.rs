@@ -197,7 +197,9 @@ pub enum InSwing {
     /// (`docs/safety.md`, seed 1): falls after overruns 7 → 0 in 96 runs.
     /// Not for a lost joint encoder: landing on a joint run on the model's
     /// torque alone fell more often than holding at once (57 against 34
-    /// falls in 400 encoder-fault runs).
+    /// falls in 400 encoder-fault runs). Every hold late in a stair
+    /// descent's swing lands first while the stance knee works
+    /// (`Sequencer::in_swing_now`).
     LandFirst,
     /// Hold at once, and leave the swing foot where it is (no set-down):
     /// a saturated drive has no torque to spare, and moving the swing leg

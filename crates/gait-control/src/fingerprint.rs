@@ -69,6 +69,8 @@ impl_fingerprint!(SequencerConfig {
     hold_ramp_s,
     set_down_depth_m,
     set_down_s,
+    set_down_joint_speed_rad_s,
+    lands_after,
 });
 impl_fingerprint!(ControllerConfig {
     dt_s,

@@ -420,6 +420,34 @@ impl<'t> Sequencer<'t> {
         self.stop_requested = true;
     }
 
+    /// What a safe hold that strikes now does in a swing: `asked` (the
+    /// faults' own [`InSwing`]), except late in a swing whose stance knee
+    /// still has its drive and encoder (`braked`: the joints braked), where
+    /// the step goes on to its landing. There the body is on its way onto
+    /// the landing foot: stopping it asks the stance leg for more than its
+    /// drives have until the pilot's arms take the load (0.15 s and more
+    /// after the hold), and a foot held short of its tread may not reach
+    /// the ground below; the stance knee is what lowers the body onto it
+    /// (docs/safety.md, session 23).
+    #[must_use]
+    pub fn in_swing_now(&self, asked: InSwing, braked: &[bool; JOINTS]) -> InSwing {
+        let Phase::Swing { stance, t_s } = self.phase else {
+            return asked;
+        };
+        let duration = self.tables.get(self.gait).map_or(0.0, |tb| tb.duration_s());
+        let after = match self.gait {
+            Gait::Walk => self.cfg.lands_after[0],
+            Gait::StairUp => self.cfg.lands_after[1],
+            Gait::StairDown => self.cfg.lands_after[2],
+        };
+        let knee_works = !braked.get(stance.hip() + 1).copied().unwrap_or(true);
+        if duration > 0.0 && t_s >= after * duration && knee_works {
+            InSwing::LandFirst
+        } else {
+            asked
+        }
+    }
+
     /// The supervisor's fatal reaction: ramp to `measured` and hold; in a
     /// swing, first play the step to its landing if `in_swing` says so,
     /// otherwise set the swing foot down where it is while holding the
@@ -490,7 +518,7 @@ impl<'t> Sequencer<'t> {
     /// was in the posture held, while the swing foot's sensor reads less
     /// than a contact; from the first contact (or a sensor that cannot
     /// tell) on, where they were then. `held` itself without a set-down.
-    fn set_down(&mut self, sensed: &Sensed, t_s: f32, held: &mut [f32; JOINTS]) {
+    fn set_down(&mut self, sensed: &Sensed, t_s: f32, dt_s: f32, held: &mut [f32; JOINTS]) {
         let cfg = self.cfg;
         let (Some(mut sd), Some(model)) = (self.set_down, self.model.as_ref()) else {
             return;
@@ -529,7 +557,13 @@ impl<'t> Sequencer<'t> {
             let w = sd.stance.other().hip();
             if let (Some(&hip), Some(&knee)) = (joints.get(w), joints.get(w + 1)) {
                 if hip.is_finite() && knee.is_finite() {
-                    sd.swing_rad = [hip, knee];
+                    // The IK's answer, at most the set-down's joint speed
+                    // away: near a straight knee a steady fall of the
+                    // ankle asks the knee for any speed.
+                    let step = (cfg.set_down_joint_speed_rad_s * dt_s).max(0.0);
+                    for (now, to) in sd.swing_rad.iter_mut().zip([hip, knee]) {
+                        *now += (to - *now).clamp(-step, step);
+                    }
                 }
             }
         }
@@ -780,7 +814,7 @@ impl<'t> Sequencer<'t> {
                     t_s: t.min(cfg.hold_ramp_s.max(cfg.set_down_s).max(0.0) + 1.0),
                 };
                 let mut held = self.blended(frac.min(1.0));
-                self.set_down(sensed, t, &mut held);
+                self.set_down(sensed, t, dt_s, &mut held);
                 held
             }
         };

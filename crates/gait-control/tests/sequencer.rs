@@ -437,6 +437,65 @@ fn a_safe_hold_for_a_motor_fault_holds_a_swing_at_once() {
 }
 
 #[test]
+fn late_in_a_swing_a_hold_lands_the_step_while_the_stance_knee_works() {
+    // From `lands_after` of the swing on (here 0.6 of the walk's), a hold
+    // that would stop the swing plays it on to its landing, unless the
+    // stance knee is braked: it is what lowers the body onto the foot.
+    let img = walk_image();
+    let mut rig = Rig::new(&img);
+    let mut cfg = SequencerConfig::DEFAULT;
+    cfg.lands_after = [0.6, 1.0, 1.0];
+    let tables = GaitTables {
+        walk: Some(rig.table),
+        ..GaitTables::default()
+    };
+    rig.seq = Sequencer::new(cfg, tables, rig.start_pose(Side::Left));
+    let pose = rig.start_pose(Side::Left);
+    let s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    rig.seq.request_start(Gait::Walk, &s);
+    let none = [false; JOINTS];
+    let mut stance_knee = [false; JOINTS];
+    stance_knee[Side::Left.hip() + 1] = true;
+    let mut swing_knee = [false; JOINTS];
+    swing_knee[Side::Right.hip() + 1] = true;
+    assert_eq!(
+        rig.seq.in_swing_now(InSwing::HoldNow, &none),
+        InSwing::HoldNow
+    );
+    let duration = rig.table.duration_s();
+    let mut seen = (false, false);
+    for _ in 0..(3.0 / DT) as usize {
+        rig.step(&s);
+        let Phase::Swing { t_s, .. } = rig.seq.phase() else {
+            continue;
+        };
+        let now = rig.seq.in_swing_now(InSwing::HoldNow, &none);
+        if t_s < 0.59 * duration {
+            assert_eq!(now, InSwing::HoldNow, "{t_s} s");
+            seen.0 = true;
+        } else if t_s > 0.61 * duration {
+            assert_eq!(now, InSwing::LandFirst, "{t_s} s");
+            assert_eq!(
+                rig.seq.in_swing_now(InSwing::HoldInAir, &swing_knee),
+                InSwing::LandFirst
+            );
+            assert_eq!(
+                rig.seq.in_swing_now(InSwing::HoldNow, &stance_knee),
+                InSwing::HoldNow
+            );
+            seen.1 = true;
+        }
+    }
+    assert_eq!(seen, (true, true), "the swing was seen early and late");
+    // The shipped configuration's walk never lands first this way.
+    let (rig, _) = walking_in_a_swing(&img);
+    assert_eq!(
+        rig.seq.in_swing_now(InSwing::HoldNow, &none),
+        InSwing::HoldNow
+    );
+}
+
+#[test]
 fn non_fatal_block_finishes_the_step_then_refuses_new_ones() {
     let img = walk_image();
     let mut rig = Rig::new(&img);
@@ -778,6 +837,58 @@ fn a_safe_hold_in_a_swing_sets_the_foot_down_until_it_feels_the_ground() {
         assert_eq!(rig.step(&in_air), at_contact);
     }
     assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
+}
+
+/// The fastest the set-down moved the swing hip or knee reference, rad/s,
+/// with `cfg`, from the middle of the walk's swing, the foot never finding
+/// the ground.
+fn set_down_joint_speed(img: &[u8], cfg: SequencerConfig) -> f32 {
+    let (mut rig, model, s, pose) = started_with_a_model(img);
+    let tables = GaitTables {
+        walk: Some(rig.table),
+        ..GaitTables::default()
+    };
+    rig.seq = Sequencer::new(cfg, tables, pose).with_model(model);
+    rig.seq.request_start(Gait::Walk, &s);
+    let mut held = pose;
+    for _ in 0..20_000 {
+        held = rig.step(&s);
+        if matches!(rig.seq.phase(), Phase::Swing { t_s, .. } if t_s >= 0.5 * rig.table.duration_s())
+        {
+            break;
+        }
+    }
+    rig.seq.enter_safe_hold(&held, InSwing::HoldNow);
+    let in_air = sensed(held, READY_FEET, READY_CRUTCHES);
+    let mut last = rig.step(&in_air);
+    let mut fastest = 0.0f32;
+    for _ in 0..(1.5 * cfg.set_down_s / DT) as usize {
+        let now = rig.step(&in_air);
+        for j in [Side::Right.hip(), Side::Right.hip() + 1] {
+            fastest = fastest.max((now[j] - last[j]).abs() / DT);
+        }
+        last = now;
+    }
+    fastest
+}
+
+#[test]
+fn the_set_down_moves_the_swing_leg_no_faster_than_its_joint_speed() {
+    // Asked to go 60 cm down in 0.4 s, the ankle's target leaves the leg's
+    // reach: near a straight knee the IK's answer races; the references
+    // move at the set-down's joint speed at most.
+    let img = walk_image();
+    let mut cfg = SequencerConfig::DEFAULT;
+    cfg.set_down_depth_m = 0.6;
+    cfg.set_down_s = 0.4;
+    let capped = set_down_joint_speed(&img, cfg);
+    assert!(
+        capped <= cfg.set_down_joint_speed_rad_s * 1.001 && capped > 0.5,
+        "{capped} rad/s"
+    );
+    cfg.set_down_joint_speed_rad_s = f32::INFINITY;
+    let free = set_down_joint_speed(&img, cfg);
+    assert!(free > 2.0 * capped, "without the cap: {free} rad/s");
 }
 
 #[test]

@@ -3,8 +3,11 @@
 //! fall and the tally: for trying a reaction on the kinds it is for.
 //! `cargo run --release -p sim --example campaign_subset -- SEED RUNS PREFIX...`
 //! (`EXO_SET_DOWN=SECONDS,METRES` tries another set-down,
-//! `EXO_PILOT_REACTION=SECONDS,SECONDS` a pilot who reacts to a hold
-//! later and moves slower), or the runs
+//! `EXO_SET_DOWN_SPEED=RAD_PER_S` another cap on its joints,
+//! `EXO_LANDS_AFTER=WALK,UP,DOWN` other points of each swing from which a
+//! hold lands first, `EXO_PILOT_REACTION=SECONDS,SECONDS` a pilot who
+//! reacts to a hold at another time and speed, `EXO_GAIT=stair-down` one
+//! gait's runs alone), or the runs
 //! listed in a file, one `GAIT FAULT NOISE_SEED` a line (as `fault_trace`
 //! takes them): `... campaign_subset -- file PATH`.
 
@@ -65,6 +68,23 @@ fn main() {
         device.controller.sequencer.set_down_s = s;
         device.controller.sequencer.set_down_depth_m = m;
     }
+    // EXO_SET_DOWN_SPEED=RAD_PER_S: another cap on the set-down's joints.
+    if let Some(w) = std::env::var("EXO_SET_DOWN_SPEED")
+        .ok()
+        .and_then(|v| v.parse::<f32>().ok())
+    {
+        device.controller.sequencer.set_down_joint_speed_rad_s = w;
+    }
+    // EXO_LANDS_AFTER=WALK,UP,DOWN: other points of each gait's swing
+    // from which a hold plays the step on.
+    if let Some(f) = std::env::var("EXO_LANDS_AFTER").ok().and_then(|v| {
+        let f: Vec<f32> = v.split(',').filter_map(|x| x.parse().ok()).collect();
+        <[f32; 3]>::try_from(f).ok()
+    }) {
+        device.controller.sequencer.lands_after = f;
+    }
+    // EXO_GAIT=walk|stair-up|stair-down: that gait's runs alone.
+    let gait = std::env::var("EXO_GAIT").ok();
     let plan: Vec<_> = match &file {
         Some(path) => match listed(path) {
             Ok(runs) => runs,
@@ -75,6 +95,16 @@ fn main() {
         },
         None => sim::campaign::plan(seed, runs)
             .into_iter()
+            .filter(|r| {
+                gait.as_deref().is_none_or(|g| {
+                    let name = match r.gait {
+                        gait_control::operator::Gait::Walk => "walk",
+                        gait_control::operator::Gait::StairUp => "stair-up",
+                        gait_control::operator::Gait::StairDown => "stair-down",
+                    };
+                    name == g
+                })
+            })
             .filter(|r| {
                 let name = r.fault.to_string();
                 prefixes.iter().any(|p| name.starts_with(p.as_str()))

@@ -3,7 +3,8 @@
 //! and crutch forces, faults. For diagnosing a run `exogait faults --json`
 //! lists: `cargo run --release -p sim --example fault_trace -- GAIT FAULT NOISE_SEED [EVERY_MS]`.
 //! Feet and crutches are [left, right]; `FULL=1` prints the phase whole
-//! (its time into a swing, to time a landing).
+//! (its time into a swing, to time a landing), `POINTS=1` adds the
+//! body's points and the feet, m.
 
 use std::str::FromStr;
 
@@ -93,6 +94,16 @@ fn main() {
             rep.faults,
             rep.motors_enabled,
         );
+        if std::env::var("POINTS").is_ok() {
+            let p = |v: [f64; 2]| format!("({:+.3},{:+.3})", v[0], v[1]);
+            let points: Vec<String> = st.points_m.iter().map(|&v| p(v)).collect();
+            println!(
+                "      points {} feet {} {}",
+                points.join(" "),
+                p(st.feet_m[0]),
+                p(st.feet_m[1])
+            );
+        }
     }
     let o = sim::outcome::outcome(&r.rig, r.ended_by.as_ref());
     println!(

@@ -26,12 +26,29 @@ pub fn flash_tables() -> GaitTables<'static> {
 }
 
 /// A pilot strong enough for the paper's walk (300 N·m through the
-/// crutches, ≈ 670 N on them together at the 0.45 m lever).
+/// crutches, ≈ 670 N on them together at the 0.45 m lever), who meets an
+/// unannounced safe hold as a person does: 0.15 s to react (an arm's
+/// automatic response starts ≈ 0.1 s after a perturbation, a voluntary one
+/// 0.18–0.23 s), then 1.5 s to move the body to the hold's aim (a
+/// deliberate move of the body by the arms takes 1–2 s). Sources and
+/// what an instant pilot changes: `docs/safety.md`, session 23.
 pub fn strong_pilot() -> PilotConfig {
     PilotConfig {
         torque_limit_nm: 300.0,
         gravity_compensation: 1.0,
+        hold_reaction_s: 0.15,
+        hold_recovery_s: 1.5,
         ..PilotConfig::default()
+    }
+}
+
+/// [`strong_pilot`] meeting a safe hold on the tick it begins with all
+/// its strength: no person can (the campaign's pilot up to session 22).
+pub fn instant_pilot() -> PilotConfig {
+    PilotConfig {
+        hold_reaction_s: 0.0,
+        hold_recovery_s: 0.0,
+        ..strong_pilot()
     }
 }
 

@@ -68,6 +68,16 @@ pub struct SequencerConfig {
     /// leaves the whole body on the stance leg, whose hip alone then
     /// carries the torso (docs/safety.md).
     pub set_down_s: f32,
+    /// … its swing hip and knee references moving no faster than this,
+    /// rad/s: where the leg nears its reach, the knee's angle changes ever
+    /// faster for the same fall of the ankle, past what its drive can
+    /// follow (docs/safety.md, session 23).
+    pub set_down_joint_speed_rad_s: f32,
+    /// From this fraction of a swing on (walk, stair ascent, stair
+    /// descent), a safe hold plays the step on to its landing first,
+    /// whatever the fault, while the stance knee has its drive and encoder
+    /// (1 or more: never; `Sequencer::in_swing_now`).
+    pub lands_after: [f32; 3],
 }
 
 impl SequencerConfig {
@@ -81,7 +91,8 @@ impl SequencerConfig {
     /// cm/s, slower the nearer the ground is), 0.15 rad start
     /// tolerance, 0.4 s transfer, stance ankle within 0.05 rad (2.9°) of
     /// the table's start, 0.3 s hold ramp, a set-down of up to 20 cm over
-    /// 0.8 s (at most 0.375 m/s).
+    /// 0.8 s (at most 0.375 m/s), its joints at most 2 rad/s; a hold in the
+    /// last 35 % of a stair descent's swing lands the step first.
     pub const DEFAULT: Self = Self {
         crutch_ready_n: 60.0,
         feet_ready_n: 400.0,
@@ -99,5 +110,7 @@ impl SequencerConfig {
         hold_ramp_s: 0.3,
         set_down_depth_m: 0.2,
         set_down_s: 0.8,
+        set_down_joint_speed_rad_s: 2.0,
+        lands_after: [1.0, 1.0, 0.65],
     };
 }
