@@ -435,11 +435,8 @@ impl<'t> Sequencer<'t> {
             return asked;
         };
         let duration = self.tables.get(self.gait).map_or(0.0, |tb| tb.duration_s());
-        let after = match self.gait {
-            Gait::Walk => self.cfg.lands_after[0],
-            Gait::StairUp => self.cfg.lands_after[1],
-            Gait::StairDown => self.cfg.lands_after[2],
-        };
+        let slot = transfer::target_slot(self.gait);
+        let after = self.cfg.lands_after.get(slot).copied().unwrap_or(1.0);
         let knee_works = !braked.get(stance.hip() + 1).copied().unwrap_or(true);
         if duration > 0.0 && t_s >= after * duration && knee_works {
             InSwing::LandFirst

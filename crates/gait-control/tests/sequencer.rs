@@ -67,6 +67,10 @@ struct Rig<'t> {
 
 impl<'t> Rig<'t> {
     fn new(image: &'t [u8]) -> Self {
+        Self::with_config(image, SequencerConfig::DEFAULT)
+    }
+
+    fn with_config(image: &'t [u8], cfg: SequencerConfig) -> Self {
         let table = GaitTable::parse(image).unwrap();
         let tables = GaitTables {
             walk: Some(table),
@@ -74,7 +78,7 @@ impl<'t> Rig<'t> {
         };
         let start = joints_from_phi(&table.first(), Side::Left);
         Self {
-            seq: Sequencer::new(SequencerConfig::DEFAULT, tables, start),
+            seq: Sequencer::new(cfg, tables, start),
             table,
             events: Vec::new(),
         }
@@ -442,14 +446,9 @@ fn late_in_a_swing_a_hold_lands_the_step_while_the_stance_knee_works() {
     // that would stop the swing plays it on to its landing, unless the
     // stance knee is braked: it is what lowers the body onto the foot.
     let img = walk_image();
-    let mut rig = Rig::new(&img);
     let mut cfg = SequencerConfig::DEFAULT;
     cfg.lands_after = [0.6, 1.0, 1.0];
-    let tables = GaitTables {
-        walk: Some(rig.table),
-        ..GaitTables::default()
-    };
-    rig.seq = Sequencer::new(cfg, tables, rig.start_pose(Side::Left));
+    let mut rig = Rig::with_config(&img, cfg);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
     rig.seq.request_start(Gait::Walk, &s);
@@ -844,11 +843,7 @@ fn a_safe_hold_in_a_swing_sets_the_foot_down_until_it_feels_the_ground() {
 /// the ground.
 fn set_down_joint_speed(img: &[u8], cfg: SequencerConfig) -> f32 {
     let (mut rig, model, s, pose) = started_with_a_model(img);
-    let tables = GaitTables {
-        walk: Some(rig.table),
-        ..GaitTables::default()
-    };
-    rig.seq = Sequencer::new(cfg, tables, pose).with_model(model);
+    rig.seq = Rig::with_config(img, cfg).seq.with_model(model);
     rig.seq.request_start(Gait::Walk, &s);
     let mut held = pose;
     for _ in 0..20_000 {

@@ -13,6 +13,16 @@
 
 use std::str::FromStr;
 
+/// The gait named as `--gait` takes it.
+fn gait_named(name: &str) -> Option<gait_control::operator::Gait> {
+    match name {
+        "walk" => Some(gait_control::operator::Gait::Walk),
+        "stair-up" => Some(gait_control::operator::Gait::StairUp),
+        "stair-down" => Some(gait_control::operator::Gait::StairDown),
+        _ => None,
+    }
+}
+
 /// The runs listed in `path`, one `GAIT FAULT NOISE_SEED` a line (blank
 /// lines skipped); a line that does not read is an error naming it.
 fn listed(path: &str) -> Result<Vec<sim::campaign::CampaignRun>, String> {
@@ -27,12 +37,7 @@ fn listed(path: &str) -> Result<Vec<sim::campaign::CampaignRun>, String> {
             }
             return Err(bad("want GAIT FAULT NOISE_SEED"));
         };
-        let gait = match *gait {
-            "walk" => gait_control::operator::Gait::Walk,
-            "stair-up" => gait_control::operator::Gait::StairUp,
-            "stair-down" => gait_control::operator::Gait::StairDown,
-            _ => return Err(bad("gait is walk, stair-up or stair-down")),
-        };
+        let gait = gait_named(gait).ok_or_else(|| bad("gait is walk, stair-up or stair-down"))?;
         let fault = sim::inject::Injection::from_str(fault).map_err(|e| bad(&e.to_string()))?;
         let noise_seed = seed
             .parse()
@@ -84,7 +89,7 @@ fn main() {
         device.controller.sequencer.lands_after = f;
     }
     // EXO_GAIT=walk|stair-up|stair-down: that gait's runs alone.
-    let gait = std::env::var("EXO_GAIT").ok();
+    let gait = std::env::var("EXO_GAIT").ok().and_then(|g| gait_named(&g));
     let plan: Vec<_> = match &file {
         Some(path) => match listed(path) {
             Ok(runs) => runs,
@@ -95,16 +100,7 @@ fn main() {
         },
         None => sim::campaign::plan(seed, runs)
             .into_iter()
-            .filter(|r| {
-                gait.as_deref().is_none_or(|g| {
-                    let name = match r.gait {
-                        gait_control::operator::Gait::Walk => "walk",
-                        gait_control::operator::Gait::StairUp => "stair-up",
-                        gait_control::operator::Gait::StairDown => "stair-down",
-                    };
-                    name == g
-                })
-            })
+            .filter(|r| gait.is_none_or(|g| r.gait == g))
             .filter(|r| {
                 let name = r.fault.to_string();
                 prefixes.iter().any(|p| name.starts_with(p.as_str()))

@@ -62,7 +62,8 @@ pub(super) fn transfer_targets(
     })
 }
 
-/// `gait`'s slot in [`transfer_targets`].
+/// `gait`'s slot in per-gait arrays ([`transfer_targets`],
+/// `SequencerConfig::lands_after`).
 pub(super) const fn target_slot(gait: Gait) -> usize {
     match gait {
         Gait::Walk => 0,
