@@ -303,14 +303,16 @@ fault_table! {
         reset_allowed_when: "the frame is valid and < 3 bad frames in 100 ticks",
     },
     /// Ankle encoder: any of the encoder faults above on a passive ankle,
-    /// or one stuck on its dorsiflexion stop with its foot in the air
-    /// (only the ground holds an ankle there; control then stops taking
-    /// its frames until they move).
+    /// one stuck on its dorsiflexion stop with its foot in the air (only
+    /// the ground holds an ankle there), or a swing's stance ankle whose
+    /// counts do not follow the shank the plan turns; control then stops
+    /// taking its frames until they move.
     AnkleEncoder = 0x0207 {
         name: "ankle encoder fault",
         reaction: Reaction::FinishStepThenHold,
         detection_bound: "3 ticks (window rule); 1 tick (invalid value); \
-            100 ticks (stuck on the stop in the air)",
+            100 ticks (stuck on the stop in the air); the plan's 0.05 rad \
+            (a walk's swing: 0.1–0.25 s)",
         reset_allowed_when: "as for the joint encoders",
     },
     /// Force sensor: too many bad samples, the last a bus error.

@@ -103,6 +103,7 @@ impl_fingerprint!(SupervisorConfig {
     frozen_reference_speed_rad_s,
     frozen_command_fraction,
     frozen_still_reset_ticks,
+    frozen_ankle_plan_rad,
     force_debounce,
     force_min_n,
     force_max_n,

@@ -216,6 +216,9 @@ pub struct Supervisor {
     /// Consecutive frames each ankle has read its dorsiflexion stop,
     /// unchanged, with its foot in the air (0x0207's stuck ankle).
     stuck_in_air_ticks: [u32; ANKLES],
+    /// The plan of each stance ankle when its counts last changed (NaN
+    /// outside a swing's stance): 0x0207's frozen stance ankle.
+    plan_since_moved: [f32; ANKLES],
     /// An ankle found stuck: control takes none of its frames until its
     /// counts move again.
     ankle_stuck: [bool; ANKLES],
@@ -304,6 +307,7 @@ impl Supervisor {
             ankles: [EncoderTrack::default(); ANKLES],
             heel_off_ticks: [0; ANKLES],
             stuck_in_air_ticks: [0; ANKLES],
+            plan_since_moved: [f32::NAN; ANKLES],
             ankle_stuck: [false; ANKLES],
             forces: [ForceTrack::default(); FORCES],
             drive_currents: Default::default(),

@@ -505,6 +505,74 @@ fn an_ankle_stuck_on_its_stop_in_the_air_is_a_lost_ankle_encoder() {
     assert!(v.iter().all(|x| x.reaction == Reaction::None));
 }
 
+/// A left swing (right stance) whose plan turns the right shank by
+/// `rate` rad a tick from the standing angle, the right ankle reading
+/// `reading(k, planned)` at tick k.
+fn right_stance_in_a_swing(
+    rate: f32,
+    reading: impl Fn(u32, f32) -> f32,
+) -> (Supervisor, Vec<Verdict>) {
+    inject(200, |k, input| {
+        let planned = STAND_ANKLES[1] + rate * k as f32;
+        input.ankles[1] = encoder(reading(k, planned));
+        input.swing_leg = Some(gait_control::layout::Side::Left);
+        input.ankle_plan_rad = [f32::NAN, planned];
+        input.forces[0].newtons = 0.0;
+    })
+}
+
+#[test]
+fn a_stance_ankle_that_does_not_turn_with_the_plan_is_a_lost_ankle_encoder() {
+    // Session 24: a walk's stance ankle froze mid-swing; its stale reading
+    // set the posture the step played on with past the table's end, the
+    // residual braked the stance knee and the pilot fell. Counts that do
+    // not change once while the plan turns the shank by 0.05 rad: 0x0207,
+    // and control stops taking them.
+    let cfg = SupervisorConfig::paper();
+    let rate = 0.5e-3; // 0.5 rad/s
+    let (sup, v) = right_stance_in_a_swing(rate, |_, _| STAND_ANKLES[1]);
+    let bound = (cfg.frozen_ankle_plan_rad / rate).ceil() as u32;
+    let at = detected_at(&v, FaultCode::AnkleEncoder).unwrap();
+    assert!(at.abs_diff(bound) <= 1, "{at} against {bound}");
+    assert_row(
+        &v,
+        FaultCode::AnkleEncoder,
+        Reaction::FinishStepThenHold,
+        at,
+    );
+    assert!(!sup.accepts_encoder(JOINTS + 1, &encoder(STAND_ANKLES[1])));
+    assert!(sup.accepts_encoder(JOINTS, &encoder(STAND_ANKLES[0])));
+
+    // Following the plan, lagging it by 0.1 rad, or still with a count of
+    // noise, as a pilot who stops the shank may: nothing. Nor when the
+    // plan does not turn it (a frozen reading on a held shank is a good
+    // one), nor on the dorsiflexion stop (a heel up), nor with no swing.
+    let quiet = |v: &[Verdict]| v.iter().all(|x| x.reaction == Reaction::None);
+    assert!(quiet(&right_stance_in_a_swing(rate, |_, p| p).1));
+    assert!(quiet(&right_stance_in_a_swing(rate, |_, p| p - 0.1).1));
+    let noisy = |k: u32, _| STAND_ANKLES[1] + RAD_PER_COUNT * (k % 2) as f32;
+    assert!(quiet(&right_stance_in_a_swing(rate, noisy).1));
+    assert!(quiet(
+        &right_stance_in_a_swing(0.0, |_, _| STAND_ANKLES[1]).1
+    ));
+    let stop = cfg.heel_off_rad;
+    let (_, v) = inject(200, |k, input| {
+        input.ankles[1] = encoder((STAND_ANKLES[1] + 0.02 * k as f32).min(stop));
+        input.swing_leg = Some(gait_control::layout::Side::Left);
+        input.ankle_plan_rad = [f32::NAN, stop + rate * k as f32];
+        input.forces[0].newtons = 0.0;
+    });
+    assert!(
+        quiet(&v),
+        "{:?}",
+        v.iter().find(|x| x.reaction != Reaction::None)
+    );
+    let (_, v) = inject(200, |k, input| {
+        input.ankle_plan_rad = [f32::NAN, STAND_ANKLES[1] + rate * k as f32];
+    });
+    assert!(quiet(&v));
+}
+
 fn bad_force(status: ForceStatus, code: FaultCode) {
     let (_, v) = inject(10, |_, input| input.forces[2].status = status);
     assert_row(&v, code, Reaction::FinishStepThenHold, 3);

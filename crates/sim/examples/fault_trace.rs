@@ -3,7 +3,8 @@
 //! and crutch forces, faults. For diagnosing a run `exogait faults --json`
 //! lists: `cargo run --release -p sim --example fault_trace -- GAIT FAULT NOISE_SEED [EVERY_MS]`.
 //! Feet and crutches are [left, right]; `FULL=1` prints the phase whole
-//! (its time into a swing, to time a landing), `POINTS=1` adds the
+//! (its time into a swing, to time a landing), `PILOT=1` the plant's stance, its five link angles φ and the
+//! pilot's torque, `POINTS=1` adds the
 //! body's points and the feet, m.
 
 use std::str::FromStr;
@@ -94,6 +95,19 @@ fn main() {
             rep.faults,
             rep.motors_enabled,
         );
+        if std::env::var("PILOT").is_ok() {
+            println!(
+                "      pilot stance {:?} phi {} torque {:+.1} spring {:+.1}",
+                st.stance,
+                st.phi
+                    .iter()
+                    .map(|x| format!("{x:+.3}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                st.pilot_torque_nm,
+                st.spring_torque_nm
+            );
+        }
         if std::env::var("POINTS").is_ok() {
             let p = |v: [f64; 2]| format!("({:+.3},{:+.3})", v[0], v[1]);
             let points: Vec<String> = st.points_m.iter().map(|&v| p(v)).collect();

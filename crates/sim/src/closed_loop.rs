@@ -451,6 +451,7 @@ impl<'t> Rig<'t> {
             &pilot_cfg,
             matches!(report.phase, Phase::SafeHold { .. }),
             target,
+            plant.stance(),
             || plant.state().phi[0],
             plant.time_s(),
         );

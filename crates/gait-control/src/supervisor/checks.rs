@@ -309,6 +309,29 @@ impl Supervisor {
                         self.latch.raise(t, FaultCode::AnkleEncoder, ch, *n as f32);
                     }
                 }
+                // A stance ankle in a swing turns with its shank: counts
+                // that do not change once while the plan turns it by
+                // `frozen_ankle_plan_rad` are a frozen encoder (its stale
+                // reading set the posture a walk's step played on with
+                // past its table's end, and the residual braked the
+                // stance knee). Off the stop only: a heel up rests there;
+                // and within one swing, whose plan is continuous.
+                let stance_in_swing = input.swing_leg.is_some_and(|leg| leg.other().ankle() == i);
+                let planned = stance_in_swing && plan.is_finite() && !on_stop;
+                if let (Some(from), Some(stuck)) = (
+                    self.plan_since_moved.get_mut(i),
+                    self.ankle_stuck.get_mut(i),
+                ) {
+                    if !planned {
+                        *from = f32::NAN;
+                    } else if moved || from.is_nan() {
+                        *from = plan;
+                    } else if delta.is_some() && (plan - *from).abs() >= cfg.frozen_ankle_plan_rad {
+                        *stuck = true;
+                        self.latch
+                            .raise(t, FaultCode::AnkleEncoder, ch, plan - *from);
+                    }
+                }
             } else {
                 self.encoder_offsets |= track.offset_counts != 0;
             }

@@ -118,6 +118,12 @@ pub struct SupervisorConfig {
     /// driven ticks scattered over a long rest (a command that now and
     /// then reaches the limit's 0.9 on a still joint) never add up.
     pub frozen_still_reset_ticks: u32,
+    /// How far the plan turns a stance ankle, rad, with its counts not
+    /// changing once, before the encoder counts as frozen (0x0207): a
+    /// stance shank turns over its foot through every swing, and even one
+    /// count is 0.022°; a reading held since the swing began would set the
+    /// posture the step plays on with at its end.
+    pub frozen_ankle_plan_rad: f32,
     /// Bad force samples (bus, open, shorted, out of range) that make a
     /// fault.
     pub force_debounce: Debounce,
@@ -207,6 +213,9 @@ impl SupervisorConfig {
             frozen_reference_speed_rad_s: 0.1,
             frozen_command_fraction: 0.9,
             frozen_still_reset_ticks: 500,
+            // 2.9°, some 130 counts: a healthy walk's stance shank turns
+            // 0.3–0.5 rad in a swing.
+            frozen_ankle_plan_rad: 0.05,
             force_debounce: Debounce {
                 count: 3,
                 window_ticks: 100,
@@ -237,6 +246,7 @@ impl SupervisorConfig {
             self.tracking_error_limit_rad,
             self.frozen_reference_speed_rad_s,
             self.frozen_command_fraction,
+            self.frozen_ankle_plan_rad,
             self.heel_off_rad,
             self.heel_off_reading_tolerance_rad,
             self.heel_off_plan_margin_rad,

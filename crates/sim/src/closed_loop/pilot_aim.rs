@@ -8,6 +8,7 @@ use gait_core::gait::StanceAnkleProfile;
 use gait_core::tables::GaitTable;
 
 use crate::pilot::{PilotConfig, PilotTarget};
+use crate::plant::Side;
 
 /// How the simulated pilot uses the crutches.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,25 +72,30 @@ pub(crate) fn pilot_target(
 /// The pilot's reaction to a safe hold ([`PilotConfig::hold_reaction_s`],
 /// [`PilotConfig::hold_recovery_s`]): what the pilot aimed at before the
 /// hold, kept for the reaction time, then a move from where the shank is
-/// to the hold's aim.
+/// to the hold's aim. A foot set down in the hold becomes the plant's
+/// stance foot: the move then starts again from that foot's shank, since
+/// the angle it started from was the other leg's.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct HoldReaction {
     /// The aim of the last tick outside a hold.
     before: Option<PilotTarget>,
     /// When the hold began, s.
     struck_s: Option<f64>,
-    /// Where the shank was when the pilot began to move it, rad.
-    from_phi1: Option<f64>,
+    /// Where the shank was when the pilot began to move it, rad, the
+    /// plant's stance foot then, and when, s.
+    from: Option<(f64, Side, f64)>,
 }
 
 impl HoldReaction {
     /// The pilot's aim this tick, `aim` being where the phase alone puts
-    /// it, `phi1` what tells the shank's angle now, `now_s` the time.
+    /// it, `stance` the plant's stance foot and `phi1` what tells its
+    /// shank's angle now, `now_s` the time.
     pub(crate) fn aim(
         &mut self,
         cfg: &PilotConfig,
         in_hold: bool,
         aim: PilotTarget,
+        stance: Side,
         phi1: impl FnOnce() -> f64,
         now_s: f64,
     ) -> PilotTarget {
@@ -107,8 +113,11 @@ impl HoldReaction {
         let (Some((to, _)), true) = (aim.desired(now_s, 0.0), cfg.hold_recovery_s > 0.0) else {
             return aim;
         };
-        let from = *self.from_phi1.get_or_insert_with(phi1);
-        let x = ((since - cfg.hold_reaction_s) / cfg.hold_recovery_s).clamp(0.0, 1.0);
+        let (from, _, moved_s) = match self.from {
+            Some(f) if f.1 == stance => f,
+            _ => *self.from.insert((phi1(), stance, now_s)),
+        };
+        let x = ((now_s - moved_s) / cfg.hold_recovery_s).clamp(0.0, 1.0);
         let s = smoothstep(x);
         let ds = if x < 1.0 {
             6.0 * x * (1.0 - x) / cfg.hold_recovery_s
@@ -185,6 +194,8 @@ mod tests {
     use super::*;
     use gait_control::posture::Side;
 
+    const LEFT: crate::plant::Side = crate::plant::Side::Left;
+
     fn held(t: PilotTarget) -> f64 {
         match t {
             PilotTarget::Hold { phi1_rad } => phi1_rad,
@@ -210,13 +221,16 @@ mod tests {
         };
         let hold = PilotTarget::Hold { phi1_rad: -0.1 };
         let mut r = HoldReaction::default();
-        assert_eq!(r.aim(&cfg, false, swing, || 0.3, 1.0), swing);
+        assert_eq!(r.aim(&cfg, false, swing, LEFT, || 0.3, 1.0), swing);
         // Through the reaction time: what the pilot was doing.
         for t in [1.001, 1.1, 1.15] {
-            assert_eq!(r.aim(&cfg, true, hold, || panic!("not yet"), t), swing);
+            assert_eq!(
+                r.aim(&cfg, true, hold, LEFT, || panic!("not yet"), t),
+                swing
+            );
         }
         // Then from where the shank is (0.35) to the aim, eased.
-        let at = |r: &mut HoldReaction, t: f64| match r.aim(&cfg, true, hold, || 0.35, t) {
+        let at = |r: &mut HoldReaction, t: f64| match r.aim(&cfg, true, hold, LEFT, || 0.35, t) {
             PilotTarget::Track {
                 phi1_rad,
                 rate_rad_s,
@@ -232,13 +246,46 @@ mod tests {
         let (end, v_end) = at(&mut r, 2.0);
         assert!((end + 0.1).abs() < 1e-9 && v_end == 0.0, "{end} {v_end}");
         // A new hold after leaving this one reacts again.
-        assert_eq!(r.aim(&cfg, false, swing, || 0.3, 3.0), swing);
-        assert_eq!(r.aim(&cfg, true, hold, || 0.3, 3.01), swing);
+        assert_eq!(r.aim(&cfg, false, swing, LEFT, || 0.3, 3.0), swing);
+        assert_eq!(r.aim(&cfg, true, hold, LEFT, || 0.3, 3.01), swing);
         // Times 0: the hold's aim at once.
         let instant = PilotConfig::default();
         let mut r = HoldReaction::default();
-        r.aim(&instant, false, swing, || 0.3, 1.0);
-        assert_eq!(r.aim(&instant, true, hold, || 0.3, 1.001), hold);
+        r.aim(&instant, false, swing, LEFT, || 0.3, 1.0);
+        assert_eq!(r.aim(&instant, true, hold, LEFT, || 0.3, 1.001), hold);
+    }
+
+    /// A foot set down in a hold becomes the plant's stance foot: the
+    /// pilot's move starts again from that foot's shank, not from the
+    /// other leg's angle (session 24: a descent's left shank at 0.49 rad,
+    /// the landed right one at −0.03; the move went on from 0.49 and the
+    /// crutches shoved the body over the lower foot at their full 300 N·m).
+    #[test]
+    fn a_foot_set_down_in_a_hold_restarts_the_move_from_its_own_shank() {
+        let cfg = PilotConfig {
+            hold_reaction_s: 0.1,
+            hold_recovery_s: 1.0,
+            ..PilotConfig::default()
+        };
+        let right = crate::plant::Side::Right;
+        let hold = PilotTarget::Hold { phi1_rad: 0.1 };
+        let phi = |t: PilotTarget| match t {
+            PilotTarget::Track { phi1_rad, .. } => phi1_rad,
+            other => panic!("not a move: {other:?}"),
+        };
+        let mut r = HoldReaction::default();
+        r.aim(&cfg, false, hold, LEFT, || 0.49, 1.0);
+        r.aim(&cfg, true, hold, LEFT, || 0.49, 1.0);
+        assert!((phi(r.aim(&cfg, true, hold, LEFT, || 0.49, 1.1)) - 0.49).abs() < 1e-9);
+        let left_mid = phi(r.aim(&cfg, true, hold, LEFT, || 0.0, 1.3));
+        assert!(left_mid < 0.49 && left_mid > 0.1, "{left_mid}");
+        // The right foot lands: the aim is where its shank is, then eases
+        // from there to the hold's aim over the whole recovery time.
+        let landed = r.aim(&cfg, true, hold, right, || -0.03, 1.3);
+        assert!((phi(landed) + 0.03).abs() < 1e-9, "{landed:?}");
+        let half = phi(r.aim(&cfg, true, hold, right, || 9.0, 1.8));
+        assert!((half - 0.5 * (0.1 - 0.03)).abs() < 1e-6, "{half}");
+        assert!((phi(r.aim(&cfg, true, hold, right, || 9.0, 2.3)) - 0.1).abs() < 1e-9);
     }
 
     /// What the campaign's figures rest on (session 18 measured them
