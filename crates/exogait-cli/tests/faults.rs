@@ -15,7 +15,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
             "--runs",
             "60",
             "--seed",
-            "33",
+            "1",
             "--healthy",
             "0",
             "--json",
@@ -35,7 +35,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
         && all["errors"] == 0;
     assert_eq!(out.status.code(), Some(if goal_met { 0 } else { 1 }));
     let bad = v["bad_runs"].as_array().unwrap();
-    assert!(!bad.is_empty(), "seed 33's first 60 runs include bad ones");
+    assert!(!bad.is_empty(), "seed 1's first 60 runs include bad ones");
     let mut own_joint_runs = 0;
     let mut estop_runs = 0;
     for run in bad {
@@ -72,16 +72,23 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
         .and_then(|rest| rest.split('@').next())
         .filter(|target| JOINTS.contains(target));
         if let Some(target) = lost {
-            own_joint_runs += 1;
             assert!(braked.contains(&target), "{run}");
+        }
+        // Any fault on a joint that lists that joint braked: the names
+        // come out in the right place.
+        let target = fault.split(':').nth(1).and_then(|t| t.split('@').next());
+        if target.is_some_and(|t| braked.contains(&t)) {
+            own_joint_runs += 1;
         }
     }
     // Since the campaign's pilot meets a hold 0.15 s late (session 23) an
-    // e-stop run is rarely a bad one (3 of 824 on seed 1's 10,000): checked
-    // above when one is.
+    // e-stop run is rarely a bad one (3 of 824 on seed 1's 10,000), and
+    // since session 24 no lost encoder or output stage is one in seed 1's
+    // 10,000: checked above when one is. Seed 1's first 60 hold a slipping
+    // hip gear braked at its own hip.
     eprintln!("{estop_runs} e-stop runs among the bad ones");
     assert!(
         own_joint_runs > 0,
-        "the runs include a joint's own fault: {text}"
+        "a bad run lists its own joint braked: {text}"
     );
 }

@@ -219,6 +219,20 @@ fn row_encoder_frozen() {
         input.joint_reference_rad[0] = STAND_JOINTS[0] + 0.0005 * k as f32;
     });
     assert_row(&v, FaultCode::EncoderFrozen, Reaction::SafeHold, 100);
+    // A reference creeping at 0.06 rad/s (session 24: an ascent's stance
+    // knee late in its swing, whose frozen encoder went unseen for 0.89 s
+    // under the 0.1 rad/s of before) still drives the joint 16 counts in
+    // 100 ticks; at 0.04 rad/s it counts as still.
+    let creeping = |rad_s: f32| {
+        inject(150, |k, input| {
+            input.joints[0] = frozen;
+            input.joint_reference_rad[0] = STAND_JOINTS[0] + rad_s * 1e-3 * k as f32;
+        })
+        .1
+    };
+    let v = creeping(0.06);
+    assert_row(&v, FaultCode::EncoderFrozen, Reaction::SafeHold, 100);
+    assert!(creeping(0.04).iter().all(|v| v.latched.is_empty()));
 }
 
 #[test]
