@@ -959,23 +959,16 @@ fn late_in_a_descent_s_swing_a_hold_lands_the_step_first() {
     // once; session 24 traced much of that to the simulated pilot's
     // crutch push jumping when the set-down foot landed, and mended it:
     // the set-down alone now keeps these up too.)
+    stands_clear_of_the_stops(
+        Gait::StairDown,
+        &[
+            ("pwm-fail:left-hip@3.021", 55_537),
+            ("encoder-bus:left-hip@3.111", 791_362),
+            ("encoder-error-flag:right-knee@3.286", 635_979),
+            ("dir-fail:right-knee@3.253", 151_192),
+        ],
+    );
     let device = DeviceConfig::exogait().unwrap();
-    for (fault, seed) in [
-        ("pwm-fail:left-hip@3.021", 55_537),
-        ("encoder-bus:left-hip@3.111", 791_362),
-        ("encoder-error-flag:right-knee@3.286", 635_979),
-        ("dir-fail:right-knee@3.253", 151_192),
-    ] {
-        let run = sim::campaign::CampaignRun {
-            gait: Gait::StairDown,
-            fault: fault.parse().unwrap(),
-            noise_seed: seed,
-        };
-        let o = sim::campaign::play(&run, &device).outcome;
-        assert!(o.fell.is_none(), "{fault}: {o:?}");
-        assert!(o.worst_limit_margin_rad > 0.0, "{fault}: {o:?}");
-        assert!(o.landings >= 1, "{fault}: {o:?}");
-    }
     // What landing first still buys (session 24, the plan's 3,303
     // descents: 154 falls and 62 stops crossed, none the device's,
     // against 158 and 63 with one the device's): a weak stance hip late
@@ -1007,13 +1000,7 @@ fn a_stance_ankle_frozen_in_a_walk_s_swing_is_found_before_the_step_ends() {
     // the torso pitched past 60° (session 23's main). Found as the plan
     // turns the shank 0.05 rad with no count changing (0x0207), the step
     // lands on the plan's shank and the pilot stands.
-    let device = DeviceConfig::exogait().unwrap();
-    let run = sim::campaign::CampaignRun {
-        gait: Gait::Walk,
-        fault: "encoder-stuck:right-ankle@4.486".parse().unwrap(),
-        noise_seed: 932_124,
-    };
-    let o = sim::campaign::play(&run, &device).outcome;
+    let o = campaign_run(Gait::Walk, "encoder-stuck:right-ankle@4.486", 932_124).outcome;
     let found = o.faults.iter().find(|f| f.code == FaultCode::AnkleEncoder);
     let found = found.unwrap_or_else(|| panic!("not found: {o:?}"));
     assert!(found.latency_ticks.is_some_and(|n| n < 500), "{found:?}");
@@ -1029,18 +1016,22 @@ fn the_pilot_does_not_shove_the_body_when_the_set_down_foot_lands() {
     // foot (its shank at −0.03): the crutches pushed at their full
     // 300 N·m and the torso pitched past 60°. Restarted from the landed
     // shank, the pilot stands, with no stop crossed.
-    let device = DeviceConfig::exogait().unwrap();
-    for (fault, seed) in [
-        ("encoder-parity:left-knee@2.97", 886_658),
-        ("encoder-error-flag:left-knee@2.97", 7_735),
-    ] {
-        let run = sim::campaign::CampaignRun {
-            gait: Gait::StairDown,
-            fault: fault.parse().unwrap(),
-            noise_seed: seed,
-        };
-        let o = sim::campaign::play(&run, &device).outcome;
+    stands_clear_of_the_stops(
+        Gait::StairDown,
+        &[
+            ("encoder-parity:left-knee@2.97", 886_658),
+            ("encoder-error-flag:left-knee@2.97", 7_735),
+        ],
+    );
+}
+
+/// Each of seed 1's campaign runs (`fault`, noise seed) of `gait` lands a
+/// step, and the pilot stands with no hip or knee past its stop.
+fn stands_clear_of_the_stops(gait: Gait, runs: &[(&str, u64)]) {
+    for &(fault, seed) in runs {
+        let o = campaign_run(gait, fault, seed).outcome;
         assert!(o.fell.is_none(), "{fault}: {o:?}");
         assert!(o.worst_limit_margin_rad > 0.0, "{fault}: {o:?}");
+        assert!(o.landings >= 1, "{fault}: {o:?}");
     }
 }
