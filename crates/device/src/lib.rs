@@ -21,6 +21,7 @@
 
 pub mod admission;
 pub mod drive;
+pub mod fitting;
 pub mod parts;
 pub mod sensors;
 pub mod tick_record;
@@ -39,6 +40,7 @@ use gait_control::position_loop::JointGains;
 use gait_control::posture::JOINTS;
 use gait_control::sequencer::{GaitTables, SequencerConfig};
 use gait_control::supervisor::{self, Supervisor, SupervisorConfig};
+use gait_core::anthropometry::{self, AnthropometryError, ExoSegments, Pilot, SegmentLengths};
 use gait_core::fingerprint::Fingerprint;
 use gait_core::{BodyModel, JointLimits};
 
@@ -56,8 +58,14 @@ pub const DT_S: f32 = 1.0 / TICK_HZ as f32;
 pub struct DeviceConfig {
     /// Control-loop period, s.
     pub dt_s: f32,
-    /// Pilot plus exoskeleton (Table III) with the device's joint limits.
+    /// Pilot plus exoskeleton with the device's joint limits: Table III
+    /// for the device as built; a patient's model once fitted
+    /// ([`DeviceConfig::fitted`]).
     pub body: BodyModel<f64>,
+    /// The exoskeleton's own segments (masses; centres of mass and
+    /// inertias where measured), which a patient's model adds to the
+    /// pilot's.
+    pub exo: ExoSegments<f64>,
     /// The passive spring of each exoskeleton ankle, N·m/rad (relaxed at
     /// 0 rad dorsiflexion).
     pub ankle_spring_nm_per_rad: f64,
@@ -202,6 +210,7 @@ impl DeviceConfig {
         Ok(Self {
             dt_s: DT_S,
             body,
+            exo: ExoSegments::paper_default(),
             ankle_spring_nm_per_rad: 30.0,
             drives,
             motors,
@@ -230,6 +239,34 @@ impl DeviceConfig {
         let mut digest = crc.digest();
         self.feed(&mut |bytes: &[u8]| digest.update(bytes));
         digest.finalize()
+    }
+
+    /// The device fitted to a patient: the same drives, sensors, gains,
+    /// thresholds and joint limits, with the patient's body model in the
+    /// controller's feed-forward (and in the simulator's plant). The
+    /// model's joint limits are replaced by the device's.
+    pub fn fitted(&self, body: &BodyModel<f64>) -> Result<Self, AnthropometryError> {
+        let body = BodyModel::new(*body.links(), *self.body.limits())?;
+        let mut cfg = *self;
+        cfg.body = body;
+        cfg.controller.model = body.cast();
+        Ok(cfg)
+    }
+
+    /// The combined pilot-plus-exoskeleton model of a pilot of `pilot`'s
+    /// height and mass, with the leg `lengths` given (Winter's proportions
+    /// where not measured: [`SegmentLengths::winter`]), this device's
+    /// exoskeleton segments and joint limits.
+    pub fn patient_model(
+        &self,
+        pilot: &Pilot<f64>,
+        lengths: &SegmentLengths<f64>,
+    ) -> Result<BodyModel<f64>, AnthropometryError> {
+        let options = anthropometry::Options {
+            limits: *self.body.limits(),
+            ..anthropometry::Options::default()
+        };
+        anthropometry::body_model_with_lengths(pilot, lengths, &self.exo, &options)
     }
 
     /// The supervisor.
@@ -270,6 +307,7 @@ impl DeviceConfig {
 gait_core::impl_fingerprint!(DeviceConfig {
     dt_s,
     body,
+    exo,
     ankle_spring_nm_per_rad,
     drives,
     motors,

@@ -25,9 +25,14 @@ use crate::simulate::SimGait;
 /// Options of `exogait compare`.
 #[derive(Debug, Args)]
 pub struct CompareArgs {
-    /// The gait.
-    #[arg(long, value_enum)]
-    pub gait: SimGait,
+    /// The gait: walk, stair-up or stair-down (the shipped tables), or a
+    /// gait's name in the bundle given with `--bundle`.
+    #[arg(long, value_name = "NAME")]
+    pub gait: String,
+    /// A patient's bundle (`exogait tables`): its patient's body and its
+    /// gait named by `--gait`.
+    #[arg(long, value_name = "FILE.bundle")]
+    pub bundle: Option<PathBuf>,
     /// Steps to play each gait for.
     #[arg(long, default_value_t = 4)]
     pub steps: usize,
@@ -60,8 +65,26 @@ pub struct RunJson {
     pub faults: Vec<FaultJson>,
     /// Means over the landed steps.
     pub mean: MeanJson,
+    /// Progression from the first swing's start to the last landing, m/s.
+    pub progression_m_s: f64,
+    /// Lowest swing-foot clearance over a nosing in the closed loop, m
+    /// (the sole taken level under the ankle; null on level ground).
+    pub clearance_min_m: Option<f64>,
     /// Why the simulation stopped early, if it did.
     pub ended_by: Option<String>,
+}
+
+/// The gait's geometry and timing (both gaits share them).
+#[derive(Debug, Serialize)]
+pub struct GeometryJson {
+    /// Horizontal step length, m.
+    pub step_length_m: f64,
+    /// Rise per step, m (negative down, 0 on level ground).
+    pub rise_m: f64,
+    /// Tread, m (0 on level ground).
+    pub tread_m: f64,
+    /// Step time, s.
+    pub step_time_s: f64,
 }
 
 /// A fault.
@@ -113,8 +136,14 @@ pub struct DeviceJson {
 /// The answer.
 #[derive(Debug, Serialize)]
 pub struct CompareJson {
-    /// "walk", "stair_up", "stair_down".
-    pub gait: &'static str,
+    /// "walk", "stair_up", "stair_down", or the bundle gait's name.
+    pub gait: String,
+    /// The movement: "walk", "stair_up", "stair_down".
+    pub kind: &'static str,
+    /// The patient's hash (null: the device's own body, Table III).
+    pub patient_hash: Option<String>,
+    /// The gait's geometry and timing.
+    pub geometry: GeometryJson,
     /// Steps asked for.
     pub steps: usize,
     /// The table the firmware ships.
@@ -129,8 +158,10 @@ pub struct CompareJson {
     pub device: DeviceJson,
 }
 
-fn run_json(r: &GaitRun) -> RunJson {
+fn run_json(r: &GaitRun, clearance_min_m: Option<f64>) -> RunJson {
     RunJson {
+        progression_m_s: r.progression_m_s(),
+        clearance_min_m,
         f_ns: r.steps.iter().map(|s| s.impulse_ns).collect(),
         f_balance_ns: r.steps.iter().map(|s| s.balance_ns).collect(),
         peak_N: r
@@ -158,14 +189,28 @@ fn run_json(r: &GaitRun) -> RunJson {
     }
 }
 
-/// The comparison of one gait (also the main job's).
+/// The comparison of one shipped gait (also the main job's).
 pub fn compare(kind: GaitKind, steps: usize) -> Result<(CompareJson, GaitRun, GaitRun), String> {
     let device = DeviceConfig::exogait().map_err(|e| format!("device: {e:?}"))?;
     let shipped = gait_core::flash_tables::of(kind)
         .map_err(|e| format!("the shipped table is refused: {e}"))?;
-    // The human gait at the shipped table's geometry and step time.
+    let name = gait_opt::clinical_report::gait_name(kind).to_string();
+    compare_table(&device, shipped, name, None, steps)
+}
+
+/// The comparison of `table` on `device` (fitted to a patient, or as
+/// built) against the human-data gait at the table's geometry and step
+/// time on the same device and pilot.
+pub fn compare_table(
+    device: &DeviceConfig,
+    shipped: GaitTable<'_>,
+    name: String,
+    patient_hash: Option<u32>,
+    steps: usize,
+) -> Result<(CompareJson, GaitRun, GaitRun), String> {
+    let kind = shipped.kind();
     let geometry = sim::scenario::table_geometry(&shipped, &device.body);
-    let mut case = ClinicalCase::for_gait(kind, &device);
+    let mut case = ClinicalCase::for_gait(kind, device);
     case.spacing_m = geometry.landing_m;
     case.step_time_s = f64::from(shipped.duration_s());
     let human = playable_human_gait(&case, &gait_opt::default_data_dir())
@@ -178,16 +223,25 @@ pub fn compare(kind: GaitKind, steps: usize) -> Result<(CompareJson, GaitRun, Ga
         .map_err(|e| format!("human-data gait as a table: {e}"))?;
     let human_table = GaitTable::parse(&image).map_err(|e| format!("human table: {e}"))?;
     let pilot = sim::scenario::strong_pilot();
-    let max_s = 8.0 + 4.0 * steps as f64;
-    let (ours, _) = play(&device, shipped, pilot, steps, max_s, |_| {})
+    let max_s = 8.0 + (2.0 + case.step_time_s) * steps as f64;
+    let (ours, our_rig) = play(device, shipped, pilot, steps, max_s, |_| {})
         .map_err(|e| format!("shipped table: {e}"))?;
-    let (theirs, _) = play(&device, human_table, pilot, steps, max_s, |_| {})
+    let (theirs, their_rig) = play(device, human_table, pilot, steps, max_s, |_| {})
         .map_err(|e| format!("human-data gait: {e}"))?;
+    let level = kind == GaitKind::Walk;
     let answer = CompareJson {
-        gait: gait_opt::clinical_report::gait_name(kind),
+        gait: name,
+        kind: gait_opt::clinical_report::gait_name(kind),
+        patient_hash: patient_hash.map(|h| format!("0x{h:08x}")),
+        geometry: GeometryJson {
+            step_length_m: geometry.landing_m[0],
+            rise_m: if level { 0.0 } else { geometry.landing_m[1] },
+            tread_m: if level { 0.0 } else { geometry.landing_m[0] },
+            step_time_s: f64::from(shipped.duration_s()),
+        },
         steps,
-        shipped: run_json(&ours),
-        human: run_json(&theirs),
+        shipped: run_json(&ours, sim::compare::nosing_clearance_m(&our_rig)),
+        human: run_json(&theirs, sim::compare::nosing_clearance_m(&their_rig)),
         human_torso_lean_rad: human.torso_lean_rad,
         reduction_pct: ReductionJson {
             f: reduction_pct(ours.mean(|s| s.impulse_ns), theirs.mean(|s| s.impulse_ns)),
@@ -281,6 +335,31 @@ pub fn table_text(a: &CompareJson) -> String {
     out
 }
 
+/// The comparison of the bundle's gait `name` on its patient.
+fn compare_bundle(
+    path: &std::path::Path,
+    name: &str,
+    steps: usize,
+) -> Result<(CompareJson, GaitRun, GaitRun), String> {
+    let file = crate::bundle_file::BundleFile::load(path)?;
+    let bundle = file.bundle()?;
+    let (_, gait) = bundle.find(name).ok_or_else(|| {
+        format!(
+            "{}: no gait {name:?} (it holds {})",
+            path.display(),
+            file.names().join(", ")
+        )
+    })?;
+    let device = file.fitted_device()?;
+    compare_table(
+        &device,
+        gait.table,
+        name.to_string(),
+        Some(bundle.patient_hash()),
+        steps,
+    )
+}
+
 /// Runs `exogait compare`; exit status 0 when both gaits landed every step
 /// without a fault, 1 otherwise, 2 for unusable options or a failed set-up.
 pub fn run(args: &CompareArgs) -> u8 {
@@ -288,8 +367,20 @@ pub fn run(args: &CompareArgs) -> u8 {
         eprintln!("exogait compare: --steps must be in 1..=20");
         return 2;
     }
-    let kind = args.gait.kind();
-    let (answer, ours, theirs) = match compare(kind, args.steps) {
+    let result = match &args.bundle {
+        Some(path) => compare_bundle(path, &args.gait, args.steps),
+        None => match <SimGait as clap::ValueEnum>::from_str(&args.gait, false) {
+            Ok(g) => compare(g.kind(), args.steps),
+            Err(_) => {
+                eprintln!(
+                    "exogait compare: --gait {:?}: without --bundle, one of walk, stair-up, stair-down",
+                    args.gait
+                );
+                return 2;
+            }
+        },
+    };
+    let (answer, ours, theirs) = match result {
         Ok(x) => x,
         Err(e) => {
             eprintln!("exogait compare: {e}");

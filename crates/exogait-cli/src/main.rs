@@ -4,13 +4,18 @@
 //! lines; `optimize` and `cost` call gait-opt. No algorithm lives here. See
 //! `crates/exogait-cli/README.md`.
 
+mod bundle_cmd;
+mod bundle_file;
 mod commands;
 mod compare;
 mod cost;
+mod family;
 mod faults;
+mod fit;
 mod jsonl;
 mod model_file;
 mod optimize;
+mod patient_file;
 mod simulate;
 mod table;
 
@@ -75,6 +80,18 @@ enum Command {
     /// An `optimize` report as a gait table in the flash format (checked
     /// against the device first).
     Table(table::TableArgs),
+    /// A patient's body model from height and mass (and measured thigh,
+    /// shank, foot): writes the patient file and prints it (exit 2 for
+    /// measures the device cannot be fitted to).
+    Fit(fit::FitArgs),
+    /// A patient's gait family (walking paces, stairs up and down) as a
+    /// verified bundle: each gait searched, admitted and played in the
+    /// closed loop; the ones the device cannot play are left out with the
+    /// reason (exit 1 if none is cleared, 2 for unusable input).
+    Tables(family::TablesArgs),
+    /// Lists a bundle after verifying it for this device (exit 2 for a
+    /// corrupt, truncated or foreign bundle).
+    Bundle(bundle_cmd::BundleArgs),
     /// A seeded randomised fault campaign in the closed loop: one random
     /// fault per run; the tally per kind (exit 1 unless no run fell,
     /// crossed a stop, missed a detection or tripped falsely).
@@ -83,6 +100,24 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let own_model = match &cli.command {
+        Command::Fit(_) => Some("fit"),
+        Command::Tables(_) => Some("tables"),
+        Command::Bundle(_) => Some("bundle"),
+        _ => None,
+    };
+    if let (Some(name), Some(_)) = (own_model, &cli.model) {
+        eprintln!(
+            "exogait: --model does not apply to {name} (the patient file or bundle holds the model)"
+        );
+        return ExitCode::from(EXIT_FATAL);
+    }
+    match &cli.command {
+        Command::Fit(args) => return ExitCode::from(fit::run(args)),
+        Command::Tables(args) => return ExitCode::from(family::run(args)),
+        Command::Bundle(args) => return ExitCode::from(bundle_cmd::run(args)),
+        _ => {}
+    }
     if let Command::Simulate(args) = &cli.command {
         if cli.model.is_some() {
             eprintln!("exogait: --model does not apply to simulate (the device's model is fixed)");
@@ -181,6 +216,9 @@ fn main() -> ExitCode {
         | Command::Simulate(_)
         | Command::Compare(_)
         | Command::Table(_)
+        | Command::Fit(_)
+        | Command::Tables(_)
+        | Command::Bundle(_)
         | Command::Faults(_) => Ok(jsonl::Summary::default()),
     };
     match result {

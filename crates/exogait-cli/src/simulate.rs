@@ -40,9 +40,15 @@ impl SimGait {
 /// Options of `exogait simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// The gait (with the table the firmware carries for it).
-    #[arg(long, value_enum, default_value_t = SimGait::Walk)]
-    pub gait: SimGait,
+    /// The gait: walk, stair-up or stair-down (with the table the firmware
+    /// carries for it), or a gait's name in the bundle given with
+    /// `--bundle`.
+    #[arg(long, value_name = "NAME", default_value = "walk")]
+    pub gait: String,
+    /// A patient's bundle (`exogait tables`): the device fitted to its
+    /// patient plays its gait named by `--gait`.
+    #[arg(long, value_name = "FILE.bundle", conflicts_with = "table")]
+    pub bundle: Option<PathBuf>,
     /// Simulated time at most, s (the run also stops 1.5 s after the last
     /// landing asked for, or 1 s into a safe hold).
     #[arg(long, default_value_t = 20.0)]
@@ -137,7 +143,7 @@ fn reaction_name(r: gait_control::faults::Reaction) -> &'static str {
 }
 
 /// Runs the steps; exit status 0 when every step asked for landed within
-/// 5 cm of its planned point and nothing faulted, 1 otherwise, 2 when the
+/// 5 cm of its planned length from the foot before it and nothing faulted, 1 otherwise, 2 when the
 /// run could not be set up, the table is refused or the options are
 /// unusable.
 pub fn run(args: &SimulateArgs) -> u8 {
@@ -156,11 +162,54 @@ pub fn run(args: &SimulateArgs) -> u8 {
         );
         return 2;
     }
-    let device = match exogait_device::DeviceConfig::exogait() {
+    let bundle_file = match &args.bundle {
+        Some(path) => match crate::bundle_file::BundleFile::load(path) {
+            Ok(f) => Some(f),
+            Err(e) => {
+                eprintln!("exogait simulate: {e}");
+                return 2;
+            }
+        },
+        None => None,
+    };
+    let device = match &bundle_file {
+        Some(f) => f.fitted_device(),
+        None => exogait_device::DeviceConfig::exogait().map_err(|e| format!("{e:?}")),
+    };
+    let device = match device {
         Ok(d) => d,
         Err(e) => {
-            eprintln!("exogait simulate: device configuration: {e:?}");
+            eprintln!("exogait simulate: device configuration: {e}");
             return 2;
+        }
+    };
+    let bundle = bundle_file.as_ref().and_then(|f| f.bundle().ok());
+    let bundle_table = match (&bundle, &bundle_file) {
+        (Some(b), Some(f)) => match b.find(&args.gait) {
+            Some((_, g)) => Some(g.table),
+            None => {
+                eprintln!(
+                    "exogait simulate: the bundle holds no gait {:?} (it holds {})",
+                    args.gait,
+                    f.names().join(", ")
+                );
+                return 2;
+            }
+        },
+        _ => None,
+    };
+    let named = if bundle_table.is_some() {
+        None
+    } else {
+        match <SimGait as ValueEnum>::from_str(&args.gait, false) {
+            Ok(g) => Some(g),
+            Err(_) => {
+                eprintln!(
+                    "exogait simulate: --gait {:?}: without --bundle, one of walk, stair-up, stair-down",
+                    args.gait
+                );
+                return 2;
+            }
         }
     };
     let image = match &args.table {
@@ -175,18 +224,23 @@ pub fn run(args: &SimulateArgs) -> u8 {
     };
     let file_table = image
         .as_deref()
-        .and_then(|i| gait_core::tables::GaitTable::parse(i).ok());
-    let kind = file_table.map_or(args.gait.kind(), |t| t.kind());
+        .and_then(|i| gait_core::tables::GaitTable::parse(i).ok())
+        .or(bundle_table);
+    let kind = file_table.map_or(
+        named.map_or(gait_core::tables::GaitKind::Walk, SimGait::kind),
+        |t| t.kind(),
+    );
     let gait = sim::compare::gait_of(kind);
     let label = match gait {
         Gait::Walk => "walking",
         Gait::StairUp => "climbing stairs",
         Gait::StairDown => "descending stairs",
     };
-    let source = args.table.as_ref().map_or_else(
-        || "the flash table".to_string(),
-        |p| p.display().to_string(),
-    );
+    let source = match (&args.table, &args.bundle) {
+        (Some(p), _) => p.display().to_string(),
+        (None, Some(p)) => format!("{} gait {}", p.display(), args.gait),
+        (None, None) => "the flash table".to_string(),
+    };
     let tables = match file_table {
         Some(t) => sim::compare::tables_of(t),
         None => sim::scenario::flash_tables(),
@@ -216,14 +270,14 @@ pub fn run(args: &SimulateArgs) -> u8 {
         }
     };
     let step = run.summary.planned_landing_x_m;
-    let on_plan = run.summary.landing_points.len() >= args.steps
-        && run
-            .summary
-            .landing_points
-            .iter()
-            .take(args.steps)
-            .enumerate()
-            .all(|(i, (_, x))| (x - step * (i as f64 + 1.0)).abs() < 0.05);
+    // Each step is judged from where its stance foot stood (the previous
+    // landing): a step lands within 5 cm of its planned length.
+    let landed_x: Vec<f64> = run.summary.landing_points.iter().map(|(_, x)| *x).collect();
+    let on_plan = landed_x.len() >= args.steps
+        && landed_x.iter().take(args.steps).enumerate().all(|(i, x)| {
+            let from = if i == 0 { 0.0 } else { landed_x[i - 1] };
+            (x - from - step).abs() < 0.05
+        });
     if args.json {
         let o = sim::outcome::outcome(&run.rig, run.ended_by.as_ref());
         let answer = SimulateJson {

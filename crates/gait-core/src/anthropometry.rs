@@ -94,6 +94,88 @@ impl<T: Real> Pilot<T> {
     }
 }
 
+/// Largest departure of a measured segment from Winter's proportion of
+/// the pilot's height, as a share of that proportion: Winter's segment
+/// fractions vary between adults by a few percent (one standard deviation
+/// is about 5 %), so a measurement 20 % away is a mistake in the measuring
+/// or in the height, not a body.
+pub const SEGMENT_TOLERANCE: f64 = 0.2;
+
+/// The leg segments' lengths, m: the model's thigh (hip to knee) and shank
+/// (knee to ankle) links, and the foot (heel to toe tip; it sets only the
+/// foot's radius of gyration: the foot is lumped at the ankle).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SegmentLengths<T> {
+    /// Greater trochanter to knee joint, m.
+    pub thigh_m: T,
+    /// Knee joint to lateral malleolus, m.
+    pub shank_m: T,
+    /// Heel to the tip of the longest toe, m.
+    pub foot_m: T,
+}
+
+/// Which leg segment a length is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Segment {
+    /// [`SegmentLengths::thigh_m`].
+    Thigh,
+    /// [`SegmentLengths::shank_m`].
+    Shank,
+    /// [`SegmentLengths::foot_m`].
+    Foot,
+}
+
+impl Segment {
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Thigh => "thigh",
+            Self::Shank => "shank",
+            Self::Foot => "foot",
+        }
+    }
+
+    /// Winter's proportion of the height.
+    pub fn fraction(self) -> f64 {
+        match self {
+            Self::Thigh => THIGH_LENGTH,
+            Self::Shank => SHANK_LENGTH,
+            Self::Foot => FOOT_LENGTH,
+        }
+    }
+}
+
+impl<T: Real> SegmentLengths<T> {
+    /// Winter's proportions of `height_m`.
+    pub fn winter(height_m: T) -> Self {
+        Self {
+            thigh_m: T::lit(THIGH_LENGTH) * height_m,
+            shank_m: T::lit(SHANK_LENGTH) * height_m,
+            foot_m: T::lit(FOOT_LENGTH) * height_m,
+        }
+    }
+
+    /// Each length finite and within [`SEGMENT_TOLERANCE`] of Winter's
+    /// proportion of `height_m`.
+    pub fn check(&self, height_m: T) -> Result<(), AnthropometryError> {
+        let given = [
+            (Segment::Thigh, self.thigh_m),
+            (Segment::Shank, self.shank_m),
+            (Segment::Foot, self.foot_m),
+        ];
+        for (segment, length) in given {
+            let expected = T::lit(segment.fraction()) * height_m;
+            let off = (length - expected).abs();
+            if !length.finite() || off > T::lit(SEGMENT_TOLERANCE) * expected {
+                return Err(AnthropometryError::SegmentInconsistent { segment });
+            }
+        }
+        Ok(())
+    }
+}
+
 /// What the torso link (link 3) spans. Only the point p3 depends on it: the
 /// torso's free end carries no link, so D, H and G do not.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -158,6 +240,12 @@ pub enum AnthropometryError {
         /// Which segment.
         part: ExoPart,
     },
+    /// A segment's length is not finite or departs from Winter's
+    /// proportion of the height by more than [`SEGMENT_TOLERANCE`].
+    SegmentInconsistent {
+        /// Which segment.
+        segment: Segment,
+    },
     /// The assembled links failed [`BodyModel::new`]'s checks.
     Model(ModelError),
 }
@@ -191,6 +279,13 @@ impl core::fmt::Display for AnthropometryError {
                 f,
                 "exoskeleton {part}: centre of mass must lie on the link (0 <= com_m <= length)"
             ),
+            Self::SegmentInconsistent { segment } => write!(
+                f,
+                "the {} length is not within {:.0} % of {:.3} x height (Winter's proportion): measured wrongly, or the height is wrong",
+                segment.name(),
+                SEGMENT_TOLERANCE * 100.0,
+                segment.fraction()
+            ),
             Self::Model(e) => write!(f, "assembled model rejected: {e}"),
         }
     }
@@ -208,14 +303,28 @@ pub fn links_for<T: Real>(
     torso: TorsoSpan,
 ) -> Result<[Link<T>; LINKS], AnthropometryError> {
     pilot.check()?;
+    links_with_lengths(pilot, &SegmentLengths::winter(pilot.height_m), exo, torso)
+}
+
+/// [`links_for`] with the leg segments' lengths given (measured on the
+/// pilot, or Winter's proportions where not), each checked against the
+/// height by [`SegmentLengths::check`].
+pub fn links_with_lengths<T: Real>(
+    pilot: &Pilot<T>,
+    lengths: &SegmentLengths<T>,
+    exo: &ExoSegments<T>,
+    torso: TorsoSpan,
+) -> Result<[Link<T>; LINKS], AnthropometryError> {
+    pilot.check()?;
+    lengths.check(pilot.height_m)?;
     let h = pilot.height_m;
     let m = pilot.mass_kg;
 
     // Shank, measured from the knee: Winter's leg plus the foot as a rigid
     // body whose centre of mass is at the ankle.
-    let l_shank = T::lit(SHANK_LENGTH) * h;
+    let l_shank = lengths.shank_m;
     let leg = Body::from_winter(&LEG, m, l_shank);
-    let foot_row = Body::from_winter(&FOOT, m, T::lit(FOOT_LENGTH) * h);
+    let foot_row = Body::from_winter(&FOOT, m, lengths.foot_m);
     let foot = Body {
         com_m: l_shank,
         ..foot_row
@@ -225,7 +334,7 @@ pub fn links_for<T: Real>(
     let shank = Body::combine(human_shank, exo_shank);
 
     // Thigh, measured from the hip.
-    let l_thigh = T::lit(THIGH_LENGTH) * h;
+    let l_thigh = lengths.thigh_m;
     let human_thigh = Body::from_winter(&THIGH, m, l_thigh);
     let exo_thigh = exo_body(&exo.thigh, ExoPart::Thigh, l_thigh, human_thigh.com_m)?;
     let thigh = Body::combine(human_thigh, exo_thigh);
@@ -264,5 +373,17 @@ pub fn body_model_with<T: Real>(
     options: &Options<T>,
 ) -> Result<BodyModel<T>, AnthropometryError> {
     let links = links_for(pilot, exo, options.torso)?;
+    Ok(BodyModel::new(links, options.limits)?)
+}
+
+/// A validated model for this pilot with measured leg lengths (see
+/// [`links_with_lengths`]).
+pub fn body_model_with_lengths<T: Real>(
+    pilot: &Pilot<T>,
+    lengths: &SegmentLengths<T>,
+    exo: &ExoSegments<T>,
+    options: &Options<T>,
+) -> Result<BodyModel<T>, AnthropometryError> {
+    let links = links_with_lengths(pilot, lengths, exo, options.torso)?;
     Ok(BodyModel::new(links, options.limits)?)
 }

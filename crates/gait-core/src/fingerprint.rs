@@ -108,7 +108,11 @@ macro_rules! impl_fingerprint_enum {
     )*};
 }
 
+use crate::anthropometry::{ExoSegment, ExoSegments};
 use crate::model::{JointLimits, Link};
+
+crate::impl_fingerprint!([T: Fingerprint] ExoSegment<T> { mass_kg, com_m, inertia_kgm2 });
+crate::impl_fingerprint!([T: Fingerprint] ExoSegments<T> { torso, thigh, shank });
 
 crate::impl_fingerprint!([T: Fingerprint] Link<T> { length_m, com_m, mass_kg, inertia_kgm2 });
 crate::impl_fingerprint!([T: Fingerprint] JointLimits<T> {

@@ -16,6 +16,7 @@
 
 pub mod anthropometry;
 pub mod bezier;
+pub mod bundle;
 pub mod clinical;
 pub mod dynamics;
 pub mod fingerprint;

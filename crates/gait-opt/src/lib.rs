@@ -18,6 +18,7 @@ pub mod clinical;
 pub mod clinical_report;
 mod compass;
 pub mod encoding;
+pub mod family;
 pub mod human;
 pub mod phi_cost;
 #[cfg(feature = "plot")]

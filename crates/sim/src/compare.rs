@@ -40,6 +40,8 @@ pub struct StepLoad {
     pub saturated_s: f64,
     /// Landing x less the plan's, m (`None`: the step did not land).
     pub landing_error_m: Option<f64>,
+    /// When it landed, s (`None`: it did not).
+    pub landing_s: Option<f64>,
 }
 
 /// A gait played for a number of steps.
@@ -76,6 +78,23 @@ impl GaitRun {
             .map(f)
             .collect();
         (!landed.is_empty()).then(|| landed.iter().sum::<f64>() / landed.len() as f64)
+    }
+
+    /// Progression, m/s: how far forward the last landed step's foot came
+    /// down (world x; the first stance ankle stands at 0) over the time
+    /// from the first swing's start to that landing; 0 without a landing.
+    pub fn progression_m_s(&self) -> f64 {
+        let t0 = self.steps.first().map(|s| s.start_s);
+        let last = self
+            .steps
+            .iter()
+            .zip(&self.landings_m)
+            .filter_map(|(s, p)| s.landing_s.map(|t| (t, p[0])))
+            .next_back();
+        match (t0, last) {
+            (Some(t0), Some((t, x))) if t > t0 => x / (t - t0),
+            _ => 0.0,
+        }
     }
 
     /// Highest crutch peak over the landed steps, N.
@@ -198,6 +217,7 @@ fn measure(
                 peak_n: [0.0; 2],
                 saturated_s: 0.0,
                 landing_error_m: None,
+                landing_s: None,
             };
             for t in trace
                 .iter()
@@ -214,6 +234,7 @@ fn measure(
             if let Some(l) = landing.filter(|l| l.time_s < next_start) {
                 let k = (i + 1) as f64;
                 s.landing_error_m = Some(l.position_m[0] - step_m[0] * k);
+                s.landing_s = Some(l.time_s);
             }
             s
         })
@@ -247,3 +268,64 @@ pub fn reduction_pct(ours: Option<f64>, theirs: Option<f64>) -> Option<f64> {
         _ => None,
     }
 }
+
+/// The swing foot's lowest clearance over a stair nosing it crossed in a
+/// run, m (`None` on level ground, or when no swing crossed one): at each
+/// swing tick whose foot spans a riser (heel behind it, toe ahead), the
+/// swing ankle's height above that nosing, in the plant's ankle-level
+/// convention (heights are where an ankle standing there is, the foot
+/// level under it); going down, not the edge the foot steps off. Ticks before the ankle has travelled
+/// [`ROLL_TRAVEL_M`] from where its swing began are skipped: the foot is
+/// still rolling on its planted toe, which stands behind the riser.
+pub fn nosing_clearance_m(rig: &Rig<'_>) -> Option<f64> {
+    use crate::terrain::Terrain;
+    use gait_core::clinical::HEEL_M;
+    use gait_core::foot::TOE_M;
+    let Terrain::Stairs {
+        start_x_m,
+        rise_m,
+        tread_m,
+        steps,
+    } = rig.plant.config().terrain
+    else {
+        return None;
+    };
+    let risers: Vec<(f64, f64)> = (0..steps)
+        .map(|k| {
+            let k = f64::from(k);
+            (
+                start_x_m + k * tread_m,
+                (rise_m * k).max(rise_m * (k + 1.0)),
+            )
+        })
+        .collect();
+    let terrain = rig.plant.config().terrain;
+    let mut swing_start_x: Option<f64> = None;
+    let mut lowest: Option<f64> = None;
+    for s in &rig.trace {
+        let [x, y] = s.state.points_m[5];
+        if !matches!(s.report.phase, Phase::Swing { .. }) {
+            swing_start_x = None;
+            continue;
+        }
+        let start = *swing_start_x.get_or_insert(x);
+        if (x - start).abs() < ROLL_TRAVEL_M {
+            continue;
+        }
+        // Going down, the edge of the tread the foot leaves is no obstacle:
+        // the foot moves off it above its own tread.
+        let own_edge = terrain.height_m(start);
+        for (rx, nosing) in &risers {
+            let leaving = rise_m < 0.0 && (nosing - own_edge).abs() < 1e-3;
+            if !leaving && x - HEEL_M <= *rx && *rx <= x + TOE_M {
+                let c = y - nosing;
+                lowest = Some(lowest.map_or(c, |l: f64| l.min(c)));
+            }
+        }
+    }
+    lowest
+}
+
+/// How far a swing ankle travels while its foot rolls on its planted toe
+/// (at most 2 cm up to a 30° pitch), with margin, m.
+pub const ROLL_TRAVEL_M: f64 = 0.03;

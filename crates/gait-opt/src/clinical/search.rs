@@ -25,6 +25,17 @@ const LIFT: (f64, f64) = (0.05, 0.6);
 const CURVE_SPAN: [f64; 3] = [0.35, 0.35, 0.8];
 const PROGRESS: (f64, f64) = (-0.4, 1.4);
 const LIFT_HEIGHT: (f64, f64) = (-0.05, 0.2);
+/// The paper's rise, m: stairs higher than it widen the swing's lift.
+const PAPER_RISE_M: f64 = 0.0935;
+
+/// The swing's lift-height range of a case: [`LIFT_HEIGHT`], its top
+/// raised by 2.5 m per m of rise above the paper's stair, so that a foot
+/// starting just behind a higher riser can rise over its nosing before it
+/// moves on.
+fn lift_height(case: &ClinicalCase) -> (f64, f64) {
+    let extra = (case.spacing_m[1].abs() - PAPER_RISE_M).max(0.0);
+    (LIFT_HEIGHT.0, LIFT_HEIGHT.1 + 2.5 * extra)
+}
 
 fn lerp((a, b): (f64, f64), x: f64) -> f64 {
     a + (b - a) * x.clamp(0.0, 1.0)
@@ -47,7 +58,10 @@ pub fn decode(case: &ClinicalCase, x: &[f64; DIM]) -> Result<ClinicalStep<f64>, 
         curves: [[0.0; 3]; 3],
         path: SwingPath {
             progress: [lerp(PROGRESS, x[13]), lerp(PROGRESS, x[14])],
-            lift_m: [lerp(LIFT_HEIGHT, x[15]), lerp(LIFT_HEIGHT, x[16])],
+            lift_m: [
+                lerp(lift_height(case), x[15]),
+                lerp(lift_height(case), x[16]),
+            ],
         },
     };
     let ends = step.ends(&case.model)?;
@@ -74,8 +88,9 @@ pub fn initial_point(case: &ClinicalCase) -> [f64; DIM] {
     x[3] = inv(LIFT, 0.35);
     x[13] = inv(PROGRESS, 0.0);
     x[14] = inv(PROGRESS, 1.0);
-    x[15] = inv(LIFT_HEIGHT, 0.08);
-    x[16] = inv(LIFT_HEIGHT, 0.08);
+    let lift = 0.08 + 1.5 * (case.spacing_m[1].abs() - PAPER_RISE_M).max(0.0);
+    x[15] = inv(lift_height(case), lift);
+    x[16] = inv(lift_height(case), lift);
     x
 }
 
