@@ -21,11 +21,11 @@ pub use exogait_device::{BoardIo, DT_S, TICK_HZ, hardware};
 /// left out, so its gait cannot start.
 #[must_use]
 pub fn flash_tables() -> GaitTables<'static> {
-    GaitTables {
-        walk: gait_core::flash_tables::walk().ok(),
-        stair_up: gait_core::flash_tables::stair_up().ok(),
-        stair_down: gait_core::flash_tables::stair_down().ok(),
-    }
+    GaitTables::by_kind(
+        gait_core::flash_tables::walk().ok(),
+        gait_core::flash_tables::stair_up().ok(),
+        gait_core::flash_tables::stair_down().ok(),
+    )
 }
 
 /// The device configuration.

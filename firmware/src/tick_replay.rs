@@ -9,7 +9,8 @@
 
 use exogait_device::DeviceConfig;
 use exogait_device::tick_record::{self, FileError};
-use gait_control::controller::TickReport;
+use gait_control::controller::{Controller, TickReport};
+use gait_control::operator::Gait;
 use gait_control::sequencer::Phase;
 
 use crate::{board_config, qemu_rig};
@@ -97,14 +98,31 @@ fn replay_starts() {
 /// many instructions it took.
 pub fn replay(
     device: &DeviceConfig,
+    time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
+) -> Result<Replay, ReplayError> {
+    replay_starts();
+    replay_with(
+        TICK_RECORDS,
+        device,
+        |gait| {
+            exogait_device::build_controller(device, board_config::flash_tables(), gait)
+                .map_err(|_| ReplayError::Config)
+        },
+        time,
+    )
+}
+
+/// Replays the recording `file` on `device`, each run through the
+/// controller `controller` builds for its gait.
+pub fn replay_with<'t>(
+    file: &[u8],
+    device: &DeviceConfig,
+    mut controller: impl FnMut(Gait) -> Result<Controller<'t>, ReplayError>,
     mut time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
 ) -> Result<Replay, ReplayError> {
     let mut out = Replay::default();
-    replay_starts();
-    for segment in tick_record::segments(TICK_RECORDS).map_err(ReplayError::File)? {
-        let mut controller =
-            exogait_device::build_controller(device, board_config::flash_tables(), segment.gait)
-                .map_err(|_| ReplayError::Config)?;
+    for segment in tick_record::segments(file).map_err(ReplayError::File)? {
+        let mut controller = controller(segment.gait)?;
         let mut hw = board_config::hardware(device, qemu_rig::peripherals())
             .map_err(|_| ReplayError::Config)?;
         out.segments += 1;

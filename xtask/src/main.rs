@@ -8,6 +8,7 @@
 //! rustup's `rust-lld` (or `arm-none-eabi-ld`). Missing Debian packages are
 //! installed with apt-get (as root, or through sudo).
 
+mod bundle;
 mod panic_paths;
 mod profile;
 mod tick_replay;
@@ -63,7 +64,15 @@ fn main() -> ExitCode {
             }
             Ok(())
         }),
-        "qemu" => Toolchain::detect().and_then(|tc| qemu(&tc)),
+        "qemu" => Toolchain::detect().and_then(|tc| match rest {
+            [flag, file] if flag == "--bundle" => bundle::qemu(&tc, Path::new(file)).map(|_| ()),
+            [] => qemu(&tc),
+            _ => Err("usage: cargo xtask qemu [--bundle FILE]".into()),
+        }),
+        "flash-bundle" => match rest {
+            [file] => bundle::flash(Path::new(file)),
+            _ => Err("usage: cargo xtask flash-bundle FILE".into()),
+        },
         "profile" => Toolchain::detect().and_then(|tc| {
             let board = BOARDS
                 .iter()
@@ -106,7 +115,12 @@ usage: cargo xtask <task>
   run       the main job: the shipped tables against the human-data gait, in the
             closed loop, walking and stairs (the paper's Table II; plot)
   firmware  build the firmware for every board (release)
-  qemu      build the QEMU image and run its self-test and benchmarks
+  qemu      build the QEMU image and run its self-test and benchmarks;
+            `--bundle FILE`: with a patient's bundle in its sector (and,
+            when it verifies, its first step recorded on the host)
+  flash-bundle FILE
+            write a patient's bundle to the motor board's bundle sector
+            (probe-rs; the image and the calibration are left as they are)
   profile   where the replayed ticks' instructions go on the target, per
             source file and the costliest lines (QEMU's execution log;
             about 3-5 minutes)
@@ -145,6 +159,10 @@ fn ci() -> Result {
     }
     step("panic paths (both release images)", || panic_paths_all(&tc))?;
     step("QEMU self-test", || qemu(&tc))?;
+    step(
+        "QEMU boot with a patient's bundle, good and corrupted",
+        || bundle::ci_boot(&tc),
+    )?;
     step("size report", || size_all(&tc))?;
     Ok(())
 }
@@ -306,7 +324,7 @@ fn have(program: &str) -> bool {
 }
 
 /// How this machine cross-builds for the Cortex-M4F.
-enum Toolchain {
+pub(crate) enum Toolchain {
     /// rustup has the target's prebuilt `core`.
     Rustup,
     /// Debian's rustc-web builds `core` from rust-web-src.
@@ -493,6 +511,16 @@ fn clippy(tc: &Toolchain) -> Result {
 }
 
 fn qemu(tc: &Toolchain) -> Result {
+    let text = run_qemu(tc, &[])?;
+    check_device_fingerprint(&text)?;
+    tick_replay::check(&text)
+}
+
+/// Builds and runs the QEMU image, with each (file, address) of `loads`
+/// placed in its memory by QEMU's loader before the reset (the data
+/// sectors: `firmware/src/flash_sectors.rs`); its output, printed too.
+/// Fails when QEMU times out or the image reports a failure.
+pub(crate) fn run_qemu(tc: &Toolchain, loads: &[(PathBuf, u32)]) -> Result<String> {
     let board = BOARDS
         .iter()
         .find(|b| b.name == "qemu")
@@ -509,13 +537,17 @@ fn qemu(tc: &Toolchain) -> Result {
         .args(["-icount", "shift=0"])
         .arg("-kernel")
         .arg(&elf);
+    for (file, addr) in loads {
+        cmd.arg("-device")
+            .arg(format!("loader,file={},addr=0x{addr:x}", file.display()));
+    }
     let t = Instant::now();
     let out = cmd
         .stderr(Stdio::inherit())
         .output()
         .map_err(|e| format!("cannot start qemu-system-arm: {e}"))?;
     let took = t.elapsed();
-    let text = String::from_utf8_lossy(&out.stdout);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
     print!("{text}");
     let status = out.status;
     if status.code() == Some(124) || took > Duration::from_secs(QEMU_TIMEOUT_S) {
@@ -524,8 +556,7 @@ fn qemu(tc: &Toolchain) -> Result {
     if !status.success() {
         return Err(format!("QEMU self-test failed ({status})"));
     }
-    check_device_fingerprint(&text)?;
-    tick_replay::check(&text)
+    Ok(text)
 }
 
 /// The firmware prints the CRC of the device configuration it was built

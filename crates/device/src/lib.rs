@@ -20,6 +20,7 @@
 #![no_std]
 
 pub mod admission;
+pub mod boot;
 pub mod drive;
 pub mod fitting;
 pub mod parts;
@@ -35,7 +36,7 @@ use gait_control::drivers::buttons::{Button, ButtonConfig};
 use gait_control::drivers::mcp3208::{CalibrationError, Channel, ForceChannels, Mcp3208};
 use gait_control::drivers::motor::{self, Motor, MotorConfig};
 use gait_control::drivers::status::Indicator;
-use gait_control::operator::{self, AllowedGaits, Gait, OperatorConfig};
+use gait_control::operator::{self, AllowedGaits, Gait, GaitChoice, OperatorConfig};
 use gait_control::position_loop::JointGains;
 use gait_control::posture::JOINTS;
 use gait_control::sequencer::{GaitTables, SequencerConfig};
@@ -117,6 +118,8 @@ pub enum DeviceError {
     Supervisor(supervisor::ConfigError),
     /// The controller configuration was refused.
     Controller(controller::ConfigError),
+    /// A patient's body model was refused.
+    Patient(AnthropometryError),
 }
 
 /// Hip position loop (joints 0 and 2): Kp 2,000 N·m/rad (5 mrad of error
@@ -283,20 +286,32 @@ impl DeviceConfig {
         tables: &GaitTables<'_>,
         first: Gait,
     ) -> Result<OperatorConfig, DeviceError> {
-        let mut list = [Gait::Walk; operator::MAX_GAITS];
+        let mut list = [GaitChoice {
+            kind: Gait::Walk,
+            slot: 0,
+            flashes: 1,
+        }; operator::MAX_GAITS];
         let mut n = 0;
         let order = [first, Gait::Walk, Gait::StairUp, Gait::StairDown];
         for (i, g) in order.into_iter().enumerate() {
             let repeated = order.get(..i).is_some_and(|before| before.contains(&g));
-            if tables.get(g).is_some() && !repeated {
-                if let Some(slot) = list.get_mut(n) {
-                    *slot = g;
+            if let (Some(slot), false) = (tables.slot_of(g), repeated) {
+                if let Some(entry) = list.get_mut(n) {
+                    *entry = GaitChoice {
+                        kind: g,
+                        slot: u8::try_from(slot).unwrap_or(0),
+                        flashes: g.code(),
+                    };
                     n += 1;
                 }
             }
         }
-        let allowed = AllowedGaits::new(list.get(..n.max(1)).unwrap_or(&[Gait::Walk]))
-            .map_err(DeviceError::Operator)?;
+        let allowed = if n == 0 {
+            AllowedGaits::new(&[Gait::Walk])
+        } else {
+            AllowedGaits::from_choices(list.get(..n).unwrap_or(&[]))
+        }
+        .map_err(DeviceError::Operator)?;
         Ok(OperatorConfig {
             allowed,
             reset_hold_ticks: self.reset_hold_ticks,

@@ -140,7 +140,6 @@ pub struct TickReport {
 /// The controller state: everything between two ticks.
 pub struct Controller<'t> {
     cfg: ControllerConfig,
-    seq: Sequencer<'t>,
     loops: [JointLoop; JOINTS],
     operator: Operator,
     supervisor: Supervisor,
@@ -171,6 +170,9 @@ pub struct Controller<'t> {
     /// cleared, and the set-down of a swing it struck in.
     estop: estop::EStopStop,
     tick: u32,
+    /// Last: its per-gait tables are read once a tick at most, and the
+    /// fields before them stay within a short load's reach.
+    seq: Sequencer<'t>,
 }
 
 impl<'t> Controller<'t> {
@@ -266,6 +268,14 @@ impl<'t> Controller<'t> {
         self.supervisor.report_restart_after_panic();
     }
 
+    /// Latches a fault the board found at boot in its flash data
+    /// (`FaultCode::BundleRefused`, `FaultCode::CalibrationRefused`): the
+    /// controller holds what it finds (or keeps the motors off) from its
+    /// first tick, and no reset clears it. Call before the first tick.
+    pub fn report_boot_fault(&mut self, code: FaultCode) {
+        self.supervisor.report_boot_fault(code);
+    }
+
     /// One control tick. `deadline_missed`: the previous tick overran its
     /// budget (measured by the board's timer).
     // Never inlined: the firmware check of panic paths (`cargo xtask panics`)
@@ -307,7 +317,7 @@ impl<'t> Controller<'t> {
     {
         if !self.primed {
             // First tick: hold the posture the device is in.
-            self.seq = self.seq.restarted_at(s.joints);
+            self.seq.restart_at(s.joints);
             self.primed = true;
         }
         let status = ControllerStatus {
@@ -336,17 +346,16 @@ impl<'t> Controller<'t> {
             None => self.complete_reset(status.safe_posture),
         }
         let mut step = StepEdges::default();
-        let reference =
-            self.seq.update(
-                &s.sensed,
-                operator.selected,
-                self.cfg.dt_s,
-                &mut |ev| match ev {
-                    SeqEvent::SwingStarted(..) => step.began = true,
-                    SeqEvent::Stopped => step.ended = true,
-                    _ => {}
-                },
-            );
+        let reference = self.seq.update(
+            &s.sensed,
+            self.operator.choice(),
+            self.cfg.dt_s,
+            &mut |ev| match ev {
+                SeqEvent::SwingStarted(..) => step.began = true,
+                SeqEvent::Stopped => step.ended = true,
+                _ => {}
+            },
+        );
         Planned {
             reference,
             operator,
@@ -438,7 +447,10 @@ impl<'t> Controller<'t> {
         match verdict.reaction {
             Reaction::None => {}
             Reaction::FinishStepThenHold => self.seq.block_new_steps(),
-            Reaction::SafeHold if verdict.latched.contains(FaultCode::RestartedAfterPanic) => {
+            Reaction::SafeHold
+                if verdict.latched.contains(FaultCode::RestartedAfterPanic)
+                    || verdict.latched.contains(FaultCode::BundleRefused) =>
+            {
                 self.seq.enter_safe_hold_after_restart(&s.joints, &s.sensed);
             }
             Reaction::SafeHold => {

@@ -466,6 +466,26 @@ fault_table! {
             1 tick if reported Ok but not finite",
         reset_allowed_when: "< 3 bad samples among that monitor's last 25",
     },
+    /// The patient's gait bundle in its flash sector failed verification
+    /// (CRC, version, device fingerprint, patient model, a table): nothing
+    /// of it is played. The board holds the posture it finds and GO does
+    /// nothing; only a verified bundle, written and booted, clears it.
+    BundleRefused = 0x0604 {
+        name: "gait bundle refused",
+        reaction: Reaction::SafeHold,
+        detection_bound: "at boot, before the first tick",
+        reset_allowed_when: "never: restart with a verified bundle in its sector",
+    },
+    /// The calibration record in its flash sector (encoder zero offsets,
+    /// force-sensor calibrations) is missing, corrupt or implausible: no
+    /// angle or force can be trusted, so the motors stay off (their
+    /// brakes hold) until a verified record is written and booted.
+    CalibrationRefused = 0x0605 {
+        name: "calibration refused",
+        reaction: Reaction::DisableMotors,
+        detection_bound: "at boot, before the first tick",
+        reset_allowed_when: "never: record the calibration and restart",
+    },
 }
 
 // A `FaultSet` has one bit per code in a `u32`.

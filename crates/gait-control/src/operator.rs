@@ -50,8 +50,9 @@ impl Gait {
     }
 }
 
-/// Longest allowed-gait list.
-pub const MAX_GAITS: usize = 3;
+/// Longest allowed-gait list: a patient's bundle holds at most this many
+/// gaits (`gait_core::bundle::MAX_GAITS`).
+pub const MAX_GAITS: usize = 16;
 
 /// Why an operator configuration was refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -65,34 +66,96 @@ pub enum ConfigError {
     Duplicate,
 }
 
+/// One gait a clinician can choose: its movement, where its table is in
+/// the sequencer's [`crate::sequencer::GaitTables`], and how many flashes
+/// the gait LED shows for it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GaitChoice {
+    /// The movement.
+    pub kind: Gait,
+    /// Its table's slot.
+    pub slot: u8,
+    /// Flashes of the gait LED (1 …).
+    pub flashes: u8,
+}
+
 /// The gaits this patient is cleared for, in MODE order (first = default).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AllowedGaits {
-    gaits: [Gait; MAX_GAITS],
+    choices: [GaitChoice; MAX_GAITS],
     len: u8,
 }
 
 impl AllowedGaits {
-    /// Checks and stores the list.
+    /// The device's own gaits, one table per movement (slots 0, 1, 2 for
+    /// walk, stair up, stair down: [`crate::sequencer::GaitTables::by_kind`]),
+    /// each showing its movement's code ([`Gait::code`]).
     pub fn new(list: &[Gait]) -> Result<Self, ConfigError> {
-        let (first, _) = list.split_first().ok_or(ConfigError::Empty)?;
-        if list.len() > MAX_GAITS {
+        let mut choices = [GaitChoice {
+            kind: Gait::Walk,
+            slot: 0,
+            flashes: 1,
+        }; MAX_GAITS];
+        for (c, g) in choices.iter_mut().zip(list) {
+            *c = GaitChoice {
+                kind: *g,
+                slot: g.code().saturating_sub(1),
+                flashes: g.code(),
+            };
+        }
+        Self::checked(choices, list.len())
+    }
+
+    /// A patient's gaits in the bundle's order: gait *i* is `kinds[i]` in
+    /// slot *i*, shown by *i* + 1 flashes.
+    pub fn in_order(kinds: &[Gait]) -> Result<Self, ConfigError> {
+        let mut choices = [GaitChoice {
+            kind: Gait::Walk,
+            slot: 0,
+            flashes: 1,
+        }; MAX_GAITS];
+        for ((c, g), i) in choices.iter_mut().zip(kinds).zip(0u8..) {
+            *c = GaitChoice {
+                kind: *g,
+                slot: i,
+                flashes: i + 1,
+            };
+        }
+        Self::checked(choices, kinds.len())
+    }
+
+    /// The choices as given (slots distinct, at most [`MAX_GAITS`]).
+    pub fn from_choices(list: &[GaitChoice]) -> Result<Self, ConfigError> {
+        let mut choices = [GaitChoice {
+            kind: Gait::Walk,
+            slot: 0,
+            flashes: 1,
+        }; MAX_GAITS];
+        for (c, g) in choices.iter_mut().zip(list) {
+            *c = *g;
+        }
+        Self::checked(choices, list.len())
+    }
+
+    fn checked(choices: [GaitChoice; MAX_GAITS], len: usize) -> Result<Self, ConfigError> {
+        if len == 0 {
+            return Err(ConfigError::Empty);
+        }
+        if len > MAX_GAITS {
             return Err(ConfigError::TooMany);
         }
-        let mut gaits = [*first; MAX_GAITS];
-        for (i, g) in list.iter().enumerate() {
-            if list.iter().skip(i + 1).any(|h| h == g) {
+        let used = choices.get(..len).unwrap_or(&[]);
+        for (i, c) in used.iter().enumerate() {
+            if used.iter().skip(i + 1).any(|d| d.slot == c.slot) {
                 return Err(ConfigError::Duplicate);
-            }
-            if let Some(slot) = gaits.get_mut(i) {
-                *slot = *g;
             }
         }
         Ok(Self {
-            gaits,
-            // list.len() ≤ MAX_GAITS = 3, checked above.
-            len: list.len() as u8,
+            choices,
+            // len ≤ MAX_GAITS = 16, checked above.
+            len: len as u8,
         })
     }
 
@@ -111,8 +174,21 @@ impl AllowedGaits {
     /// The gait at `index` (wrapped into range; total).
     #[must_use]
     pub fn get(&self, index: usize) -> Gait {
+        self.choice(index).kind
+    }
+
+    /// The choice at `index` (wrapped into range; total).
+    #[must_use]
+    pub fn choice(&self, index: usize) -> GaitChoice {
         let len = self.len().max(1);
-        self.gaits.get(index % len).copied().unwrap_or(Gait::Walk)
+        self.choices
+            .get(index % len)
+            .copied()
+            .unwrap_or(GaitChoice {
+                kind: Gait::Walk,
+                slot: 0,
+                flashes: 1,
+            })
     }
 }
 
@@ -158,7 +234,7 @@ pub struct Input {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Request {
     /// Start the given gait (the sequencer still checks readiness).
-    Start(Gait),
+    Start(GaitChoice),
     /// Finish the current step, then stand.
     StopAfterStep,
     /// Clear the supervisor's latched faults.
@@ -183,6 +259,8 @@ pub struct Feedback {
 pub struct Output {
     /// The gait MODE has selected.
     pub selected: Gait,
+    /// Its table's slot.
+    pub selected_slot: u8,
     /// At most one request per tick.
     pub request: Option<Request>,
     /// What to show.
@@ -233,6 +311,12 @@ impl Operator {
     #[must_use]
     pub fn selected(&self) -> Gait {
         self.cfg.allowed.get(self.selected)
+    }
+
+    /// The selected gait, with its slot and flashes.
+    #[must_use]
+    pub fn choice(&self) -> GaitChoice {
+        self.cfg.allowed.choice(self.selected)
     }
 
     fn beep(&mut self, count: u8) {
@@ -295,7 +379,7 @@ impl Operator {
                 if status.faulted {
                     self.beep(3);
                 } else {
-                    request = Some(Request::Start(self.selected()));
+                    request = Some(Request::Start(self.choice()));
                     self.beep(2);
                 }
             }
@@ -315,6 +399,7 @@ impl Operator {
 
         Output {
             selected: self.selected(),
+            selected_slot: self.choice().slot,
             request,
             feedback: self.feedback(&status),
             tick: self.tick,
@@ -330,7 +415,7 @@ impl Operator {
             Pattern::On
         } else {
             Pattern::Code {
-                count: self.selected().code(),
+                count: self.choice().flashes,
             }
         };
         // Blink while the combination is being held and has not yet acted.

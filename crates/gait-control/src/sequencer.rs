@@ -28,36 +28,118 @@ use gait_core::kinematics::Posture;
 use gait_core::tables::GaitTable;
 
 use crate::faults::InSwing;
-use crate::operator::Gait;
+use crate::operator::{Gait, GaitChoice, MAX_GAITS};
 use crate::posture::{JOINTS, Side, joints_from_phi};
 pub use crate::reference::Reference;
 use crate::reference::{ankles_in_start_posture, ankles_in_swing, table_motion};
 pub use config::SequencerConfig;
+use gait_core::tables::GaitKind;
 use transfer::TransferPlan;
 
 /// The ground search stops where the swing knee would straighten past this
 /// flexion, rad (6°): a leg locked straight takes the landing on its stop.
 const SEARCH_MIN_KNEE_FLEXION_RAD: f32 = 0.1;
 
-/// The verified tables the device carries (a gait without one cannot start).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// The verified tables the device plays, one per slot: the device's own
+/// three by movement ([`GaitTables::by_kind`]), or a patient's bundle in
+/// the clinician's order ([`GaitTables::in_order`], borrowed from where the
+/// board keeps them: the controller stays under 4 KiB, so that every field
+/// is in reach of one Cortex-M load). A gait without a table cannot start.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GaitTables<'t> {
-    /// Level walking.
-    pub walk: Option<GaitTable<'t>>,
-    /// Stair ascent.
-    pub stair_up: Option<GaitTable<'t>>,
-    /// Stair descent.
-    pub stair_down: Option<GaitTable<'t>>,
+    slots: Slots<'t>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Slots<'t> {
+    /// Walking, stair ascent, stair descent.
+    ByKind([Option<GaitTable<'t>>; 3]),
+    /// A patient's list (at most [`MAX_GAITS`] are used).
+    Listed(&'t [Option<GaitTable<'t>>]),
+}
+
+impl Default for GaitTables<'_> {
+    fn default() -> Self {
+        Self {
+            slots: Slots::ByKind([None; 3]),
+        }
+    }
+}
+
+/// The movement a table describes, as the operator names it.
+#[must_use]
+pub const fn gait_of_kind(kind: GaitKind) -> Gait {
+    match kind {
+        GaitKind::Walk => Gait::Walk,
+        GaitKind::StairUp => Gait::StairUp,
+        GaitKind::StairDown => Gait::StairDown,
+    }
 }
 
 impl<'t> GaitTables<'t> {
-    /// The table for a gait, if present and verified.
-    pub fn get(&self, gait: Gait) -> Option<&GaitTable<'t>> {
-        match gait {
-            Gait::Walk => self.walk.as_ref(),
-            Gait::StairUp => self.stair_up.as_ref(),
-            Gait::StairDown => self.stair_down.as_ref(),
+    /// One table per movement: walking in slot 0, stair ascent in 1,
+    /// descent in 2 (the slots [`crate::operator::AllowedGaits::new`]
+    /// chooses).
+    #[must_use]
+    pub const fn by_kind(
+        walk: Option<GaitTable<'t>>,
+        stair_up: Option<GaitTable<'t>>,
+        stair_down: Option<GaitTable<'t>>,
+    ) -> Self {
+        Self {
+            slots: Slots::ByKind([walk, stair_up, stair_down]),
         }
+    }
+
+    /// A patient's tables in order, slot *i* holding `list[i]` (the first
+    /// [`MAX_GAITS`]).
+    #[must_use]
+    pub const fn in_order(list: &'t [Option<GaitTable<'t>>]) -> Self {
+        Self {
+            slots: Slots::Listed(list),
+        }
+    }
+
+    /// The table in `slot`, if present.
+    #[must_use]
+    pub fn slot(&self, slot: usize) -> Option<&GaitTable<'t>> {
+        match &self.slots {
+            Slots::ByKind(t) => t.get(slot)?.as_ref(),
+            Slots::Listed(t) if slot < MAX_GAITS => t.get(slot)?.as_ref(),
+            Slots::Listed(_) => None,
+        }
+    }
+
+    /// The first slot holding a table of `gait`'s movement.
+    #[must_use]
+    pub fn slot_of(&self, gait: Gait) -> Option<usize> {
+        (0..MAX_GAITS).find(|&i| self.slot(i).is_some_and(|t| gait_of_kind(t.kind()) == gait))
+    }
+
+    /// The first table of `gait`'s movement, if present and verified.
+    #[must_use]
+    pub fn get(&self, gait: Gait) -> Option<&GaitTable<'t>> {
+        self.slot(self.slot_of(gait)?)
+    }
+}
+
+/// What the operator selected, as the sequencer finds its table: a
+/// movement (its first table) or a clinician's choice (its slot).
+pub trait Selection: Copy {
+    /// The slot of the selected table in `tables` (`None`: no table).
+    fn slot_in(self, tables: &GaitTables<'_>) -> Option<usize>;
+}
+
+impl Selection for Gait {
+    fn slot_in(self, tables: &GaitTables<'_>) -> Option<usize> {
+        tables.slot_of(self)
+    }
+}
+
+impl Selection for GaitChoice {
+    fn slot_in(self, tables: &GaitTables<'_>) -> Option<usize> {
+        let slot = usize::from(self.slot);
+        tables.slot(slot).map(|_| slot)
     }
 }
 
@@ -140,9 +222,10 @@ pub struct Sensed {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sequencer<'t> {
     cfg: SequencerConfig,
-    tables: GaitTables<'t>,
     phase: Phase,
     gait: Gait,
+    /// The slot of the table being played (or last played).
+    slot: usize,
     stance: Side,
     stop_requested: bool,
     new_steps_blocked: bool,
@@ -155,8 +238,6 @@ pub struct Sequencer<'t> {
     /// [`Sequencer::with_model`]); without, it blends joint angles.
     model: Option<BodyModel<f32>>,
     transfer: Option<TransferPlan>,
-    /// Each table's transfer end ([`transfer::transfer_targets`]).
-    transfer_targets: [Option<[f32; 5]>; 3],
     /// The swing foot's toe at the start of the table being played (stance
     /// foot's flat frame), m.
     swing_start_m: [f32; 2],
@@ -175,6 +256,14 @@ pub struct Sequencer<'t> {
     swing_phi1: f32,
     /// A safe hold's set-down of the swing foot, when it struck in a swing.
     set_down: Option<SetDown>,
+    /// The table being played (kept at hand: the tick reads it several
+    /// times).
+    table: Option<GaitTable<'t>>,
+    /// The tables, and each slot's transfer end
+    /// ([`transfer::transfer_targets`]): last, being large and read at
+    /// most once a tick.
+    tables: GaitTables<'t>,
+    transfer_targets: [Option<[f32; 5]>; MAX_GAITS],
 }
 
 /// A swing foot being set down in a safe hold: from where its ankle was
@@ -217,12 +306,13 @@ impl<'t> Sequencer<'t> {
     /// Starts standing, holding `posture` (normally the measured joints at
     /// power-up), with the left leg as stance.
     pub fn new(cfg: SequencerConfig, tables: GaitTables<'t>, posture: [f32; JOINTS]) -> Self {
-        let posture = posture.map(|v| if v.is_finite() { v } else { 0.0 });
-        Self {
+        let mut s = Self {
             cfg,
             tables,
             phase: Phase::Standing,
             gait: Gait::Walk,
+            slot: 0,
+            table: None,
             stance: Side::Left,
             stop_requested: false,
             new_steps_blocked: false,
@@ -231,7 +321,7 @@ impl<'t> Sequencer<'t> {
             blend_to: posture,
             model: None,
             transfer: None,
-            transfer_targets: [None; 3],
+            transfer_targets: [None; MAX_GAITS],
             swing_start_m: [0.0; 2],
             lifted_at_s: None,
             in_landing_window: false,
@@ -239,20 +329,44 @@ impl<'t> Sequencer<'t> {
             ankle_plan: [f32::NAN; 2],
             swing_phi1: f32::NAN,
             set_down: None,
-        }
+        };
+        s.restart_at(posture);
+        s
     }
 
-    /// This sequencer started afresh at `posture` (as [`Sequencer::new`]),
+    /// Starts afresh at `posture` (as [`Sequencer::new`]), in place,
     /// keeping its tables, model and what was computed from them once (the
     /// controller's first tick holds the measured posture this way, within
-    /// the tick's budget).
+    /// the tick's budget: nothing of the tables is copied).
+    pub fn restart_at(&mut self, posture: [f32; JOINTS]) {
+        let posture = posture.map(|v| if v.is_finite() { v } else { 0.0 });
+        self.phase = Phase::Standing;
+        self.gait = Gait::Walk;
+        self.slot = 0;
+        self.table = None;
+        self.stance = Side::Left;
+        self.stop_requested = false;
+        self.new_steps_blocked = false;
+        self.reference = posture;
+        self.blend_from = posture;
+        self.blend_to = posture;
+        self.transfer = None;
+        self.swing_start_m = [0.0; 2];
+        self.lifted_at_s = None;
+        self.in_landing_window = false;
+        self.contact_s = 0.0;
+        self.ankle_plan = [f32::NAN; 2];
+        self.swing_phi1 = f32::NAN;
+        self.set_down = None;
+    }
+
+    /// This sequencer started afresh at `posture` ([`Sequencer::restart_at`]
+    /// on a copy).
     #[must_use]
     pub fn restarted_at(&self, posture: [f32; JOINTS]) -> Self {
-        Self {
-            model: self.model,
-            transfer_targets: self.transfer_targets,
-            ..Self::new(self.cfg, self.tables, posture)
-        }
+        let mut s = *self;
+        s.restart_at(posture);
+        s
     }
 
     /// Plans each weight transfer in double support with this model's IK
@@ -380,13 +494,17 @@ impl<'t> Sequencer<'t> {
     /// Asks for a start of `gait`. Accepted only when standing, with a
     /// verified table, from that table's start posture (either leg may be
     /// the stance leg: the one whose mapping matches is chosen).
-    pub fn request_start(&mut self, gait: Gait, sensed: &Sensed) -> SeqEvent {
+    pub fn request_start(&mut self, selected: impl Selection, sensed: &Sensed) -> SeqEvent {
         if self.phase != Phase::Standing || self.new_steps_blocked {
             return SeqEvent::StartRefused(RefuseReason::Busy);
         }
-        let Some(table) = self.tables.get(gait) else {
+        let Some((slot, table)) = selected
+            .slot_in(&self.tables)
+            .and_then(|i| Some((i, *self.tables.slot(i)?)))
+        else {
             return SeqEvent::StartRefused(RefuseReason::NoTable);
         };
+        let gait = gait_of_kind(table.kind());
         let first = table.first();
         let tol = self.cfg.start_tolerance_rad;
         for stance in [self.stance, self.stance.other()] {
@@ -397,6 +515,8 @@ impl<'t> Sequencer<'t> {
                 .all(|(a, b)| (a - b).abs() <= tol);
             if close {
                 self.gait = gait;
+                self.slot = slot;
+                self.table = Some(table);
                 self.stance = stance;
                 self.stop_requested = false;
                 self.begin_blend(start);
@@ -434,8 +554,8 @@ impl<'t> Sequencer<'t> {
         let Phase::Swing { stance, t_s } = self.phase else {
             return asked;
         };
-        let duration = self.tables.get(self.gait).map_or(0.0, |tb| tb.duration_s());
-        let slot = transfer::target_slot(self.gait);
+        let duration = self.table.as_ref().map_or(0.0, |tb| tb.duration_s());
+        let slot = transfer::kind_index(self.gait);
         let after = self.cfg.lands_after.get(slot).copied().unwrap_or(1.0);
         let knee_works = !braked.get(stance.hip() + 1).copied().unwrap_or(true);
         if duration > 0.0 && t_s >= after * duration && knee_works {
@@ -668,7 +788,7 @@ impl<'t> Sequencer<'t> {
     pub fn update(
         &mut self,
         sensed: &Sensed,
-        selected: Gait,
+        selected: impl Selection,
         dt_s: f32,
         events: &mut impl FnMut(SeqEvent),
     ) -> Reference {
@@ -685,7 +805,7 @@ impl<'t> Sequencer<'t> {
                     self.blend_to
                 } else if self.ready(sensed, stance) {
                     self.phase = Phase::Swing { stance, t_s: 0.0 };
-                    let start = self.tables.get(self.gait).map(|tb| tb.at_time(0.0));
+                    let start = self.table.as_ref().map(|tb| tb.at_time(0.0));
                     self.swing_start_m = self
                         .planned_swing_toe(start.map(|p| Posture::new(&p)).as_ref())
                         .unwrap_or([0.0; 2]);
@@ -700,7 +820,7 @@ impl<'t> Sequencer<'t> {
             }
             Phase::Swing { stance, t_s } => {
                 let t = t_s + dt_s;
-                let duration = self.tables.get(self.gait).map_or(0.0, |tb| tb.duration_s());
+                let duration = self.table.as_ref().map_or(0.0, |tb| tb.duration_s());
                 let swing_foot = sensed
                     .feet_n
                     .get(stance.other().foot())
@@ -757,7 +877,7 @@ impl<'t> Sequencer<'t> {
                         let new_stance = stance.other();
                         self.stance = new_stance;
                         self.blend_from = reference;
-                        let table = self.tables.get(self.gait).copied();
+                        let table = self.table.as_ref().copied();
                         self.blend_to =
                             table.map_or(reference, |tb| joints_from_phi(&tb.first(), new_stance));
                         self.transfer = phi_t.and_then(|p| self.plan_transfer(&p, new_stance));
@@ -822,7 +942,7 @@ impl<'t> Sequencer<'t> {
             }
         }
         self.reference = next_reference;
-        let table = self.tables.get(self.gait);
+        let table = self.table.as_ref();
         let motion = swing.and_then(|(_, t, phi)| table_motion(table?, t, phi?));
         self.ankle_plan = match self.phase {
             Phase::SafeHold { .. } => self.ankle_plan,
@@ -836,7 +956,12 @@ impl<'t> Sequencer<'t> {
                 };
                 ankles_in_swing(s, phi1)
             }),
-            Phase::Standing => ankles_in_start_posture(self.tables.get(selected), self.stance),
+            Phase::Standing => ankles_in_start_posture(
+                selected
+                    .slot_in(&self.tables)
+                    .and_then(|i| self.tables.slot(i)),
+                self.stance,
+            ),
             Phase::WaitingReady { .. } | Phase::Transfer { .. } => {
                 ankles_in_start_posture(table, self.stance)
             }
@@ -861,7 +986,7 @@ impl<'t> Sequencer<'t> {
         // A NaN (faulted sensor) makes the sum NaN: never ready.
         let [left, right] = sensed.feet_n;
         let foot = left + right >= c.feet_ready_n;
-        let planned = self.tables.get(self.gait).map(|t| t.first()[0]);
+        let planned = self.table.as_ref().map(|t| t.first()[0]);
         let ankle = match (planned, sensed.ankles_rad.get(stance.ankle())) {
             (Some(p), Some(&a)) => (a - p).abs() <= c.start_ankle_tolerance_rad,
             _ => false,

@@ -232,6 +232,9 @@ pub struct Supervisor {
     /// Some encoder's persistent jump is taken out of its frames
     /// ([`Supervisor::encoder_offsets`]).
     encoder_offsets: bool,
+    /// Faults found at boot in flash data ([`Supervisor::report_boot_fault`]):
+    /// present at every check.
+    boot_faults: FaultSet,
 }
 
 /// Collects what one check raised.
@@ -293,6 +296,7 @@ impl Supervisor {
             cfg,
             calls: 0,
             present: FaultSet::EMPTY,
+            boot_faults: FaultSet::EMPTY,
             latch: Latch {
                 latched: FaultSet::EMPTY,
                 logged_channels: [0; FaultCode::COUNT],
@@ -400,6 +404,21 @@ impl Supervisor {
             .raise(&mut t, FaultCode::RestartedAfterPanic, NO_CHANNEL, 0.0);
     }
 
+    /// Latches a fault found at boot in the data the board loads from
+    /// flash ([`FaultCode::BundleRefused`], [`FaultCode::CalibrationRefused`]):
+    /// its condition stays present for as long as the board runs, so no
+    /// reset clears it. Call before the first tick.
+    pub fn report_boot_fault(&mut self, code: FaultCode) {
+        let mut t = Tick {
+            tick: 0,
+            present: FaultSet::EMPTY,
+            new: FaultSet::EMPTY,
+        };
+        self.boot_faults.insert(code);
+        self.present.insert(code);
+        self.latch.raise(&mut t, code, NO_CHANNEL, 0.0);
+    }
+
     /// The per-tick check: updates every detector with `input`, latches
     /// what tripped, and returns the reaction over all latched faults.
     pub fn check(&mut self, input: &SupervisorInput) -> Verdict {
@@ -417,7 +436,7 @@ impl Supervisor {
         self.check_forces(input, &mut t);
         self.check_drive_current(input, &mut t);
         self.previous_reference_rad = Some(input.joint_reference_rad);
-        self.present = t.present;
+        self.present = t.present.union(self.boot_faults);
         Verdict {
             reaction: self.latch.latched.reaction(),
             latched: self.latch.latched,

@@ -10,8 +10,8 @@
 use gait_control::drivers::buttons::{ButtonConfig, Debouncer};
 use gait_control::drivers::status::Pattern;
 use gait_control::operator::{
-    AllowedGaits, ConfigError, ControllerStatus, FAST_BLINK, Gait, Input, Operator, OperatorConfig,
-    Output, Request,
+    AllowedGaits, ConfigError, ControllerStatus, FAST_BLINK, Gait, GaitChoice, Input, MAX_GAITS,
+    Operator, OperatorConfig, Output, Request,
 };
 use proptest::prelude::*;
 
@@ -158,7 +158,14 @@ fn go_long_press_starts_selected_gait_once() {
     let reqs = rig.run(2000, false, true);
     assert_eq!(reqs.len(), 1);
     let (t, r) = reqs[0];
-    assert_eq!(r, Request::Start(Gait::StairUp));
+    assert_eq!(
+        r,
+        Request::Start(GaitChoice {
+            kind: Gait::StairUp,
+            slot: 1,
+            flashes: 2
+        })
+    );
     // 20 ms debounce + 1 s hold (counted from the debounced press).
     assert!((1015..=1025).contains(&t), "{t}");
     assert_eq!(rig.buzzer_count(), Some(2));
@@ -298,8 +305,27 @@ fn allowed_list_is_checked() {
     );
     assert_eq!(
         AllowedGaits::new(&[Gait::Walk, Gait::StairUp, Gait::StairDown, Gait::Walk]),
+        Err(ConfigError::Duplicate)
+    );
+    assert_eq!(
+        AllowedGaits::in_order(&[Gait::Walk; MAX_GAITS + 1]),
         Err(ConfigError::TooMany)
     );
+    // A bundle's list: the same movement more than once, each its own
+    // slot, shown by its place in the list.
+    let b = AllowedGaits::in_order(&[Gait::Walk, Gait::Walk, Gait::StairDown]).unwrap();
+    assert_eq!(b.len(), 3);
+    assert_eq!(
+        b.choice(1),
+        GaitChoice {
+            kind: Gait::Walk,
+            slot: 1,
+            flashes: 2
+        }
+    );
+    assert_eq!(b.choice(2).kind, Gait::StairDown);
+    assert_eq!(b.choice(2).flashes, 3);
+    assert_eq!(b.choice(3), b.choice(0));
     let a = AllowedGaits::new(&[Gait::StairDown, Gait::Walk]).unwrap();
     assert_eq!(
         (a.len(), a.get(0), a.get(1), a.get(2)),
@@ -354,7 +380,7 @@ proptest! {
                 match out.request {
                     Some(Request::Start(gait)) => {
                         prop_assert!(!walking && !step && !faulted);
-                        prop_assert!(gait == Gait::Walk || gait == Gait::StairUp);
+                        prop_assert!(gait.kind == Gait::Walk || gait.kind == Gait::StairUp);
                         starts_this_press += 1;
                         prop_assert_eq!(starts_this_press, 1);
                     }

@@ -72,9 +72,10 @@ impl<'t> Rig<'t> {
 
     fn with_config(image: &'t [u8], cfg: SequencerConfig) -> Self {
         let table = GaitTable::parse(image).unwrap();
-        let tables = GaitTables {
-            walk: Some(table),
-            ..GaitTables::default()
+        let tables = match table.kind() {
+            GaitKind::Walk => GaitTables::by_kind(Some(table), None, None),
+            GaitKind::StairUp => GaitTables::by_kind(None, Some(table), None),
+            GaitKind::StairDown => GaitTables::by_kind(None, None, Some(table)),
         };
         let start = joints_from_phi(&table.first(), Side::Left);
         Self {

@@ -259,3 +259,27 @@ fn the_physical_jump_bound_is_the_fastest_velocity_limit_over_one_tick() {
     cfg.velocity_limit_rad_s = [f32::NAN; JOINTS];
     assert_eq!(cfg.physical_jump_counts(), cfg.max_jump_counts_per_tick);
 }
+
+// ------------------------------------------------------ faults found at boot
+
+#[test]
+fn a_boot_fault_latches_before_the_first_tick_and_no_reset_clears_it() {
+    for (code, reaction) in [
+        (FaultCode::BundleRefused, Reaction::SafeHold),
+        (FaultCode::CalibrationRefused, Reaction::DisableMotors),
+    ] {
+        let mut sup = supervisor();
+        sup.report_boot_fault(code);
+        assert!(sup.latched().contains(code));
+        // Whatever the sensors say, the condition stays present.
+        for tick in 0..2_000 {
+            let v = sup.check(&healthy_input(tick));
+            assert_eq!(v.reaction, reaction, "{code:?} tick {tick}");
+            assert!(v.latched.contains(code));
+        }
+        assert!(sup.present().contains(code));
+        assert!(sup.request_reset(true).is_err(), "{code:?} was reset");
+        assert!(sup.latched().contains(code));
+        assert_eq!(sup.log().filter(|r| r.code == code).count(), 1);
+    }
+}

@@ -102,6 +102,29 @@ pub enum BundleError {
     BufferTooSmall,
 }
 
+impl BundleError {
+    /// A short name of the reason, without `core::fmt` (the board prints
+    /// it, and float or `Debug` formatting would put panic paths into its
+    /// image).
+    #[must_use]
+    pub const fn reason(&self) -> &'static str {
+        match self {
+            Self::BadMagic => "not-a-bundle",
+            Self::UnknownVersion(_) => "unknown-version",
+            Self::BadLength => "truncated",
+            Self::BadCrc => "crc",
+            Self::ForeignDevice { .. } => "foreign-device",
+            Self::BadPatientHash => "patient-hash",
+            Self::BadPatient => "patient-model",
+            Self::BadGaitCount => "gait-count",
+            Self::BadEntry(_) => "entry",
+            Self::Table(..) => "table",
+            Self::KindMismatch(_) => "kind-mismatch",
+            Self::BufferTooSmall => "buffer",
+        }
+    }
+}
+
 impl core::fmt::Display for BundleError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {

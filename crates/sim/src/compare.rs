@@ -118,13 +118,11 @@ pub fn gait_of(kind: GaitKind) -> Gait {
 
 /// Tables holding only `table`, under its kind.
 pub fn tables_of<'t>(table: GaitTable<'t>) -> GaitTables<'t> {
-    let mut t = GaitTables::default();
     match table.kind() {
-        GaitKind::Walk => t.walk = Some(table),
-        GaitKind::StairUp => t.stair_up = Some(table),
-        GaitKind::StairDown => t.stair_down = Some(table),
+        GaitKind::Walk => GaitTables::by_kind(Some(table), None, None),
+        GaitKind::StairUp => GaitTables::by_kind(None, Some(table), None),
+        GaitKind::StairDown => GaitTables::by_kind(None, None, Some(table)),
     }
-    t
 }
 
 /// Plays `table` on `device` with `pilot` from standing: GO, then `steps`

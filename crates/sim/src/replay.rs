@@ -68,6 +68,38 @@ pub fn record_gaits(device: &DeviceConfig) -> Result<Vec<Recording>, RigError> {
         .collect()
 }
 
+/// Records `steps` steps of a patient bundle's first gait on the device
+/// fitted to its patient (`fitted`), the bundle's tables in its order: the
+/// run the QEMU image replays through the controller the board builds for
+/// that bundle (`cargo xtask qemu --bundle`).
+pub fn record_bundle_step(
+    fitted: &DeviceConfig,
+    bundle: &gait_core::bundle::Bundle<'_>,
+    steps: usize,
+) -> Result<Recording, RigError> {
+    let first = bundle
+        .gait(0)
+        .ok_or(RigError::Config("the bundle holds no gait"))?;
+    let tables: Vec<_> = (0..bundle.len())
+        .map(|i| bundle.gait(i).map(|g| g.table))
+        .collect();
+    let gait = gait_control::sequencer::gait_of_kind(first.table.kind());
+    let max_s = 6.0 + steps as f64 * (f64::from(first.table.duration_s()) + 2.0);
+    let run = run_tables_with(
+        fitted,
+        gait_control::sequencer::GaitTables::in_order(&tables),
+        gait,
+        strong_pilot(),
+        max_s,
+        steps,
+        |rig| rig.record_ticks(),
+    )?;
+    Ok(Recording {
+        gait,
+        ticks: run.rig.recorded.unwrap_or_default(),
+    })
+}
+
 /// The recordings as a tick-record file.
 pub fn encode(recordings: &[Recording]) -> Vec<u8> {
     let count = u16::try_from(recordings.len()).unwrap_or(u16::MAX);

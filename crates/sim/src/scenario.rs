@@ -18,11 +18,11 @@ use crate::terrain::Terrain;
 
 /// The tables the firmware carries (`gait_core::flash_tables`), verified.
 pub fn flash_tables() -> GaitTables<'static> {
-    GaitTables {
-        walk: gait_core::flash_tables::walk().ok(),
-        stair_up: gait_core::flash_tables::stair_up().ok(),
-        stair_down: gait_core::flash_tables::stair_down().ok(),
-    }
+    GaitTables::by_kind(
+        gait_core::flash_tables::walk().ok(),
+        gait_core::flash_tables::stair_up().ok(),
+        gait_core::flash_tables::stair_down().ok(),
+    )
 }
 
 /// A pilot strong enough for the paper's walk (300 N·m through the

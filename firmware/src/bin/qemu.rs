@@ -21,6 +21,9 @@
 // the unsafe_code lint counts; this file contains no unsafe block of its own.
 #![allow(unsafe_code)]
 
+#[path = "qemu/bundle.rs"]
+mod bundle;
+
 use core::hint::black_box;
 
 use cortex_m::peripheral::{SYST, syst::SystClkSource};
@@ -80,6 +83,7 @@ fn device_error(l: &mut Line, e: &DeviceError) {
         DeviceError::Operator(_) => ("operator", None),
         DeviceError::Supervisor(_) => ("supervisor", None),
         DeviceError::Controller(_) => ("controller", None),
+        DeviceError::Patient(_) => ("patient model", None),
     };
     l.str(name);
     if let Some(i) = index {
@@ -207,6 +211,7 @@ fn run() -> usize {
             bench(out, &mut ctr);
             failed += control_tick_bench(out, &mut ctr);
             failed += replay_bench(out, &mut ctr);
+            failed += bundle::check(out, &mut ctr);
         }
         None => {
             out.put(&mut line("bench: SysTick unavailable"));

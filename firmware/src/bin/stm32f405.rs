@@ -62,9 +62,10 @@ use embedded_hal::digital::{ErrorType, OutputPin};
 use embedded_hal::spi::{Mode, Phase, Polarity};
 use embedded_hal_bus::spi::{AtomicDevice, ExclusiveDevice};
 use embedded_hal_bus::util::AtomicCell;
+use exogait_device::boot::{self, Gaits};
 use firmware::board_config::{self, BoardIo, TICK_HZ};
 use firmware::clock_tree::{ADC_SPI_BR, ENCODER_SPI_BR};
-use firmware::selftest;
+use firmware::{flash_sectors, selftest};
 use gait_control::controller::TickReport;
 use gait_control::faults::{FaultSet, Reaction};
 use stm32f4xx_hal::gpio::{ErasedPin, Output};
@@ -242,18 +243,43 @@ fn main() -> ! {
         fault_led: gpiob.pb8.into_push_pull_output().erase(),
         buzzer: gpiob.pb9.into_push_pull_output().erase(),
     };
-    let mut hw = match board_config::device().and_then(|d| board_config::hardware(&d, io)) {
+    // 5. The gaits: the patient's bundle from its own sector, verified
+    //    (`exogait_device::boot`); the built-in tables when it is erased.
+    let device = match board_config::device() {
+        Ok(d) => d,
+        Err(e) => {
+            defmt::error!("device configuration refused: {}", e);
+            halt("bad device configuration: motors stay disabled");
+        }
+    };
+    let gaits = boot::gaits_in(&device, flash_sectors::bundle());
+    match &gaits {
+        Gaits::BuiltIn => defmt::info!("no patient bundle: the device's built-in gaits"),
+        Gaits::Patient(b) => defmt::info!(
+            "patient bundle verified: {=usize} gaits, crc {=u32:#010x}, patient {=u32:#010x}",
+            b.len(),
+            b.crc(),
+            b.patient_hash()
+        ),
+        Gaits::Refused(e) => defmt::error!(
+            "patient bundle refused ({=str}): holding, GO does nothing (fault 0x0604)",
+            e.reason()
+        ),
+    }
+    let mut slots = [None; gait_core::bundle::MAX_GAITS];
+    let (cfg, mut controller) =
+        match boot::build(&device, &gaits, board_config::flash_tables(), &mut slots) {
+            Ok(x) => x,
+            Err(e) => {
+                defmt::error!("controller configuration refused: {}", e);
+                halt("bad controller configuration: motors stay disabled");
+            }
+        };
+    let mut hw = match board_config::hardware(&cfg, io) {
         Ok(hw) => hw,
         Err(e) => {
             defmt::error!("board configuration refused: {}", e);
             halt("bad board configuration: motors stay disabled");
-        }
-    };
-    let mut controller = match board_config::build_controller() {
-        Ok(c) => c,
-        Err(e) => {
-            defmt::error!("controller configuration refused: {}", e);
-            halt("bad controller configuration: motors stay disabled");
         }
     };
 
@@ -262,7 +288,7 @@ fn main() -> ! {
         controller.report_restart_after_panic();
     }
 
-    // 5. The 1 kHz loop under an independent watchdog. The DWT cycle counter
+    // 6. The 1 kHz loop under an independent watchdog. The DWT cycle counter
     //    measures each tick's work for the log.
     cp.DCB.enable_trace();
     cp.DWT.enable_cycle_counter();

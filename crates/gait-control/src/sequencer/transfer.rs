@@ -9,7 +9,7 @@ use gait_core::LINKS;
 use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::kinematics::{Phi, forward_kinematics, swap_legs};
 
-use crate::operator::Gait;
+use crate::operator::{Gait, MAX_GAITS};
 use crate::posture::{JOINTS, Side, joints_from_phi};
 
 use super::{Sequencer, smoothstep};
@@ -48,23 +48,24 @@ fn transfer_params(model: &BodyModel<f32>, ik: &IkSolver<f32>, phi: &Phi<f32>) -
     Some([x5, y5, phi[0], phi[2], r2])
 }
 
-/// The transfer's end for each gait's table (walk, ascent, descent): the
-/// parameters of its first posture, fixed with the tables, so a landing
-/// need not compute them.
+/// The transfer's end for each slot's table: the parameters of its first
+/// posture, fixed with the tables, so a landing need not compute them.
 pub(super) fn transfer_targets(
     model: &BodyModel<f32>,
     tables: &crate::sequencer::GaitTables<'_>,
-) -> [Option<[f32; 5]>; 3] {
-    [Gait::Walk, Gait::StairUp, Gait::StairDown].map(|gait| {
-        let table = tables.get(gait)?;
-        let ik = IkSolver::new(model).with_options(table.ik_options());
-        transfer_params(model, &ik, &table.first())
-    })
+) -> [Option<[f32; 5]>; MAX_GAITS] {
+    let mut out = [None; MAX_GAITS];
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = tables.slot(i).and_then(|table| {
+            let ik = IkSolver::new(model).with_options(table.ik_options());
+            transfer_params(model, &ik, &table.first())
+        });
+    }
+    out
 }
 
-/// `gait`'s slot in per-gait arrays ([`transfer_targets`],
-/// `SequencerConfig::lands_after`).
-pub(super) const fn target_slot(gait: Gait) -> usize {
+/// `gait`'s index in per-movement arrays (`SequencerConfig::lands_after`).
+pub(super) const fn kind_index(gait: Gait) -> usize {
     match gait {
         Gait::Walk => 0,
         Gait::StairUp => 1,
@@ -83,11 +84,7 @@ impl Sequencer<'_> {
     ) -> Option<TransferPlan> {
         let model = self.model.as_ref()?;
         let ik = self.transfer_ik(model)?;
-        let to = self
-            .transfer_targets
-            .get(target_slot(self.gait))
-            .copied()
-            .flatten()?;
+        let to = self.transfer_targets.get(self.slot).copied().flatten()?;
         // The same posture seen from the new stance foot (links swap roles).
         let mirrored = swap_legs(landing_phi);
         let from = transfer_params(model, &ik, &mirrored)?;
@@ -120,7 +117,7 @@ impl Sequencer<'_> {
     /// The IK the gait's table was made with (the options its header
     /// carries); `None` without a table.
     fn transfer_ik(&self, model: &BodyModel<f32>) -> Option<IkSolver<f32>> {
-        let options = self.tables.get(self.gait)?.ik_options();
+        let options = self.table.as_ref()?.ik_options();
         Some(IkSolver::new(model).with_options(options))
     }
 

@@ -1,0 +1,111 @@
+//! What the QEMU image proves of a patient's bundle at boot
+//! (`exogait_device::boot`): a refused bundle leaves the board holding with
+//! fault 0x0604 latched, GO ignored; a verified one plays its first gait's
+//! step through the controller the board builds for it, with the motor
+//! commands of the host's run of the same step
+//! (`cargo xtask qemu --bundle`).
+
+use exogait_device::DeviceConfig;
+use exogait_device::boot::{self, Gaits};
+use gait_control::controller::TickReport;
+use gait_control::faults::{FaultCode, Reaction};
+use gait_control::sequencer::Phase;
+use gait_core::bundle::MAX_GAITS;
+
+use crate::tick_replay::{self, Replay, ReplayError};
+use crate::{board_config, flash_sectors, qemu_rig};
+
+/// Ticks the refused board is run for (2 s), GO pressed from tick
+/// [`GO_FROM`] for [`GO_TICKS`].
+const HOLD_TICKS: u32 = 2_000;
+const GO_FROM: u32 = 500;
+const GO_TICKS: u32 = 300;
+
+/// How a board with a refused bundle behaved on the standing rig.
+#[derive(Clone, Copy, Debug)]
+pub struct HoldCheck {
+    /// Ticks run.
+    pub ticks: u32,
+    /// A step started (waiting for the pilot, or a swing): it must not.
+    pub stepped: bool,
+    /// 0x0604 was latched at every tick.
+    pub refusal_latched: bool,
+    /// The reaction at the last tick.
+    pub reaction: Reaction,
+    /// The last tick's phase.
+    pub phase: Phase,
+    /// The motors held the posture (enabled) at the last tick.
+    pub motors_enabled: bool,
+}
+
+/// Why a check could not run.
+#[derive(Clone, Copy, Debug)]
+pub enum CheckError {
+    /// The controller or its drivers were refused.
+    Config,
+    /// The step recording could not be replayed.
+    Replay(ReplayError),
+}
+
+/// Boots the board's controller for `gaits` (a refused bundle) on the
+/// standing rig, presses GO and runs it.
+pub fn refused_board(device: &DeviceConfig, gaits: &Gaits<'_>) -> Result<HoldCheck, CheckError> {
+    let mut slots = [None; MAX_GAITS];
+    let (cfg, mut controller) =
+        boot::build(device, gaits, board_config::flash_tables(), &mut slots)
+            .map_err(|_| CheckError::Config)?;
+    let mut hw =
+        board_config::hardware(&cfg, qemu_rig::standing(&cfg)).map_err(|_| CheckError::Config)?;
+    let pressed_high = matches!(
+        cfg.buttons.active,
+        gait_control::drivers::buttons::ActiveLevel::High
+    );
+    let mut check = HoldCheck {
+        ticks: 0,
+        stepped: false,
+        refusal_latched: true,
+        reaction: Reaction::None,
+        phase: Phase::Standing,
+        motors_enabled: false,
+    };
+    for i in 0..HOLD_TICKS {
+        let go = (GO_FROM..GO_FROM + GO_TICKS).contains(&i);
+        qemu_rig::PANEL.set_level(qemu_rig::Line::Go, go == pressed_high);
+        let r = controller.tick(&mut hw, false);
+        check.ticks += 1;
+        check.stepped |= matches!(r.phase, Phase::WaitingReady { .. } | Phase::Swing { .. });
+        check.refusal_latched &= r.faults.contains(FaultCode::BundleRefused);
+        check.reaction = r.reaction;
+        check.phase = r.phase;
+        check.motors_enabled = r.motors_enabled;
+    }
+    Ok(check)
+}
+
+/// Replays the recording loaded beside the image (the host's run of the
+/// bundle's first gait, fitted device) through the controller the board
+/// builds for the verified bundle `gaits`; `Ok(None)` when no recording
+/// was loaded.
+pub fn play_step(
+    device: &DeviceConfig,
+    gaits: &Gaits<'_>,
+    time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
+) -> Result<Option<Replay>, CheckError> {
+    let recording = flash_sectors::step_recording();
+    if exogait_device::tick_record::segments(recording).is_err() {
+        return Ok(None);
+    }
+    let mut slots = [None; MAX_GAITS];
+    let (cfg, controller) = boot::build(device, gaits, board_config::flash_tables(), &mut slots)
+        .map_err(|_| CheckError::Config)?;
+    // The recording holds one run: the controller the board built.
+    let mut once = Some(controller);
+    tick_replay::replay_with(
+        recording,
+        &cfg,
+        |_| once.take().ok_or(ReplayError::Config),
+        time,
+    )
+    .map(Some)
+    .map_err(CheckError::Replay)
+}
