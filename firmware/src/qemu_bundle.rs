@@ -51,9 +51,14 @@ pub enum CheckError {
 /// standing rig, presses GO and runs it.
 pub fn refused_board(device: &DeviceConfig, gaits: &Gaits<'_>) -> Result<HoldCheck, CheckError> {
     let mut slots = [None; MAX_GAITS];
-    let (cfg, mut controller) =
-        boot::build(device, gaits, board_config::flash_tables(), &mut slots)
-            .map_err(|_| CheckError::Config)?;
+    let (cfg, mut controller) = boot::build(
+        device,
+        gaits,
+        &boot::calibration_in(device, flash_sectors::calibration()),
+        board_config::flash_tables(),
+        &mut slots,
+    )
+    .map_err(|_| CheckError::Config)?;
     let mut hw =
         board_config::hardware(&cfg, qemu_rig::standing(&cfg)).map_err(|_| CheckError::Config)?;
     let pressed_high = matches!(
@@ -96,8 +101,14 @@ pub fn play_step(
         return Ok(None);
     }
     let mut slots = [None; MAX_GAITS];
-    let (cfg, controller) = boot::build(device, gaits, board_config::flash_tables(), &mut slots)
-        .map_err(|_| CheckError::Config)?;
+    let (cfg, controller) = boot::build(
+        device,
+        gaits,
+        &boot::calibration_in(device, flash_sectors::calibration()),
+        board_config::flash_tables(),
+        &mut slots,
+    )
+    .map_err(|_| CheckError::Config)?;
     // The recording holds one run: the controller the board built.
     let mut once = Some(controller);
     tick_replay::replay_with(
@@ -108,4 +119,66 @@ pub fn play_step(
     )
     .map(Some)
     .map_err(CheckError::Replay)
+}
+
+/// How a board without a usable calibration behaved on the standing rig.
+#[derive(Clone, Copy, Debug)]
+pub struct OffCheck {
+    /// Ticks run.
+    pub ticks: u32,
+    /// A motor was enabled at some tick: it must not be.
+    pub any_enabled: bool,
+    /// 0x0605 was latched at every tick.
+    pub refusal_latched: bool,
+}
+
+/// Boots the board's controller without a calibration (`refusal`) on the
+/// standing rig, presses GO, and runs it for 2 s.
+pub fn uncalibrated_board(
+    device: &DeviceConfig,
+    refusal: exogait_device::calibration::Refusal,
+) -> Result<OffCheck, CheckError> {
+    let mut slots = [None; MAX_GAITS];
+    let (cfg, mut controller) = boot::build(
+        device,
+        &Gaits::BuiltIn,
+        &Err(refusal),
+        board_config::flash_tables(),
+        &mut slots,
+    )
+    .map_err(|_| CheckError::Config)?;
+    let mut hw =
+        board_config::hardware(&cfg, qemu_rig::standing(&cfg)).map_err(|_| CheckError::Config)?;
+    let pressed_high = matches!(
+        cfg.buttons.active,
+        gait_control::drivers::buttons::ActiveLevel::High
+    );
+    let mut check = OffCheck {
+        ticks: 0,
+        any_enabled: false,
+        refusal_latched: true,
+    };
+    for i in 0..HOLD_TICKS {
+        let go = (GO_FROM..GO_FROM + GO_TICKS).contains(&i);
+        qemu_rig::PANEL.set_level(qemu_rig::Line::Go, go == pressed_high);
+        let r = controller.tick(&mut hw, false);
+        check.ticks += 1;
+        check.any_enabled |= r.motors_enabled || hw.motors.iter().any(|m| m.is_enabled());
+        check.refusal_latched &= r.faults.contains(FaultCode::CalibrationRefused);
+    }
+    Ok(check)
+}
+
+/// The calibration procedure on the rig set to the jig's posture: what
+/// it records, and the record read back from its bytes.
+pub fn record_on_jig(
+    device: &DeviceConfig,
+) -> Result<exogait_device::calibration::Record, exogait_device::calibration::Refusal> {
+    use exogait_device::calibration::{Record, Refusal, measure};
+    qemu_rig::on_jig(device);
+    let mut hw = board_config::hardware(device, qemu_rig::peripherals())
+        .map_err(|_| Refusal::ReadFailed(0))?;
+    let (enc, force) = measure(&mut hw)?;
+    let rec = Record::from_readings(device, &enc, &force)?;
+    Record::parse(&rec.encode(), device)
 }

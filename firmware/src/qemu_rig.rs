@@ -418,6 +418,23 @@ pub fn stand(device: &DeviceConfig) {
     PANEL.set_level(Line::EStop, !device.e_stop_active_high);
 }
 
+/// Sets the [`PANEL`] to the device on its calibration jig: every joint at
+/// its zero pose, nothing on the feet and crutches, the drives' monitors
+/// at 0 A (what the calibration procedure records).
+pub fn on_jig(device: &DeviceConfig) {
+    for (channel, cal) in device.encoders.iter().enumerate() {
+        PANEL.set_encoder(channel, counts_at(*cal, 0.0));
+    }
+    let foot = (device.foot_sensor.counts(0.0) + 0.5) as u16;
+    let crutch = (device.crutch_sensor.counts(0.0) + 0.5) as u16;
+    for (channel, counts) in [foot, foot, crutch, crutch, 2_048, 2_048, 2_048, 2_048]
+        .into_iter()
+        .enumerate()
+    {
+        PANEL.set_adc(channel, counts);
+    }
+}
+
 /// Sets the [`PANEL`] to one recorded tick: the counts as recorded, each
 /// input at the level that means what was recorded under the device's
 /// polarities.

@@ -8,9 +8,9 @@
 //! rustup's `rust-lld` (or `arm-none-eabi-ld`). Missing Debian packages are
 //! installed with apt-get (as root, or through sudo).
 
-mod bundle;
 mod panic_paths;
 mod profile;
+mod sectors;
 mod tick_replay;
 
 use std::env;
@@ -65,12 +65,14 @@ fn main() -> ExitCode {
             Ok(())
         }),
         "qemu" => Toolchain::detect().and_then(|tc| match rest {
-            [flag, file] if flag == "--bundle" => bundle::qemu(&tc, Path::new(file)).map(|_| ()),
+            [flag, file] if flag == "--bundle" => {
+                sectors::qemu_with_bundle(&tc, Path::new(file)).map(|_| ())
+            }
             [] => qemu(&tc),
             _ => Err("usage: cargo xtask qemu [--bundle FILE]".into()),
         }),
         "flash-bundle" => match rest {
-            [file] => bundle::flash(Path::new(file)),
+            [file] => sectors::flash_bundle(Path::new(file)),
             _ => Err("usage: cargo xtask flash-bundle FILE".into()),
         },
         "profile" => Toolchain::detect().and_then(|tc| {
@@ -161,8 +163,11 @@ fn ci() -> Result {
     step("QEMU self-test", || qemu(&tc))?;
     step(
         "QEMU boot with a patient's bundle, good and corrupted",
-        || bundle::ci_boot(&tc),
+        || sectors::ci_bundle_boot(&tc),
     )?;
+    step("QEMU boot without a calibration", || {
+        sectors::ci_uncalibrated_boot(&tc)
+    })?;
     step("size report", || size_all(&tc))?;
     Ok(())
 }
@@ -511,7 +516,7 @@ fn clippy(tc: &Toolchain) -> Result {
 }
 
 fn qemu(tc: &Toolchain) -> Result {
-    let text = run_qemu(tc, &[])?;
+    let text = run_qemu(tc, &[sectors::calibration_load()?])?;
     check_device_fingerprint(&text)?;
     tick_replay::check(&text)
 }

@@ -1,4 +1,6 @@
-//! What the board plays, decided once at boot from the bundle sector: the
+//! What the board runs with, decided once at boot from its data sectors:
+//! its calibration (`crate::calibration`; without one the motors stay off,
+//! fault 0x0605), and what it plays, from the bundle sector: the
 //! device's own tables when the sector is erased (no patient fitted), a
 //! patient's verified bundle, or nothing at all when a bundle is there but
 //! fails verification (fault 0x0604: the board holds, GO does nothing).
@@ -15,6 +17,7 @@ use gait_control::sequencer::{GaitTables, gait_of_kind};
 use gait_core::bundle::{Bundle, BundleError, MAX_GAITS};
 use gait_core::tables::GaitTable;
 
+use crate::calibration::{Record, Refusal};
 use crate::{DeviceConfig, DeviceError};
 
 /// Where the board's gaits come from.
@@ -83,12 +86,37 @@ pub fn patient_gaits<'a>(
     ))
 }
 
+/// The calibration record in its sector, verified for `device`.
+pub fn calibration_in(device: &DeviceConfig, sector: &[u8]) -> Result<Record, Refusal> {
+    Record::parse(sector, device)
+}
+
 /// The device and controller the board runs with `gaits` over the
 /// device's own `built_in` tables: fitted to the patient and over their
 /// bundle; as built over the built-in tables; as built over no table with
-/// fault 0x0604 latched when the bundle was refused.
-/// `slots` holds a patient's tables while the controller runs.
+/// fault 0x0604 latched when the bundle was refused. The device is first
+/// given its `calibration`; without one (refused), fault 0x0605 is
+/// latched and the motors stay off. `slots` holds a patient's tables while
+/// the controller runs.
 pub fn build<'a>(
+    device: &DeviceConfig,
+    gaits: &Gaits<'a>,
+    calibration: &Result<Record, Refusal>,
+    built_in: GaitTables<'a>,
+    slots: &'a mut TableSlots<'a>,
+) -> Result<(DeviceConfig, Controller<'a>), DeviceError> {
+    let device = match calibration {
+        Ok(r) => device.calibrated(r)?,
+        Err(_) => *device,
+    };
+    let (cfg, mut controller) = with_gaits(&device, gaits, built_in, slots)?;
+    if calibration.is_err() {
+        controller.report_boot_fault(FaultCode::CalibrationRefused);
+    }
+    Ok((cfg, controller))
+}
+
+fn with_gaits<'a>(
     device: &DeviceConfig,
     gaits: &Gaits<'a>,
     built_in: GaitTables<'a>,

@@ -21,6 +21,7 @@
 
 pub mod admission;
 pub mod boot;
+pub mod calibration;
 pub mod drive;
 pub mod fitting;
 pub mod parts;

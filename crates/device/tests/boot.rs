@@ -11,6 +11,7 @@
 
 use exogait_device::DeviceConfig;
 use exogait_device::boot::{self, Gaits, TableSlots};
+use exogait_device::calibration::{self, Record, Refusal};
 use exogait_device::fitting::{Measures, fit};
 use gait_control::faults::FaultCode;
 use gait_control::operator::Gait;
@@ -81,7 +82,8 @@ fn an_erased_sector_plays_the_built_in_gaits() {
         assert_eq!(gaits, Gaits::BuiltIn);
         let built_in = GaitTables::by_kind(gait_core::flash_tables::walk().ok(), None, None);
         let mut slots: TableSlots<'_> = [None; MAX_GAITS];
-        let (cfg, c) = boot::build(&d, &gaits, built_in, &mut slots).unwrap();
+        let (cfg, c) =
+            boot::build(&d, &gaits, &Ok(Record::of_device(&d)), built_in, &mut slots).unwrap();
         assert_eq!(cfg, d);
         assert_eq!(c.planned_gait(), Gait::Walk);
         assert!(c.supervisor().latched().is_empty());
@@ -98,7 +100,14 @@ fn a_verified_bundle_plays_its_gaits_in_order_on_the_fitted_device() {
     };
     assert_eq!(b.len(), 2);
     let mut slots: TableSlots<'_> = [None; MAX_GAITS];
-    let (cfg, c) = boot::build(&d, &gaits, GaitTables::default(), &mut slots).unwrap();
+    let (cfg, c) = boot::build(
+        &d,
+        &gaits,
+        &Ok(Record::of_device(&d)),
+        GaitTables::default(),
+        &mut slots,
+    )
+    .unwrap();
     // The controller's model is the patient's, the rest the device's.
     assert_eq!(cfg.body.links(), b.patient().model.links());
     assert_ne!(cfg.fingerprint(), d.fingerprint());
@@ -139,7 +148,14 @@ fn a_refused_bundle_plays_nothing_and_latches_0x0604_for_good() {
         // is checked first.
         assert_eq!(e, why);
         let mut slots: TableSlots<'_> = [None; MAX_GAITS];
-        let (cfg, c) = boot::build(&d, &gaits, GaitTables::default(), &mut slots).unwrap();
+        let (cfg, c) = boot::build(
+            &d,
+            &gaits,
+            &Ok(Record::of_device(&d)),
+            GaitTables::default(),
+            &mut slots,
+        )
+        .unwrap();
         assert_eq!(cfg, d);
         assert!(c.sequencer().tables().slot(0).is_none());
         assert!(c.supervisor().latched().contains(FaultCode::BundleRefused));
@@ -159,5 +175,122 @@ fn a_refused_bundle_plays_nothing_and_latches_0x0604_for_good() {
             bundle: other,
             device: d.fingerprint()
         })
+    );
+}
+
+// ------------------------------------------------------------ calibration
+
+fn readings(
+    d: &DeviceConfig,
+    rec: &Record,
+) -> (
+    [[u16; calibration::SAMPLES]; 6],
+    [[u16; calibration::SAMPLES]; 4],
+) {
+    let _ = d;
+    let mut enc = [[0u16; calibration::SAMPLES]; 6];
+    for (e, &z) in enc.iter_mut().zip(&rec.encoder_zero_counts) {
+        for (k, v) in e.iter_mut().enumerate() {
+            // ±2 counts of jitter, wrapping at 14 bits.
+            *v = ((i32::from(z) + (k as i32 % 5) - 2).rem_euclid(16384)) as u16;
+        }
+    }
+    let mut f = [[0u16; calibration::SAMPLES]; 4];
+    for (c, &z) in f.iter_mut().zip(&rec.force_zero_counts) {
+        for (k, v) in c.iter_mut().enumerate() {
+            *v = z + (k % 3) as u16 - 1;
+        }
+    }
+    (enc, f)
+}
+
+#[test]
+fn a_record_round_trips_and_every_corruption_is_refused() {
+    let d = device();
+    let mut rec = Record::of_device(&d);
+    rec.encoder_zero_counts[3] = 16_383; // a zero next to the wrap
+    let b = rec.encode();
+    assert_eq!(Record::parse(&b, &d), Ok(rec));
+    for byte in 0..calibration::RECORD_LEN {
+        for bit in 0..8 {
+            let mut x = b;
+            x[byte] ^= 1 << bit;
+            assert!(Record::parse(&x, &d).is_err(), "flip {byte}:{bit} accepted");
+        }
+    }
+    assert_eq!(Record::parse(&[0xFF; 64], &d), Err(Refusal::Missing));
+    assert_eq!(Record::parse(&b[..20], &d), Err(Refusal::Missing));
+    // Plausibility, even under a good CRC.
+    let mut loaded = rec;
+    loaded.force_zero_counts[2] += 400;
+    assert_eq!(
+        Record::parse(&loaded.encode(), &d),
+        Err(Refusal::ForceZero(2))
+    );
+    let mut wide = rec;
+    wide.encoder_zero_counts[0] = 16_384;
+    assert_eq!(
+        Record::parse(&wide.encode(), &d),
+        Err(Refusal::EncoderZero(0))
+    );
+}
+
+#[test]
+fn the_recording_procedure_finds_the_zeros_and_refuses_a_moving_device() {
+    let d = device();
+    let mut truth = Record::of_device(&d);
+    truth.encoder_zero_counts = [1, 15_000, 8_191, 40, 3_000, 16_380];
+    truth.force_zero_counts[0] += 37;
+    let (enc, force) = readings(&d, &truth);
+    assert_eq!(Record::from_readings(&d, &enc, &force), Ok(truth));
+    let mut moved = enc;
+    moved[1][40] = moved[1][40].wrapping_add(30);
+    assert_eq!(
+        Record::from_readings(&d, &moved, &force),
+        Err(Refusal::EncoderMoved(1))
+    );
+    let mut pressed = force;
+    pressed[3][10] += 200;
+    assert_eq!(
+        Record::from_readings(&d, &enc, &pressed),
+        Err(Refusal::ForceMoved(3))
+    );
+}
+
+#[test]
+fn the_calibrated_device_reads_with_the_record_and_without_one_stays_off() {
+    let d = device();
+    let mut rec = Record::of_device(&d);
+    // The simulated device's own record changes nothing.
+    assert_eq!(d.calibrated(&rec).unwrap(), d);
+    rec.encoder_zero_counts[4] = 123;
+    rec.force_zero_counts[1] += 50;
+    let c = d.calibrated(&rec).unwrap();
+    assert_eq!(c.encoders[4].zero_offset_counts, 123);
+    assert_eq!(c.encoders[4].direction, d.encoders[4].direction);
+    assert_ne!(
+        c.controller.force_calibration,
+        d.controller.force_calibration
+    );
+    // Without a record: 0x0605 latched for good, motors off.
+    let s = vec![0xFFu8; 4096];
+    let gaits = boot::gaits_in(&d, &s);
+    let mut slots: TableSlots<'_> = [None; MAX_GAITS];
+    let (_, ctl) = boot::build(
+        &d,
+        &gaits,
+        &Err(Refusal::Missing),
+        GaitTables::default(),
+        &mut slots,
+    )
+    .unwrap();
+    assert!(
+        ctl.supervisor()
+            .latched()
+            .contains(FaultCode::CalibrationRefused)
+    );
+    assert_eq!(
+        ctl.supervisor().latched().reaction(),
+        gait_control::faults::Reaction::DisableMotors
     );
 }

@@ -23,6 +23,8 @@
 
 #[path = "qemu/bundle.rs"]
 mod bundle;
+#[path = "qemu/calibration.rs"]
+mod calibration;
 
 use core::hint::black_box;
 
@@ -211,6 +213,7 @@ fn run() -> usize {
             bench(out, &mut ctr);
             failed += control_tick_bench(out, &mut ctr);
             failed += replay_bench(out, &mut ctr);
+            failed += calibration::check(out);
             failed += bundle::check(out, &mut ctr);
         }
         None => {

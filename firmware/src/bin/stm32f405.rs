@@ -40,6 +40,8 @@
 // to `#[export_name]`, which this lint counts.
 #![allow(unsafe_code)]
 
+#[path = "stm32f405/calibrate.rs"]
+mod calibrate;
 #[path = "stm32f405/clocks.rs"]
 mod clocks;
 #[path = "stm32f405/pwm.rs"]
@@ -230,21 +232,27 @@ fn main() -> ! {
         gpioc.pc10.into_push_pull_output().erase(),
         gpioc.pc11.into_push_pull_output().erase(),
     ];
+    let mode = gpioc.pc0.into_pull_up_input().erase();
+    let go = gpioc.pc1.into_pull_up_input().erase();
+    // MODE and GO held at power-up (active low): the calibration procedure.
+    let calibrating = mode.is_low() && go.is_low();
     let io = BoardIo {
         encoders,
         adc,
         pwm,
         dir,
         enable: en,
-        mode: gpioc.pc0.into_pull_up_input().erase(),
-        go: gpioc.pc1.into_pull_up_input().erase(),
+        mode,
+        go,
         e_stop: gpioa.pa0.into_pull_up_input().erase(),
         gait_led: gpioc.pc13.into_push_pull_output().erase(),
         fault_led: gpiob.pb8.into_push_pull_output().erase(),
         buzzer: gpiob.pb9.into_push_pull_output().erase(),
     };
-    // 5. The gaits: the patient's bundle from its own sector, verified
-    //    (`exogait_device::boot`); the built-in tables when it is erased.
+    // 5. The device's calibration from its own sector (or, MODE and GO
+    //    held at power-up, recorded now), and the gaits: the patient's
+    //    bundle from its own sector, verified (`exogait_device::boot`); the
+    //    built-in tables when it is erased.
     let device = match board_config::device() {
         Ok(d) => d,
         Err(e) => {
@@ -252,6 +260,34 @@ fn main() -> ! {
             halt("bad device configuration: motors stay disabled");
         }
     };
+    if calibrating {
+        let mut flash = dp.FLASH;
+        let recorded = board_config::hardware(&device, io)
+            .map_err(|_| calibrate::Failure::ReadBack)
+            .and_then(|mut hw| calibrate::record(&device, &mut hw, &mut flash));
+        match recorded {
+            Ok(r) => {
+                defmt::info!(
+                    "calibration recorded: encoder zeros {}, load cells unloaded {}",
+                    r.encoder_zero_counts,
+                    r.force_zero_counts
+                );
+                halt("calibration recorded: restart the board");
+            }
+            Err(calibrate::Failure::Refused(e)) => {
+                defmt::error!("calibration refused ({=str}): nothing written", e.reason());
+                halt("calibration refused: check the jig and the posture, then try again");
+            }
+            Err(_) => halt("calibration could not be written to flash"),
+        }
+    }
+    let calibration = boot::calibration_in(&device, flash_sectors::calibration());
+    if let Err(e) = &calibration {
+        defmt::error!(
+            "calibration refused ({=str}): motors stay off (fault 0x0605); record it on the jig",
+            e.reason()
+        );
+    }
     let gaits = boot::gaits_in(&device, flash_sectors::bundle());
     match &gaits {
         Gaits::BuiltIn => defmt::info!("no patient bundle: the device's built-in gaits"),
@@ -267,14 +303,19 @@ fn main() -> ! {
         ),
     }
     let mut slots = [None; gait_core::bundle::MAX_GAITS];
-    let (cfg, mut controller) =
-        match boot::build(&device, &gaits, board_config::flash_tables(), &mut slots) {
-            Ok(x) => x,
-            Err(e) => {
-                defmt::error!("controller configuration refused: {}", e);
-                halt("bad controller configuration: motors stay disabled");
-            }
-        };
+    let (cfg, mut controller) = match boot::build(
+        &device,
+        &gaits,
+        &calibration,
+        board_config::flash_tables(),
+        &mut slots,
+    ) {
+        Ok(x) => x,
+        Err(e) => {
+            defmt::error!("controller configuration refused: {}", e);
+            halt("bad controller configuration: motors stay disabled");
+        }
+    };
     let mut hw = match board_config::hardware(&cfg, io) {
         Ok(hw) => hw,
         Err(e) => {

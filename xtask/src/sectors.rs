@@ -1,7 +1,8 @@
-//! A patient's bundle on the board: booted under QEMU with the bundle in
-//! its sector (`cargo xtask qemu --bundle FILE`), written to the motor
-//! board's sector (`cargo xtask flash-bundle FILE`), and CI's check of both
-//! a good and a corrupted bundle at boot.
+//! The board's data sectors, apart from its image: the calibration record
+//! QEMU boots with (the simulated device's own), a patient's bundle booted
+//! under QEMU (`cargo xtask qemu --bundle FILE`) or written to the motor
+//! board's sector (`cargo xtask flash-bundle FILE`), and CI's checks of a
+//! good and a corrupted bundle and of a board without a calibration.
 //!
 //! The addresses are the firmware's (`firmware/src/flash_sectors.rs`,
 //! `memory.x`, `firmware/qemu/memory.x`).
@@ -15,6 +16,8 @@ use crate::{Result, Toolchain, cargo, root, run, run_qemu};
 
 /// Where the QEMU image reads the bundle sector.
 const QEMU_BUNDLE_ADDR: u32 = 0x0030_0000;
+/// Where the QEMU image reads its calibration record.
+const QEMU_CALIBRATION_ADDR: u32 = 0x0032_0000;
 /// Where the QEMU image reads the recording of the bundle's first step.
 const QEMU_RECORDING_ADDR: u32 = 0x0034_0000;
 /// The motor board's bundle sector (sector 11).
@@ -28,7 +31,7 @@ const CHIP: &str = "STM32F405RGTx";
 /// must print `bundle: ok …` and replay that step with the host's motor
 /// commands. When the host refuses it, the image must print
 /// `bundle: refused reason=…` and hold with GO ignored.
-pub fn qemu(tc: &Toolchain, file: &Path) -> Result<String> {
+pub fn qemu_with_bundle(tc: &Toolchain, file: &Path) -> Result<String> {
     let recording = root().join("target/replay/bundle-step.bin");
     let status = cargo()
         .args([
@@ -49,7 +52,8 @@ pub fn qemu(tc: &Toolchain, file: &Path) -> Result<String> {
         Some(2) => false,
         _ => return Err(format!("recording the bundle's step failed ({status})")),
     };
-    let mut loads: Vec<(PathBuf, u32)> = vec![(file.to_path_buf(), QEMU_BUNDLE_ADDR)];
+    let mut loads: Vec<(PathBuf, u32)> =
+        vec![(file.to_path_buf(), QEMU_BUNDLE_ADDR), calibration_load()?];
     if verified {
         loads.push((recording, QEMU_RECORDING_ADDR));
     }
@@ -82,7 +86,7 @@ pub fn qemu(tc: &Toolchain, file: &Path) -> Result<String> {
 /// Writes `file` to the motor board's bundle sector with probe-rs, after
 /// verifying it for this device (a bundle the board would refuse is not
 /// written).
-pub fn flash(file: &Path) -> Result {
+pub fn flash_bundle(file: &Path) -> Result {
     let bytes = std::fs::read(file).map_err(|e| format!("{}: {e}", file.display()))?;
     let device = exogait_device::DeviceConfig::exogait()
         .map_err(|e| format!("device configuration refused: {e:?}"))?;
@@ -107,7 +111,7 @@ pub fn flash(file: &Path) -> Result {
 /// CI: a small family for a 1.60 m, 55 kg patient made with `exogait`,
 /// booted as it is (its first step played), then with one byte of a
 /// table flipped (refused: the board holds).
-pub fn ci_boot(tc: &Toolchain) -> Result {
+pub fn ci_bundle_boot(tc: &Toolchain) -> Result {
     let dir = root().join("target/qemu-bundle");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let patient = dir.join("patient.json");
@@ -139,7 +143,7 @@ pub fn ci_boot(tc: &Toolchain) -> Result {
         "--out",
         &path(&good),
     ]))?;
-    qemu(tc, &good)?;
+    qemu_with_bundle(tc, &good)?;
     let mut bytes = std::fs::read(&good).map_err(|e| format!("{}: {e}", good.display()))?;
     let middle = bytes.len() / 2;
     if let Some(b) = bytes.get_mut(middle) {
@@ -147,9 +151,36 @@ pub fn ci_boot(tc: &Toolchain) -> Result {
     }
     let bad = dir.join("corrupted.bundle");
     std::fs::write(&bad, &bytes).map_err(|e| format!("{}: {e}", bad.display()))?;
-    let text = qemu(tc, &bad)?;
+    let text = qemu_with_bundle(tc, &bad)?;
     if !text.contains("bundle: refused reason=crc") {
         return Err("the corrupted bundle was not refused for its CRC".into());
+    }
+    Ok(())
+}
+
+/// The simulated device's calibration record (`Record::of_device`) as a
+/// file, and where QEMU loads it: what a calibrated board holds.
+pub fn calibration_load() -> Result<(PathBuf, u32)> {
+    let device = exogait_device::DeviceConfig::exogait()
+        .map_err(|e| format!("device configuration refused: {e:?}"))?;
+    let dir = root().join("target/qemu-data");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let file = dir.join("calibration.bin");
+    let record = exogait_device::calibration::Record::of_device(&device).encode();
+    std::fs::write(&file, record).map_err(|e| format!("{}: {e}", file.display()))?;
+    Ok((file, QEMU_CALIBRATION_ADDR))
+}
+
+/// CI: the QEMU image without a calibration record must say so and keep
+/// its motors off (its self-test still runs).
+pub fn ci_uncalibrated_boot(tc: &Toolchain) -> Result {
+    let text = run_qemu(tc, &[])?;
+    let has = |s: &str| text.lines().any(|l| l.trim().starts_with(s));
+    if !has("calibration: refused reason=missing") {
+        return Err("the board booted without a calibration and did not refuse it".into());
+    }
+    if !has("calibration: without a record the motors stay off") {
+        return Err("a board without a calibration enabled a motor".into());
     }
     Ok(())
 }
