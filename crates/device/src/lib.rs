@@ -163,10 +163,17 @@ const DRIVE_SOFT_START_TICKS: u32 = 40;
 impl DeviceConfig {
     /// The exogait device.
     pub fn exogait() -> Result<Self, DeviceError> {
+        Self::with_drive(JOINT_DRIVE)
+    }
+
+    /// The device with `drive` at every hip and knee (the controller's
+    /// torque limits, the motor drivers and the supervisor's current check
+    /// follow it): for comparing drives, not a device that is built.
+    pub fn with_drive(drive: DriveSpec) -> Result<Self, DeviceError> {
         let limits = JointLimits::<f64>::paper_with_heel_rocker();
         let table_iii = BodyModel::<f64>::paper_table_iii();
         let body = BodyModel::new(*table_iii.links(), limits).unwrap_or(table_iii);
-        let drives = [JOINT_DRIVE; JOINTS];
+        let drives = [drive; JOINTS];
         let motors =
             drives.map(|d| d.motor_config(DT_S, DRIVE_SLEW_NM_PER_TICK, DRIVE_SOFT_START_TICKS));
         let foot = |i: usize| {
@@ -180,7 +187,7 @@ impl DeviceConfig {
                 .map_err(|e| DeviceError::ForceCalibration(i, e))
         };
         let drive_current = |j: usize| {
-            let d: &DriveSpec = drives.get(j).unwrap_or(&JOINT_DRIVE);
+            let d: &DriveSpec = drives.get(j).unwrap_or(&drive);
             DRIVE_CURRENT_MONITOR
                 .calibration(d.joint_torque_per_amp())
                 .map_err(|e| DeviceError::DriveCurrentCalibration(j, e))
@@ -189,7 +196,7 @@ impl DeviceConfig {
         let controller = ControllerConfig {
             dt_s: DT_S,
             gains: [HIP_GAINS, KNEE_GAINS, HIP_GAINS, KNEE_GAINS].map(|g| JointGains {
-                torque_limit_nm: JOINT_DRIVE.peak_torque_nm(),
+                torque_limit_nm: drive.peak_torque_nm(),
                 ..g
             }),
             sequencer: SEQUENCER,
@@ -210,7 +217,7 @@ impl DeviceConfig {
         supervisor.max_jump_counts_per_tick = supervisor.physical_jump_counts();
         supervisor.force_min_n = FOOT_LOAD_CELL.rated_min_n;
         supervisor.force_max_n = FOOT_LOAD_CELL.rated_max_n;
-        supervisor.drive_current.full_torque_speed_rad_s = JOINT_DRIVE.full_torque_speed_rad_s();
+        supervisor.drive_current.full_torque_speed_rad_s = drive.full_torque_speed_rad_s();
         Ok(Self {
             dt_s: DT_S,
             body,
