@@ -16,7 +16,7 @@ use clap::Args;
 use exogait_device::DeviceConfig;
 use gait_core::tables::{GaitKind, GaitTable};
 use gait_opt::clinical::ClinicalCase;
-use gait_opt::human::playable_human_gait;
+use gait_opt::human::playable_human_gait_in_loop;
 use serde::Serialize;
 use sim::compare::{GaitRun, play, reduction_pct};
 
@@ -213,7 +213,7 @@ pub fn compare_table(
     let mut case = ClinicalCase::for_gait(kind, device);
     case.spacing_m = geometry.landing_m;
     case.step_time_s = f64::from(shipped.duration_s());
-    let human = playable_human_gait(&case, &gait_opt::default_data_dir())
+    let human = playable_human_gait_in_loop(&case, device, &gait_opt::default_data_dir())
         .map_err(|e| format!("human-data gait: {e}"))?;
     // The human-data gait comes from joint-angle data, not from the IK: its
     // table carries the clinical case's IK options, the ones the shipped

@@ -9,8 +9,11 @@
 //! the device play it: the data have no trunk angle (the baseline holds the
 //! torso upright), and the torso is given the constant lean of smallest
 //! magnitude for which no hip or knee needs more than [`HUMAN_DRIVE_USE`]
-//! of its drive (a lean moves neither foot). What the device then does with
-//! it, faults included, is what the comparison reports
+//! of its drive (a lean moves neither foot), and, where the closed loop
+//! still cannot play it ([`playable_human_gait_in_loop`]: a walk whose
+//! stance knee gives way as the second step begins), the nearest lean, in
+//! [`LOOP_LEAN_STEP_RAD`] steps, that lands every step. What the device then
+//! does with it, faults included, is what the comparison reports
 //! (`docs/optimiser.md`, "The human-data gait").
 
 use std::path::Path;
@@ -22,6 +25,9 @@ use gait_core::ik::IkOptions;
 use gait_core::kinematics::Phi;
 use gait_core::problem::{PaperProblem, StepCase};
 use gait_core::tables::GaitKind;
+
+use exogait_device::DeviceConfig;
+use gait_core::tables::GaitTable;
 
 use crate::baseline::{BaselineError, Correction, Source, baseline_window};
 use crate::clinical::{ClinicalCase, evaluate_phi};
@@ -148,4 +154,65 @@ pub fn playable_human_gait(case: &ClinicalCase, dir: &Path) -> Result<HumanGait,
         Some((_, g)) => Ok(g),
         None => human_gait(case, dir, 0.0),
     }
+}
+
+/// Steps the human gait must land, without a fault, for the closed loop to
+/// play it.
+pub const HUMAN_VERIFY_STEPS: usize = 4;
+/// Step of the closed loop's lean search, rad (about 3°).
+pub const LOOP_LEAN_STEP_RAD: f64 = 0.05;
+
+/// Whether `device` with the comparison's pilot plays `gait` for
+/// [`HUMAN_VERIFY_STEPS`] steps, every one landed and no fault.
+fn lands_in_loop(case: &ClinicalCase, device: &DeviceConfig, gait: &HumanGait) -> bool {
+    let Ok(image) = crate::tables::table_image(case.gait, &case.ik, &gait.phi) else {
+        return false;
+    };
+    let Ok(table) = GaitTable::parse(&image) else {
+        return false;
+    };
+    let steps = HUMAN_VERIFY_STEPS;
+    let max_s = 8.0 + (2.0 + case.step_time_s) * steps as f64;
+    sim::compare::play(
+        device,
+        table,
+        sim::scenario::strong_pilot(),
+        steps,
+        max_s,
+        |_| {},
+    )
+    .is_ok_and(|(run, _)| run.faults.is_empty() && run.landed() >= steps)
+}
+
+/// [`playable_human_gait`], played in the closed loop on `device`: when it
+/// does not land every step, the lean nearest to it (in
+/// [`LOOP_LEAN_STEP_RAD`] steps, forward first, within the drive use of
+/// [`HUMAN_DRIVE_USE`]) that does; when none does, [`playable_human_gait`]'s
+/// (the comparison then reports the faults).
+pub fn playable_human_gait_in_loop(
+    case: &ClinicalCase,
+    device: &DeviceConfig,
+    dir: &Path,
+) -> Result<HumanGait, BaselineError> {
+    let first = playable_human_gait(case, dir)?;
+    if lands_in_loop(case, device, &first) {
+        return Ok(first);
+    }
+    let use_of = |g: &HumanGait| evaluate_phi(case, &g.phi).map_or(f64::INFINITY, |e| e.drive_use);
+    let steps = (MAX_LEAN_RAD / LOOP_LEAN_STEP_RAD).round() as usize;
+    for i in 1..=steps {
+        for sign in [1.0, -1.0] {
+            let lean = first.torso_lean_rad + sign * LOOP_LEAN_STEP_RAD * i as f64;
+            if lean.abs() > MAX_LEAN_RAD + 1e-9 {
+                continue;
+            }
+            let Ok(g) = human_gait(case, dir, lean) else {
+                continue;
+            };
+            if use_of(&g) <= HUMAN_DRIVE_USE && lands_in_loop(case, device, &g) {
+                return Ok(g);
+            }
+        }
+    }
+    Ok(first)
 }
