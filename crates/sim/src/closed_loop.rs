@@ -204,6 +204,9 @@ pub struct RigSetup {
     /// Ticks during which the plant is held still (the pilot supported,
     /// e.g. by a therapist or a hoist) while the motors soft-start.
     pub support_ticks: u64,
+    /// The clinician's gait list, when it is not the device's own order
+    /// over `tables` (a patient's bundle: `exogait_device::boot`).
+    pub operator: Option<gait_control::operator::OperatorConfig>,
 }
 
 /// The device's body model: Table III with its joint limits (the
@@ -279,8 +282,17 @@ impl<'t> Rig<'t> {
             buzzer: indicators[2].clone(),
         };
         let hw = exogait_device::hardware(&device, io).map_err(RigError::Device)?;
-        let controller = exogait_device::build_controller(&device, tables, setup.gait)
-            .map_err(RigError::Device)?;
+        let controller = match setup.operator {
+            None => exogait_device::build_controller(&device, tables, setup.gait)
+                .map_err(RigError::Device)?,
+            Some(op) => gait_control::controller::Controller::new(
+                device.controller,
+                tables,
+                op,
+                device.supervisor().map_err(RigError::Device)?,
+            )
+            .map_err(|e| RigError::Device(exogait_device::DeviceError::Controller(e)))?,
+        };
         if controller.sequencer().tables().get(setup.gait).is_none() {
             return Err(RigError::Config("no verified table for the gait"));
         }

@@ -141,6 +141,35 @@ pub fn table_rig_on<'t>(
     tables: GaitTables<'t>,
     terrain: Terrain,
 ) -> Result<Rig<'t>, RigError> {
+    rig_with(device, gait, pilot, tables, terrain, None)
+}
+
+/// A patient's rig: `tables` and the clinician's list `operator` of their
+/// bundle (`exogait_device::boot::patient_gaits`), the pilot standing in
+/// the start posture of the first table of `stand_for`, on its ground.
+pub fn patient_rig<'t>(
+    device: &DeviceConfig,
+    stand_for: Gait,
+    pilot: PilotConfig,
+    tables: GaitTables<'t>,
+    operator: gait_control::operator::OperatorConfig,
+) -> Result<Rig<'t>, RigError> {
+    let table = tables
+        .get(stand_for)
+        .copied()
+        .ok_or(RigError::Config("no verified table for the gait"))?;
+    let terrain = table_geometry(&table, &device.body).terrain;
+    rig_with(device, stand_for, pilot, tables, terrain, Some(operator))
+}
+
+fn rig_with<'t>(
+    device: &DeviceConfig,
+    gait: Gait,
+    pilot: PilotConfig,
+    tables: GaitTables<'t>,
+    terrain: Terrain,
+    operator: Option<gait_control::operator::OperatorConfig>,
+) -> Result<Rig<'t>, RigError> {
     let table = tables
         .get(gait)
         .copied()
@@ -163,6 +192,7 @@ pub fn table_rig_on<'t>(
         pilot: PilotBehaviour::FollowsTable,
         gait,
         support_ticks: 60,
+        operator,
     };
     Rig::new(&setup, tables)
 }
