@@ -59,12 +59,6 @@ pub fn refused_board(device: &DeviceConfig, gaits: &Gaits<'_>) -> Result<HoldChe
         &mut slots,
     )
     .map_err(|_| CheckError::Config)?;
-    let mut hw =
-        board_config::hardware(&cfg, qemu_rig::standing(&cfg)).map_err(|_| CheckError::Config)?;
-    let pressed_high = matches!(
-        cfg.buttons.active,
-        gait_control::drivers::buttons::ActiveLevel::High
-    );
     let mut check = HoldCheck {
         ticks: 0,
         stepped: false,
@@ -73,17 +67,14 @@ pub fn refused_board(device: &DeviceConfig, gaits: &Gaits<'_>) -> Result<HoldChe
         phase: Phase::Standing,
         motors_enabled: false,
     };
-    for i in 0..HOLD_TICKS {
-        let go = (GO_FROM..GO_FROM + GO_TICKS).contains(&i);
-        qemu_rig::PANEL.set_level(qemu_rig::Line::Go, go == pressed_high);
-        let r = controller.tick(&mut hw, false);
+    press_go_standing(&cfg, &mut controller, |r, _| {
         check.ticks += 1;
         check.stepped |= matches!(r.phase, Phase::WaitingReady { .. } | Phase::Swing { .. });
         check.refusal_latched &= r.faults.contains(FaultCode::BundleRefused);
         check.reaction = r.reaction;
         check.phase = r.phase;
         check.motors_enabled = r.motors_enabled;
-    }
+    })?;
     Ok(check)
 }
 
@@ -147,25 +138,16 @@ pub fn uncalibrated_board(
         &mut slots,
     )
     .map_err(|_| CheckError::Config)?;
-    let mut hw =
-        board_config::hardware(&cfg, qemu_rig::standing(&cfg)).map_err(|_| CheckError::Config)?;
-    let pressed_high = matches!(
-        cfg.buttons.active,
-        gait_control::drivers::buttons::ActiveLevel::High
-    );
     let mut check = OffCheck {
         ticks: 0,
         any_enabled: false,
         refusal_latched: true,
     };
-    for i in 0..HOLD_TICKS {
-        let go = (GO_FROM..GO_FROM + GO_TICKS).contains(&i);
-        qemu_rig::PANEL.set_level(qemu_rig::Line::Go, go == pressed_high);
-        let r = controller.tick(&mut hw, false);
+    press_go_standing(&cfg, &mut controller, |r, enabled| {
         check.ticks += 1;
-        check.any_enabled |= r.motors_enabled || hw.motors.iter().any(|m| m.is_enabled());
+        check.any_enabled |= r.motors_enabled || enabled;
         check.refusal_latched &= r.faults.contains(FaultCode::CalibrationRefused);
-    }
+    })?;
     Ok(check)
 }
 
@@ -181,4 +163,27 @@ pub fn record_on_jig(
     let (enc, force) = measure(&mut hw)?;
     let rec = Record::from_readings(device, &enc, &force)?;
     Record::parse(&rec.encode(), device)
+}
+
+/// Runs `controller` on the standing rig for [`HOLD_TICKS`], GO pressed
+/// from [`GO_FROM`] for [`GO_TICKS`]; `each` sees every tick's report and
+/// whether any motor driver was enabled after it.
+fn press_go_standing(
+    cfg: &DeviceConfig,
+    controller: &mut gait_control::controller::Controller<'_>,
+    mut each: impl FnMut(&TickReport, bool),
+) -> Result<(), CheckError> {
+    let mut hw =
+        board_config::hardware(cfg, qemu_rig::standing(cfg)).map_err(|_| CheckError::Config)?;
+    let pressed_high = matches!(
+        cfg.buttons.active,
+        gait_control::drivers::buttons::ActiveLevel::High
+    );
+    for i in 0..HOLD_TICKS {
+        let go = (GO_FROM..GO_FROM + GO_TICKS).contains(&i);
+        qemu_rig::PANEL.set_level(qemu_rig::Line::Go, go == pressed_high);
+        let r = controller.tick(&mut hw, false);
+        each(&r, hw.motors.iter().any(|m| m.is_enabled()));
+    }
+    Ok(())
 }

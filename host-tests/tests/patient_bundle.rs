@@ -78,7 +78,10 @@ fn mode_picks_the_bundles_second_gait_and_go_plays_it() {
     let landings = rig.plant.landings();
     assert!(landings.len() >= 2);
     // Walking steps of 0.3 m on level ground.
-    assert!((landings[0].position_m[0] - 0.3).abs() < 0.05, "{landings:?}");
+    assert!(
+        (landings[0].position_m[0] - 0.3).abs() < 0.05,
+        "{landings:?}"
+    );
     assert!(landings[1].position_m[1].abs() < 0.01);
 }
 
@@ -95,7 +98,10 @@ fn go_on_a_gait_the_pilot_does_not_stand_for_starts_nothing() {
     for _ in 0..6_000 {
         let s = rig.tick().unwrap();
         assert!(
-            !matches!(s.report.phase, Phase::Swing { .. } | Phase::WaitingReady { .. }),
+            !matches!(
+                s.report.phase,
+                Phase::Swing { .. } | Phase::WaitingReady { .. }
+            ),
             "a step started at {} s",
             s.state.time_s
         );

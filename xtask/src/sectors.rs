@@ -12,7 +12,8 @@ use std::process::Command;
 
 use gait_core::bundle::{Bundle, MAX_BUNDLE_LEN};
 
-use crate::{Result, Toolchain, cargo, root, run, run_qemu};
+use crate::qemu::run_qemu;
+use crate::{Result, Toolchain, cargo, root, run};
 
 /// Where the QEMU image reads the bundle sector.
 const QEMU_BUNDLE_ADDR: u32 = 0x0030_0000;

@@ -80,6 +80,14 @@ pub struct GaitChoice {
     pub flashes: u8,
 }
 
+/// What fills the unused end of a list (never chosen: the list's length
+/// bounds the choice).
+const UNUSED: GaitChoice = GaitChoice {
+    kind: Gait::Walk,
+    slot: 0,
+    flashes: 1,
+};
+
 /// The gaits this patient is cleared for, in MODE order (first = default).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -93,11 +101,7 @@ impl AllowedGaits {
     /// walk, stair up, stair down: [`crate::sequencer::GaitTables::by_kind`]),
     /// each showing its movement's code ([`Gait::code`]).
     pub fn new(list: &[Gait]) -> Result<Self, ConfigError> {
-        let mut choices = [GaitChoice {
-            kind: Gait::Walk,
-            slot: 0,
-            flashes: 1,
-        }; MAX_GAITS];
+        let mut choices = [UNUSED; MAX_GAITS];
         for (c, g) in choices.iter_mut().zip(list) {
             *c = GaitChoice {
                 kind: *g,
@@ -111,11 +115,7 @@ impl AllowedGaits {
     /// A patient's gaits in the bundle's order: gait *i* is `kinds[i]` in
     /// slot *i*, shown by *i* + 1 flashes.
     pub fn in_order(kinds: &[Gait]) -> Result<Self, ConfigError> {
-        let mut choices = [GaitChoice {
-            kind: Gait::Walk,
-            slot: 0,
-            flashes: 1,
-        }; MAX_GAITS];
+        let mut choices = [UNUSED; MAX_GAITS];
         for ((c, g), i) in choices.iter_mut().zip(kinds).zip(0u8..) {
             *c = GaitChoice {
                 kind: *g,
@@ -128,11 +128,7 @@ impl AllowedGaits {
 
     /// The choices as given (slots distinct, at most [`MAX_GAITS`]).
     pub fn from_choices(list: &[GaitChoice]) -> Result<Self, ConfigError> {
-        let mut choices = [GaitChoice {
-            kind: Gait::Walk,
-            slot: 0,
-            flashes: 1,
-        }; MAX_GAITS];
+        let mut choices = [UNUSED; MAX_GAITS];
         for (c, g) in choices.iter_mut().zip(list) {
             *c = *g;
         }
@@ -181,14 +177,7 @@ impl AllowedGaits {
     #[must_use]
     pub fn choice(&self, index: usize) -> GaitChoice {
         let len = self.len().max(1);
-        self.choices
-            .get(index % len)
-            .copied()
-            .unwrap_or(GaitChoice {
-                kind: Gait::Walk,
-                slot: 0,
-                flashes: 1,
-            })
+        self.choices.get(index % len).copied().unwrap_or(UNUSED)
     }
 }
 
