@@ -81,6 +81,7 @@ struct GaitJson {
     step_time_s: f64,
     pace_m_s: Option<f64>,
     clearance_m: Option<f64>,
+    double_support_s: Option<f64>,
     balance_ns: Option<f64>,
     reason: Option<String>,
 }
@@ -174,6 +175,7 @@ pub fn run(args: &TablesArgs) -> u8 {
                 step_time_s: g.plan.step_time_s,
                 pace_m_s: Some(f64::from(g.info.pace_m_s)),
                 clearance_m: Some(f64::from(g.info.clearance_m)),
+                double_support_s: Some(g.evaluation.double_support_s),
                 balance_ns: Some(g.balance_ns),
                 reason: None,
             },
@@ -186,6 +188,7 @@ pub fn run(args: &TablesArgs) -> u8 {
                 step_time_s: plan.step_time_s,
                 pace_m_s: None,
                 clearance_m: None,
+                double_support_s: None,
                 balance_ns: None,
                 reason: Some(reason.clone()),
             },
@@ -219,11 +222,12 @@ pub fn run(args: &TablesArgs) -> u8 {
         for g in &report.gaits {
             if g.cleared {
                 println!(
-                    "  cleared   {:<12} step {:.3} m, rise {:+.3} m, {:.2} s: pace {:.3} m/s, clearance {:.3} m, balance part {:.0} N·s",
+                    "  cleared   {:<12} step {:.3} m, rise {:+.3} m, {:.2} s ({:.2} s double support): pace {:.3} m/s, clearance {:.3} m, balance part {:.0} N·s",
                     g.name,
                     g.step_length_m,
                     g.rise_m,
                     g.step_time_s,
+                    g.double_support_s.unwrap_or(0.0),
                     g.pace_m_s.unwrap_or(0.0),
                     g.clearance_m.unwrap_or(0.0),
                     g.balance_ns.unwrap_or(0.0),
