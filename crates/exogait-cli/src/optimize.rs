@@ -342,6 +342,19 @@ fn run_clinical(a: &OptimizeArgs, model: Option<BodyModel<f64>>) -> Result<(), F
         r.evaluations,
         a.out.display()
     );
+    // The result must be a gait the device can play (on the model asked
+    // for): otherwise the search failed, whatever its cost.
+    let image = gait_opt::tables::table_image(kind, &case.ik, &r.phi)
+        .map_err(|e| Failure::Search(format!("the result is not a table: {e}")))?;
+    let on = device
+        .fitted(&case.model)
+        .map_err(|e| Failure::Usage(format!("model: {e}")))?;
+    crate::table::admit(&image, &on, &a.out).map_err(|e| {
+        Failure::Search(format!(
+            "no playable step found ({}); the report is written for inspection",
+            e.message
+        ))
+    })?;
     Ok(())
 }
 

@@ -13,6 +13,9 @@ use gait_control::operator::Gait;
 use serde::Serialize;
 use sim::inject::Injection;
 
+/// Longest simulated run, s.
+const MAX_SECONDS: f64 = 120.0;
+
 /// Which gait to simulate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 #[value(rename_all = "kebab-case")]
@@ -49,10 +52,11 @@ pub struct SimulateArgs {
     /// patient plays its gait named by `--gait`.
     #[arg(long, value_name = "FILE.bundle", conflicts_with = "table")]
     pub bundle: Option<PathBuf>,
-    /// Simulated time at most, s (the run also stops 1.5 s after the last
-    /// landing asked for, or 1 s into a safe hold).
-    #[arg(long, default_value_t = 20.0)]
-    pub seconds: f64,
+    /// Simulated time at most, s (default: enough for the steps asked, 4 s
+    /// and the table's step time plus 3 s a step; the run also stops 1.5 s
+    /// after the last landing asked for, or 1 s into a safe hold).
+    #[arg(long, value_name = "S")]
+    pub seconds: Option<f64>,
     /// Steps (landings) to walk.
     #[arg(long, default_value_t = 4)]
     pub steps: usize,
@@ -147,21 +151,17 @@ fn reaction_name(r: gait_control::faults::Reaction) -> &'static str {
 /// run could not be set up, the table is refused or the options are
 /// unusable.
 pub fn run(args: &SimulateArgs) -> u8 {
-    if !(args.seconds.is_finite() && args.seconds > 0.0 && args.seconds <= 60.0) {
-        eprintln!("exogait simulate: --seconds must be in (0, 60]");
-        return 2;
+    if let Some(t) = args.seconds {
+        if !(t.is_finite() && t > 0.0 && t <= MAX_SECONDS) {
+            eprintln!("exogait simulate: --seconds must be in (0, {MAX_SECONDS}]");
+            return 2;
+        }
     }
     if args.steps == 0 || args.steps > 20 {
         eprintln!("exogait simulate: --steps must be in 1..=20");
         return 2;
     }
-    if let Some(f) = args.inject.iter().find(|f| f.at_s >= args.seconds) {
-        eprintln!(
-            "exogait simulate: --inject {f}: at {} s it would strike after the run's {} s (--seconds)",
-            f.at_s, args.seconds
-        );
-        return 2;
-    }
+
     let bundle_file = match &args.bundle {
         Some(path) => match crate::bundle_file::BundleFile::load(path) {
             Ok(f) => Some(f),
@@ -245,6 +245,17 @@ pub fn run(args: &SimulateArgs) -> u8 {
         Some(t) => sim::compare::tables_of(t),
         None => sim::scenario::flash_tables(),
     };
+    let step_s = file_table.map_or(2.3, |t| f64::from(t.duration_s()));
+    let seconds = args
+        .seconds
+        .unwrap_or_else(|| (4.0 + args.steps as f64 * (step_s + 3.0)).min(MAX_SECONDS));
+    if let Some(f) = args.inject.iter().find(|f| f.at_s >= seconds) {
+        eprintln!(
+            "exogait simulate: --inject {f}: at {} s it would strike after the run's {seconds} s (--seconds)",
+            f.at_s
+        );
+        return 2;
+    }
     let noise = args.sensor_noise;
     let injections = args.inject.clone();
     let run = match sim::scenario::run_tables_with(
@@ -252,7 +263,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
         tables,
         gait,
         sim::scenario::strong_pilot(),
-        args.seconds,
+        seconds,
         args.steps,
         |rig| {
             if let Some((enc, adc)) = noise {
@@ -347,10 +358,29 @@ pub fn run(args: &SimulateArgs) -> u8 {
         }
     }
     if on_plan && run.summary.faults.is_empty() && run.ended_by.is_none() {
-        0
-    } else {
-        1
+        return 0;
     }
+    // Say why the run is not a success, on stderr whatever the format.
+    let landed = landed_x.len().min(args.steps);
+    if !run.summary.faults.is_empty() {
+        eprintln!(
+            "exogait simulate: the controller latched {}",
+            run.summary.faults.join(", ")
+        );
+    }
+    if landed < args.steps {
+        eprintln!(
+            "exogait simulate: {landed} of {} steps landed within {seconds} s{}",
+            args.steps,
+            run.ended_by
+                .as_ref()
+                .map(|e| format!(" ({e})"))
+                .unwrap_or_default()
+        );
+    } else if !on_plan {
+        eprintln!("exogait simulate: a step landed more than 5 cm from its planned length");
+    }
+    1
 }
 
 /// `ENC,ADC` → counts of noise on the encoders and the ADC (each ≤ 1,000).

@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use exogait_device::DeviceConfig;
-use exogait_device::admission::check_table;
 use gait_core::tables::{GaitKind, GaitTable, MAGIC};
 use gait_opt::clinical_report::{ClinicalReport, gait_kind};
+use gait_opt::family::check_playable;
 use gait_opt::report::step_samples;
 use gait_opt::{Report, tables::table_image};
 
@@ -103,10 +103,13 @@ pub fn load_playable(path: &Path, device: &DeviceConfig) -> Result<Vec<u8>, Tabl
     Ok(image)
 }
 
-fn admit(image: &[u8], device: &DeviceConfig, path: &Path) -> Result<(), TableFailure> {
+/// The table of `image` is one the tool may hand a user
+/// (`gait_opt::family::check_playable`: admission, clearance, first step
+/// in the closed loop); refused with the reason otherwise.
+pub fn admit(image: &[u8], device: &DeviceConfig, path: &Path) -> Result<(), TableFailure> {
     let table = GaitTable::parse(image)
         .map_err(|e| TableFailure::input(format!("{}: {e}", path.display())))?;
-    check_table(device, &table).map_err(|e| TableFailure {
+    check_playable(device, &table).map_err(|e| TableFailure {
         message: format!("{}: the device cannot play it: {e}", path.display()),
         refused: true,
     })?;

@@ -305,3 +305,47 @@ pub fn design_all(
         })
         .collect()
 }
+
+/// The checks every table the tool hands a user passes, in this order:
+/// the device's admission check; a swing foot that stays above the floor
+/// or the nosing it crosses (the table's own clearance at its geometry,
+/// gait-core's model of the foot); and its first step landing, without a
+/// fault, in the closed loop (the comparison's pilot). `Err` says which
+/// failed, with its numbers.
+pub fn check_playable(device: &DeviceConfig, table: &GaitTable<'_>) -> Result<(), String> {
+    check_table(device, table)
+        .map_err(|r| format!("the device's admission check refuses it: {r}"))?;
+    let geometry = sim::scenario::table_geometry(table, &device.body);
+    let mut case = ClinicalCase::for_gait(table.kind(), device);
+    case.spacing_m = geometry.landing_m;
+    case.step_time_s = f64::from(table.duration_s());
+    let phi: Vec<gait_core::kinematics::Phi<f64>> = (0..table.len())
+        .filter_map(|k| table.sample(k))
+        .map(|p| p.map(f64::from))
+        .collect();
+    let e = crate::clinical::evaluate_phi(&case, &phi)
+        .map_err(|err| format!("its step cannot be evaluated: {err:?}"))?;
+    if e.clearance_m < 0.0 {
+        return Err(format!(
+            "its swing foot passes {:.3} m below the {} it crosses",
+            -e.clearance_m,
+            if table.kind() == GaitKind::Walk {
+                "floor"
+            } else {
+                "nosing"
+            }
+        ));
+    }
+    let max_s = 8.0 + f64::from(table.duration_s()) + 3.0;
+    let (run, _) = play_steps(device, *table, strong_pilot(), 1, max_s, 0.5)
+        .map_err(|err| format!("closed loop: {err}"))?;
+    if let Some((code, name)) = run.faults.first() {
+        return Err(format!(
+            "its first step faults in the closed loop: {code} {name}"
+        ));
+    }
+    if run.landed() < 1 {
+        return Err("its first step does not land in the closed loop".into());
+    }
+    Ok(())
+}

@@ -1,0 +1,56 @@
+//! The tool never hands a user a gait the device cannot play: an
+//! infeasible search exits 1 and says why, `table` and `simulate --table`
+//! refuse a table whose first step does not land, and a short run says
+//! why; the default run time fits the steps asked.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn exogait(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn dir() -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("safe-gaits");
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn a_search_that_finds_no_playable_step_exits_1_and_says_why() {
+    let report = dir().join("up17.json");
+    let r = report.to_str().unwrap();
+    let (code, _, err) = exogait(&[
+        "optimize", "--case", "stair-up", "--rise", "0.17", "--tread", "0.28", "--mode",
+        "clinical", "--evals", "2000", "--out", r,
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("no playable step"), "{err}");
+    // The report stays for inspection, and `table` refuses it too.
+    assert!(report.exists());
+    let bin = dir().join("up17.bin");
+    let (code, _, err) = exogait(&["table", r, "--out", bin.to_str().unwrap()]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("cannot play"), "{err}");
+    assert!(!bin.exists(), "nothing written");
+    let (code, _, err) = exogait(&["simulate", "--table", r]);
+    assert_eq!(code, 2, "{err}");
+}
+
+#[test]
+fn the_default_run_time_fits_the_steps_and_a_short_run_says_why() {
+    let (code, out, err) = exogait(&["simulate", "--steps", "8"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, _, err) = exogait(&["simulate", "--steps", "8", "--seconds", "10"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("of 8 steps landed within 10 s"), "{err}");
+}
