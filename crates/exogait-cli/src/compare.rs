@@ -367,6 +367,10 @@ pub fn run(args: &CompareArgs) -> u8 {
         eprintln!("exogait compare: --steps must be in 1..=20");
         return 2;
     }
+    if let Some(Err(e)) = args.plot.as_deref().map(crate::plot_path::check) {
+        eprintln!("exogait compare: {e}");
+        return 2;
+    }
     let result = match &args.bundle {
         Some(path) => compare_bundle(path, &args.gait, args.steps),
         None => match <SimGait as clap::ValueEnum>::from_str(&args.gait, false) {

@@ -45,14 +45,18 @@ where
     F: FnMut(Req) -> Result<Resp, String>,
 {
     let mut summary = Summary::default();
-    for (index, line) in input.lines().enumerate() {
-        let line = line?;
-        if line.trim().is_empty() {
+    // Lines as bytes: a line that is not UTF-8 is answered with an error
+    // like any bad line, and the lines after it still are.
+    for (index, bytes) in input.split(b'\n').enumerate() {
+        let bytes = bytes?;
+        let text = std::str::from_utf8(&bytes);
+        if text.is_ok_and(|l| l.trim().is_empty()) {
             continue;
         }
         summary.answered += 1;
-        let answer = serde_json::from_str::<Req>(&line)
-            .map_err(|e| parse_error(&e))
+        let answer = text
+            .map_err(|_| "the line is not UTF-8 text".to_string())
+            .and_then(|line| serde_json::from_str::<Req>(line).map_err(|e| parse_error(&e)))
             .and_then(&mut handle)
             .and_then(|resp| serde_json::to_string(&resp).map_err(|e| e.to_string()));
         match answer {

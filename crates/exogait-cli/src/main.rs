@@ -16,6 +16,7 @@ mod jsonl;
 mod model_file;
 mod optimize;
 mod patient_file;
+mod plot_path;
 mod simulate;
 mod table;
 

@@ -105,16 +105,16 @@ pub struct OptimizeArgs {
     #[arg(long, value_enum)]
     mode: Option<ModeArg>,
     /// Walk: stride, m (swing ankle from −stride/2 to +stride/2; paper 0.6).
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     stride: Option<f64>,
     /// Step time ts, s (paper: 2.24 walk, 2.28 stairs).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     step_time: Option<f64>,
     /// Stairs: rise of one step, m (paper 0.0935).
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     rise: Option<f64>,
     /// Stairs: tread of one step, m (paper 0.275; stride = 2·tread).
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     tread: Option<f64>,
     /// Seed of the search (same seed and budget: same result).
     #[arg(long, default_value_t = 1)]

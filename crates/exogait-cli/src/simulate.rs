@@ -55,7 +55,7 @@ pub struct SimulateArgs {
     /// Simulated time at most, s (default: enough for the steps asked, 4 s
     /// and the table's step time plus 3 s a step; the run also stops 1.5 s
     /// after the last landing asked for, or 1 s into a safe hold).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub seconds: Option<f64>,
     /// Steps (landings) to walk.
     #[arg(long, default_value_t = 4)]
@@ -151,6 +151,10 @@ fn reaction_name(r: gait_control::faults::Reaction) -> &'static str {
 /// run could not be set up, the table is refused or the options are
 /// unusable.
 pub fn run(args: &SimulateArgs) -> u8 {
+    if let Some(Err(e)) = args.plot.as_deref().map(crate::plot_path::check) {
+        eprintln!("exogait simulate: {e}");
+        return 2;
+    }
     if let Some(t) = args.seconds {
         if !(t.is_finite() && t > 0.0 && t <= MAX_SECONDS) {
             eprintln!("exogait simulate: --seconds must be in (0, {MAX_SECONDS}]");

@@ -215,10 +215,51 @@ impl std::fmt::Display for RunSummary {
             self.pilot_torque_rms_nm, self.pilot_torque_peak_nm
         )?;
         match self.first_reaction {
-            Some((t, r)) => writeln!(f, "first supervisor action  {t:.3} s: {r:?}")?,
+            Some((t, r)) => writeln!(f, "first supervisor action  {t:.3} s: {}", reaction_text(r))?,
             None => writeln!(f, "first supervisor action  none")?,
         }
-        writeln!(f, "faults latched           {:?}", self.faults)?;
-        write!(f, "final phase              {:?}", self.final_phase)
+        if self.faults.is_empty() {
+            writeln!(f, "faults latched           none")?;
+        } else {
+            writeln!(f, "faults latched           {}", self.faults.join(", "))?;
+        }
+        write!(
+            f,
+            "final phase              {}",
+            phase_text(&self.final_phase)
+        )
+    }
+}
+
+/// A reaction as a user reads it.
+fn reaction_text(r: gait_control::faults::Reaction) -> &'static str {
+    use gait_control::faults::Reaction;
+    match r {
+        Reaction::None => "none",
+        Reaction::FinishStepThenHold => "finish the step, then hold",
+        Reaction::SafeHold => "safe hold",
+        Reaction::DisableMotors => "motors disabled",
+    }
+}
+
+/// A phase as a user reads it: the phase, its stance leg and time.
+fn phase_text(p: &Phase) -> String {
+    let leg = |s: &crate::Side| match s {
+        crate::Side::Left => "left",
+        crate::Side::Right => "right",
+    };
+    match p {
+        Phase::Standing => "standing".into(),
+        Phase::WaitingReady { stance } => {
+            format!("waiting for the pilot ({} leg stance)", leg(stance))
+        }
+        Phase::Swing { stance, t_s } => format!("swing, {} leg stance, {t_s:.2} s in", leg(stance)),
+        Phase::Transfer { stance, t_s } => {
+            format!(
+                "weight transfer onto the {} leg, {t_s:.2} s in",
+                leg(stance)
+            )
+        }
+        Phase::SafeHold { .. } => "safe hold".into(),
     }
 }
