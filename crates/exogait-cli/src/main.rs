@@ -71,12 +71,15 @@ enum Command {
         file: PathBuf,
     },
     /// Closed loop: the real controller on the simulated exoskeleton and
-    /// pilot, with the flash table of the gait (walk, or stair ascent on the
-    /// paper's staircase); prints the metrics (exit 1 if the first step did
-    /// not land within 5 cm of the plan).
+    /// pilot, with a built-in gait, a table file or a bundle's gait; prints
+    /// the metrics (exit 0 when every step asked for landed within 5 cm of
+    /// its planned length with no fault, 1 otherwise, saying why; 2 for
+    /// unusable options or a refused table or bundle).
     Simulate(simulate::SimulateArgs),
-    /// The shipped table against the human-data gait, same device and
-    /// pilot, in the closed loop (the paper's Table II).
+    /// A gait against the human-data gait at its geometry, same device and
+    /// pilot, in the closed loop (the paper's Table II; exit 0 when both
+    /// land every step without a fault, 1 otherwise, 2 for unusable
+    /// options or a refused bundle).
     Compare(compare::CompareArgs),
     /// An `optimize` report as a gait table in the flash format (checked
     /// against the device first).
@@ -94,8 +97,10 @@ enum Command {
     /// corrupt, truncated or foreign bundle).
     Bundle(bundle_cmd::BundleArgs),
     /// A seeded randomised fault campaign in the closed loop: one random
-    /// fault per run; the tally per kind (exit 1 unless no run fell,
-    /// crossed a stop, missed a detection or tripped falsely).
+    /// fault per run; the tally per kind, then healthy runs of each gait
+    /// (exit 0 when no fall and no stop crossed is the device's — each one
+    /// a named case with its physical reason — no detection is missed, no
+    /// healthy run trips; 1 otherwise; 2 for unusable options).
     Faults(faults::FaultsArgs),
 }
 
