@@ -182,10 +182,29 @@ pub fn run(args: &FaultsArgs) -> u8 {
     };
     let runs = plan(args.seed, args.runs);
     let healthy_runs = healthy_plan(args.seed, args.healthy);
-    let bar = progress(runs.len() + healthy_runs.len());
-    let results = play_all(&runs, &device, &|| bar.inc(1));
-    let healthy = play_all_healthy(&healthy_runs, &device, &|| bar.inc(1));
+    let started = std::time::Instant::now();
+    let total = runs.len() + healthy_runs.len();
+    let bar = progress(total);
+    // Piped, a line at every tenth of the runs instead of the bar.
+    let piped = bar.is_hidden();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let tick = || {
+        bar.inc(1);
+        let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        if piped && (n * 10 / total.max(1)) != ((n - 1) * 10 / total.max(1)) {
+            eprintln!(
+                "exogait faults: {n}/{total} runs, {:.0} s",
+                started.elapsed().as_secs_f64()
+            );
+        }
+    };
+    let results = play_all(&runs, &device, &tick);
+    let healthy = play_all_healthy(&healthy_runs, &device, &tick);
     bar.finish_and_clear();
+    eprintln!(
+        "exogait faults: {total} runs in {:.1} s",
+        started.elapsed().as_secs_f64()
+    );
     if results.len() != runs.len() || healthy.len() != healthy_runs.len() {
         eprintln!(
             "exogait faults: only {} of {} runs finished",

@@ -67,6 +67,15 @@ pub struct SimulateArgs {
     /// turn) and ±ADC counts on the force ADC (of 4,096), e.g. `3,10`.
     #[arg(long, value_name = "ENC,ADC", value_parser = parse_noise)]
     pub sensor_noise: Option<(u16, u16)>,
+    /// Seed of the sensor noise (`exogait faults` lists each run's, so a
+    /// run can be played again here).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 2026,
+        requires = "sensor_noise"
+    )]
+    pub noise_seed: u64,
     /// Play this table (flash format, `exogait table`) or `optimize`
     /// report instead of the flash table; its kind sets the gait. Refused
     /// before the run when the device cannot play it.
@@ -261,6 +270,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
         return 2;
     }
     let noise = args.sensor_noise;
+    let noise_seed = args.noise_seed;
     let injections = args.inject.clone();
     let run = match sim::scenario::run_tables_with(
         &device,
@@ -271,7 +281,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
         args.steps,
         |rig| {
             if let Some((enc, adc)) = noise {
-                rig.set_sensor_noise(enc, adc, 2026);
+                rig.set_sensor_noise(enc, adc, noise_seed);
             }
             for f in injections {
                 rig.schedule(f);

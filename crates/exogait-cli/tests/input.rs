@@ -86,3 +86,34 @@ fn the_text_report_reads_as_text() {
     assert!(out.contains("final phase"), "{out}");
     assert!(out.contains("faults latched           none"), "{out}");
 }
+
+#[test]
+fn a_noisy_run_is_played_again_from_its_seed() {
+    let rms = |seed: &str| {
+        let (code, out, err) = exogait(
+            &[
+                "simulate",
+                "--steps",
+                "1",
+                "--sensor-noise",
+                "3,10",
+                "--noise-seed",
+                seed,
+                "--json",
+            ],
+            b"",
+        );
+        assert_eq!(code, 0, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        v["tracking_rms_rad"].to_string()
+    };
+    assert_eq!(rms("5"), rms("5"));
+    assert_ne!(rms("5"), rms("6"));
+}
+
+#[test]
+fn the_campaign_reports_progress_and_time_when_piped() {
+    let (_, _, err) = exogait(&["faults", "--runs", "10", "--healthy", "0"], b"");
+    assert!(err.contains("10/10 runs"), "{err}");
+    assert!(err.contains("runs in "), "{err}");
+}
