@@ -42,27 +42,38 @@ const EXIT_FATAL: u8 = 2;
 #[derive(Debug, Parser)]
 #[command(name = "exogait", version, about, long_about = None)]
 struct Cli {
-    /// Body model JSON: `{"links":[…×5],"limits":{…}}` or
-    /// `{"pilot":{"height_m":…,"mass_kg":…}}` (default: the paper's Table III).
-    #[arg(long, global = true, value_name = "FILE.json")]
-    model: Option<PathBuf>,
-
     #[command(subcommand)]
     command: Command,
+}
+
+/// The body model of the model commands (`fk`, `ik`, `dynamics`,
+/// `optimize`); the others take theirs from the device, a patient file or
+/// a bundle.
+#[derive(Debug, clap::Args)]
+struct ModelArgs {
+    /// Body model JSON: `{"links":[…×5],"limits":{…}}` or
+    /// `{"pilot":{"height_m":…,"mass_kg":…}}` (default: the paper's Table III).
+    #[arg(long, value_name = "FILE.json")]
+    model: Option<PathBuf>,
 }
 
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Inverse dynamics: {"phi":[5],"dphi":[5],"ddphi":[5]} → {"t_phi":[5],"t_theta":[5]}.
-    Dynamics,
+    Dynamics(ModelArgs),
     /// Forward kinematics: {"phi":[5]} → {"p":[[x,y]×5]} (stance ankle at the origin).
-    Fk,
+    Fk(ModelArgs),
     /// Inverse kinematics: {"x5","y5","phi1","phi3","r2"} → {"phi":[5],"theta":[5]}.
-    Ik,
+    Ik(ModelArgs),
     /// Optimises a swing step (paper mode or a geometry of one's own) and
     /// writes the JSON report (and a plot). stair-down has no paper mode: it
     /// defaults to the paper's stair (rise 0.0935 m, tread 0.275 m, 2.28 s).
-    Optimize(optimize::OptimizeArgs),
+    Optimize {
+        #[command(flatten)]
+        args: optimize::OptimizeArgs,
+        #[command(flatten)]
+        model: ModelArgs,
+    },
     /// Recomputes J from a report file and compares it with the stored J
     /// (exit 1 if they differ by more than 1e-9 relative, 2 for a bad file).
     Cost {
@@ -106,126 +117,93 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let own_model = match &cli.command {
-        Command::Fit(_) => Some("fit"),
-        Command::Tables(_) => Some("tables"),
-        Command::Bundle(_) => Some("bundle"),
-        _ => None,
-    };
-    if let (Some(name), Some(_)) = (own_model, &cli.model) {
-        eprintln!(
-            "exogait: --model does not apply to {name} (the patient file or bundle holds the model)"
-        );
-        return ExitCode::from(EXIT_FATAL);
-    }
     match &cli.command {
-        Command::Fit(args) => return ExitCode::from(fit::run(args)),
-        Command::Tables(args) => return ExitCode::from(family::run(args)),
-        Command::Bundle(args) => return ExitCode::from(bundle_cmd::run(args)),
-        _ => {}
-    }
-    if let Command::Simulate(args) = &cli.command {
-        if cli.model.is_some() {
-            eprintln!("exogait: --model does not apply to simulate (the device's model is fixed)");
-            return ExitCode::from(EXIT_FATAL);
-        }
-        return ExitCode::from(simulate::run(args));
-    }
-    if let Command::Faults(args) = &cli.command {
-        if cli.model.is_some() {
-            eprintln!("exogait: --model does not apply to faults (the device's model is fixed)");
-            return ExitCode::from(EXIT_FATAL);
-        }
-        return ExitCode::from(faults::run(args));
-    }
-    if let Command::Table(args) = &cli.command {
-        if cli.model.is_some() {
-            eprintln!("exogait: --model does not apply to table (tables are for the device)");
-            return ExitCode::from(EXIT_FATAL);
-        }
-        return ExitCode::from(table::run(args));
-    }
-    if let Command::Compare(args) = &cli.command {
-        if cli.model.is_some() {
-            eprintln!("exogait: --model does not apply to compare (the device's model is fixed)");
-            return ExitCode::from(EXIT_FATAL);
-        }
-        return ExitCode::from(compare::run(args));
-    }
-    if let Command::Cost { file } = &cli.command {
-        if cli.model.is_some() {
-            eprintln!("exogait: --model does not apply to cost (the report holds its model)");
-            return ExitCode::from(EXIT_FATAL);
-        }
-        return match cost::run(file) {
-            Ok(answer) => {
-                match serde_json::to_string(&answer) {
-                    Ok(text) => println!("{text}"),
-                    Err(e) => {
-                        eprintln!("exogait: {e}");
-                        return ExitCode::from(EXIT_FATAL);
-                    }
-                }
-                if answer.agrees() {
-                    ExitCode::from(EXIT_OK)
-                } else {
-                    eprintln!(
-                        "exogait: {}: recomputed J differs from the stored J by more than {} (relative)",
-                        file.display(),
-                        cost::TOLERANCE
-                    );
+        Command::Fit(args) => ExitCode::from(fit::run(args)),
+        Command::Tables(args) => ExitCode::from(family::run(args)),
+        Command::Bundle(args) => ExitCode::from(bundle_cmd::run(args)),
+        Command::Simulate(args) => ExitCode::from(simulate::run(args)),
+        Command::Faults(args) => ExitCode::from(faults::run(args)),
+        Command::Table(args) => ExitCode::from(table::run(args)),
+        Command::Compare(args) => ExitCode::from(compare::run(args)),
+        Command::Cost { file } => run_cost(file),
+        Command::Optimize { args, model } => {
+            let given = match load_model(model) {
+                Ok(m) => model.model.is_some().then_some(m),
+                Err(code) => return code,
+            };
+            match optimize::run(args, given) {
+                Ok(()) => ExitCode::from(EXIT_OK),
+                Err(optimize::Failure::Search(e)) => {
+                    eprintln!("exogait: {e}");
                     ExitCode::from(EXIT_LINE_FAILED)
                 }
+                Err(optimize::Failure::Usage(e)) => {
+                    eprintln!("exogait: {e}");
+                    ExitCode::from(EXIT_FATAL)
+                }
             }
-            Err(e) => {
-                eprintln!("exogait: {e}");
-                ExitCode::from(EXIT_FATAL)
-            }
-        };
+        }
+        Command::Dynamics(m) | Command::Fk(m) | Command::Ik(m) => {
+            let model = match load_model(m) {
+                Ok(model) => model,
+                Err(code) => return code,
+            };
+            run_lines(&cli.command, &model)
+        }
     }
-    let model = match &cli.model {
-        None => BodyModel::<f64>::paper_table_iii(),
-        Some(path) => match model_file::load(path) {
-            Ok(m) => m,
-            Err(e) => {
-                eprintln!("exogait: {e}");
-                return ExitCode::from(EXIT_FATAL);
+}
+
+/// The model `--model` names, or Table III; a bad file exits 2.
+fn load_model(m: &ModelArgs) -> Result<BodyModel<f64>, ExitCode> {
+    match &m.model {
+        None => Ok(BodyModel::<f64>::paper_table_iii()),
+        Some(path) => model_file::load(path).map_err(|e| {
+            eprintln!("exogait: {e}");
+            ExitCode::from(EXIT_FATAL)
+        }),
+    }
+}
+
+/// `cost`: 0 when the recomputed J agrees, 1 when not, 2 for a bad file.
+fn run_cost(file: &std::path::Path) -> ExitCode {
+    match cost::run(file) {
+        Ok(answer) => {
+            match serde_json::to_string(&answer) {
+                Ok(text) => println!("{text}"),
+                Err(e) => {
+                    eprintln!("exogait: {e}");
+                    return ExitCode::from(EXIT_FATAL);
+                }
             }
-        },
-    };
-    if let Command::Optimize(args) = &cli.command {
-        let given = cli.model.is_some().then_some(model);
-        return match optimize::run(args, given) {
-            Ok(()) => ExitCode::from(EXIT_OK),
-            Err(optimize::Failure::Search(e)) => {
-                eprintln!("exogait: {e}");
+            if answer.agrees() {
+                ExitCode::from(EXIT_OK)
+            } else {
+                eprintln!(
+                    "exogait: {}: recomputed J differs from the stored J by more than {} (relative)",
+                    file.display(),
+                    cost::TOLERANCE
+                );
                 ExitCode::from(EXIT_LINE_FAILED)
             }
-            Err(optimize::Failure::Usage(e)) => {
-                eprintln!("exogait: {e}");
-                ExitCode::from(EXIT_FATAL)
-            }
-        };
+        }
+        Err(e) => {
+            eprintln!("exogait: {e}");
+            ExitCode::from(EXIT_FATAL)
+        }
     }
+}
+
+/// `fk`, `ik`, `dynamics`: JSON lines in and out on `model`.
+fn run_lines(command: &Command, model: &BodyModel<f64>) -> ExitCode {
     let stdin = io::stdin().lock();
     let stdout = io::stdout().lock();
-    let result = match cli.command {
-        Command::Dynamics => jsonl::run(stdin, stdout, |r| commands::dynamics(&model, r)),
-        Command::Fk => jsonl::run(stdin, stdout, |r| commands::fk(&model, r)),
-        Command::Ik => {
-            let solver = gait_core::ik::IkSolver::new(&model);
+    let result = match command {
+        Command::Dynamics(_) => jsonl::run(stdin, stdout, |r| commands::dynamics(model, r)),
+        Command::Fk(_) => jsonl::run(stdin, stdout, |r| commands::fk(model, r)),
+        _ => {
+            let solver = gait_core::ik::IkSolver::new(model);
             jsonl::run(stdin, stdout, |r| commands::ik(&solver, r))
         }
-        // Handled above.
-        Command::Optimize(_)
-        | Command::Cost { .. }
-        | Command::Simulate(_)
-        | Command::Compare(_)
-        | Command::Table(_)
-        | Command::Fit(_)
-        | Command::Tables(_)
-        | Command::Bundle(_)
-        | Command::Faults(_) => Ok(jsonl::Summary::default()),
     };
     match result {
         Ok(summary) if summary.failed == 0 => ExitCode::from(EXIT_OK),

@@ -158,9 +158,29 @@ fn bad_model_file_exits_2_naming_file_and_problem() {
     assert!(r.stderr.contains("height"), "{}", r.stderr);
 
     let path = temp_file("typo.json", "{\"links\":[], \"limts\":{}}");
-    let r = exogait(&["--model", path.to_str().unwrap(), "dynamics"], "");
+    let r = exogait(&["dynamics", "--model", path.to_str().unwrap()], "");
     assert_eq!(r.status, 2);
     assert!(r.stderr.contains("typo.json") && r.stderr.contains("bad JSON"));
+
+    // `--model` belongs to the model commands only: the others do not
+    // list it, and refuse it as an unknown option.
+    let help = |cmd: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+            .args([cmd, "--help"])
+            .output()
+            .expect("help");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    for cmd in [
+        "simulate", "compare", "table", "faults", "fit", "tables", "bundle", "cost",
+    ] {
+        assert!(!help(cmd).contains("--model"), "{cmd} lists --model");
+    }
+    for cmd in ["fk", "ik", "dynamics", "optimize"] {
+        assert!(help(cmd).contains("--model"), "{cmd} does not list --model");
+    }
+    let r = exogait(&["simulate", "--model", path.to_str().unwrap()], "");
+    assert_eq!(r.status, 2);
 
     let r = exogait(&["fk", "--model", "/nonexistent/model.json"], "");
     assert_eq!(r.status, 2);
