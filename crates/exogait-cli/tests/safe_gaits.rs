@@ -54,3 +54,26 @@ fn the_default_run_time_fits_the_steps_and_a_short_run_says_why() {
     assert_eq!(code, 1);
     assert!(err.contains("of 8 steps landed within 10 s"), "{err}");
 }
+
+#[test]
+fn cost_recomputes_a_clinical_report_and_catches_an_edit() {
+    let report = dir().join("walk-clinical.json");
+    let r = report.to_str().unwrap();
+    let (code, _, err) = exogait(&[
+        "optimize", "--case", "walk", "--mode", "clinical", "--evals", "1500", "--out", r,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) = exogait(&["cost", r]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["mode"], "clinical");
+    assert_eq!(v["agrees"], true);
+    // A stored J that is not the step's: exit 1.
+    let text = std::fs::read_to_string(&report).unwrap();
+    let mut j: serde_json::Value = serde_json::from_str(&text).unwrap();
+    j["j"] = serde_json::json!(j["j"].as_f64().unwrap() * 1.01);
+    let edited = dir().join("walk-edited.json");
+    std::fs::write(&edited, j.to_string()).unwrap();
+    let (code, _, _) = exogait(&["cost", edited.to_str().unwrap()]);
+    assert_eq!(code, 1);
+}
