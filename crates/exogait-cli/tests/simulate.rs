@@ -189,3 +189,34 @@ fn faults_runs_a_seeded_campaign_and_tallies_it() {
         assert_eq!(out.status.code(), Some(2), "{args:?}");
     }
 }
+
+#[test]
+fn the_plot_marks_phases_and_faults_in_degrees_with_references_apart() {
+    let plot = std::env::temp_dir().join(format!("exogait-marks-{}.svg", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+        .args([
+            "simulate",
+            "--steps",
+            "2",
+            "--inject",
+            "encoder-jump=300:right-knee@2.4",
+            "--plot",
+        ])
+        .arg(&plot)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "the jump's hold is a fault");
+    let svg = std::fs::read_to_string(&plot).unwrap();
+    let _ = std::fs::remove_file(&plot);
+    // The phases' shading (swing, transfer or hold colours), the fault's
+    // label, degrees on the joint panels, the references' own colours.
+    for needle in [
+        "#FFF4CC", "#FAD2D2", "0x0205", "degrees", "#FF9600", "#00A0A0",
+    ] {
+        assert!(
+            svg.to_ascii_uppercase()
+                .contains(&needle.to_ascii_uppercase()),
+            "missing {needle}"
+        );
+    }
+}

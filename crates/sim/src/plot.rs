@@ -1,6 +1,8 @@
-//! Plot of a closed-loop run (SVG, or PNG by extension): joint angles
-//! against the controller's reference, the feet's paths, and the load on
-//! the crutches with the pilot's ankle torque.
+//! Plot of a closed-loop run (SVG, or PNG by extension): joint angles (in
+//! degrees) against the controller's reference (dashed, in a colour of
+//! its own), the feet's paths, and the load on the crutches with the
+//! pilot's ankle torque; each time panel shades the gait's phases (swing,
+//! weight transfer, safe hold) and marks each fault where it latched.
 //!
 //! Text needs a TTF font (plotters' ab_glyph backend, no fontconfig):
 //! `$EXOGAIT_FONT`, else DejaVu Sans or Liberation Sans from the usual Debian
@@ -55,12 +57,62 @@ fn range(series: &[&Series], axis: impl Fn(&(f64, f64)) -> f64) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// What a time panel shows besides its lines: the phases as shaded
+/// spans, and the faults as marked instants.
+#[derive(Default)]
+struct Timeline {
+    /// (start, end, colour, name) of each span of a phase worth seeing.
+    bands: Vec<(f64, f64, RGBColor, &'static str)>,
+    /// (time, label) of each fault as it latched.
+    marks: Vec<(f64, String)>,
+}
+
+/// Swing (light yellow), weight transfer (light green), safe hold (light
+/// red); standing and waiting are left white.
+const SWING_BAND: RGBColor = RGBColor(255, 244, 204);
+const TRANSFER_BAND: RGBColor = RGBColor(214, 240, 214);
+const HOLD_BAND: RGBColor = RGBColor(250, 210, 210);
+
+fn timeline(trace: &[Sample]) -> Timeline {
+    use gait_control::sequencer::Phase;
+    let kind = |p: &Phase| match p {
+        Phase::Swing { .. } => Some((SWING_BAND, "swing")),
+        Phase::Transfer { .. } => Some((TRANSFER_BAND, "transfer")),
+        Phase::SafeHold { .. } => Some((HOLD_BAND, "safe hold")),
+        Phase::Standing | Phase::WaitingReady { .. } => None,
+    };
+    let mut out = Timeline::default();
+    let mut open: Option<(f64, RGBColor, &'static str)> = None;
+    let mut seen = gait_control::faults::FaultSet::EMPTY;
+    for s in trace {
+        let t = s.state.time_s;
+        let now = kind(&s.report.phase);
+        if open.map(|(_, c, _)| c) != now.map(|(c, _)| c) {
+            if let Some((t0, c, n)) = open.take() {
+                out.bands.push((t0, t, c, n));
+            }
+            open = now.map(|(c, n)| (t, c, n));
+        }
+        for code in s.report.faults.iter() {
+            if !seen.contains(code) {
+                seen.insert(code);
+                out.marks.push((t, format!("0x{:04x}", code.code())));
+            }
+        }
+    }
+    if let (Some((t0, c, n)), Some(last)) = (open, trace.last()) {
+        out.bands.push((t0, last.state.time_s, c, n));
+    }
+    out
+}
+
 fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     caption: &str,
     x_label: &str,
     y_label: &str,
     lines: &[(String, Series, RGBColor, bool)],
+    timeline: &Timeline,
 ) -> Result<(), PlotError>
 where
     DB::ErrorType: 'static,
@@ -81,14 +133,50 @@ where
         .y_desc(y_label)
         .draw()
         .map_err(draw_err)?;
-    for (name, series, colour, dashed) in lines {
-        let style = ShapeStyle::from(*colour).stroke_width(if *dashed { 1 } else { 2 });
-        let c = *colour;
+    for &(a, b, c, _) in &timeline.bands {
         chart
-            .draw_series(LineSeries::new(series.iter().copied(), style))
-            .map_err(draw_err)?
-            .label(name.as_str())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c));
+            .draw_series(std::iter::once(Rectangle::new(
+                [(a, y0), (b, y1)],
+                ShapeStyle::from(c).filled(),
+            )))
+            .map_err(draw_err)?;
+    }
+    for (t, label) in &timeline.marks {
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(*t, y0), (*t, y1)],
+                ShapeStyle::from(BLACK).stroke_width(1),
+            )))
+            .map_err(draw_err)?;
+        chart
+            .draw_series(std::iter::once(Text::new(
+                label.clone(),
+                (*t, y1),
+                ("sans-serif", 13),
+            )))
+            .map_err(draw_err)?;
+    }
+    // Solid lines first and wider, dashed ones on top: a line that follows
+    // another closely (a reference, the other crutch) stays visible.
+    let mut order: Vec<&(String, Series, RGBColor, bool)> = lines.iter().collect();
+    order.sort_by_key(|l| l.3);
+    for (name, series, colour, dashed) in order {
+        let c = *colour;
+        if *dashed {
+            let style = ShapeStyle::from(c).stroke_width(2);
+            chart
+                .draw_series(DashedLineSeries::new(series.iter().copied(), 6, 4, style))
+                .map_err(draw_err)?
+                .label(name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c));
+        } else {
+            let style = ShapeStyle::from(c).stroke_width(3);
+            chart
+                .draw_series(LineSeries::new(series.iter().copied(), style))
+                .map_err(draw_err)?
+                .label(name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c));
+        }
     }
     chart
         .configure_series_labels()
@@ -118,22 +206,29 @@ where
         ),
         None => "exogait closed loop: no landing".to_string(),
     };
-    let root = root.titled(&title, ("sans-serif", 22)).map_err(draw_err)?;
+    let title = format!(
+        "{title}   (shaded: swing yellow, weight transfer green, safe hold red; lines: faults)"
+    );
+    let root = root.titled(&title, ("sans-serif", 20)).map_err(draw_err)?;
     let panels = root.split_evenly((2, 2));
     let t = |s: &Sample| s.state.time_s;
     let joint = |j: usize| -> (Series, Series) {
         (
             trace
                 .iter()
-                .map(|s| (t(s), s.state.joint_angles_rad[j]))
+                .map(|s| (t(s), s.state.joint_angles_rad[j].to_degrees()))
                 .collect(),
             trace
                 .iter()
-                .map(|s| (t(s), f64::from(s.report.reference_rad[j])))
+                .map(|s| (t(s), f64::from(s.report.reference_rad[j]).to_degrees()))
                 .collect(),
         )
     };
+    let tl = timeline(trace);
+    let none = Timeline::default();
+    // Hip red, its reference orange; knee blue, its reference teal.
     let colours = [RED, BLUE];
+    let reference_colours = [RGBColor(255, 150, 0), RGBColor(0, 160, 160)];
     for (k, (side, base)) in [("left", 0usize), ("right", 2usize)]
         .into_iter()
         .enumerate()
@@ -142,17 +237,28 @@ where
         let (knee, knee_ref) = joint(base + 1);
         let lines = vec![
             (format!("{side} hip"), hip, colours[0], false),
-            (format!("{side} hip ref"), hip_ref, colours[0], true),
+            (
+                format!("{side} hip reference"),
+                hip_ref,
+                reference_colours[0],
+                true,
+            ),
             (format!("{side} knee"), knee, colours[1], false),
-            (format!("{side} knee ref"), knee_ref, colours[1], true),
+            (
+                format!("{side} knee reference"),
+                knee_ref,
+                reference_colours[1],
+                true,
+            ),
         ];
         if let Some(area) = panels.get(k) {
             panel(
                 area,
-                &format!("{side} leg: flexion vs reference"),
+                &format!("{side} leg: flexion against the reference"),
                 "t (s)",
-                "rad",
+                "degrees",
                 &lines,
+                &tl,
             )?;
         }
     }
@@ -172,6 +278,7 @@ where
                 ("left ankle".into(), foot(0), RED, false),
                 ("right ankle".into(), foot(1), BLUE, false),
             ],
+            &none,
         )?;
     }
     let crutch = |i: usize| -> Series {
@@ -192,9 +299,10 @@ where
             "N, N·m",
             &[
                 ("left crutch".into(), crutch(0), RED, false),
-                ("right crutch".into(), crutch(1), BLUE, false),
+                ("right crutch".into(), crutch(1), BLUE, true),
                 ("|pilot torque|".into(), pilot, BLACK, true),
             ],
+            &tl,
         )?;
     }
     Ok(())
@@ -264,6 +372,7 @@ where
                 ("shipped table".into(), series(shipped, &total), BLUE, false),
                 ("human-data gait".into(), series(human, &total), RED, false),
             ],
+            &Timeline::default(),
         )?;
     }
     if let Some(area) = panels.get(1) {
@@ -276,6 +385,7 @@ where
                 ("shipped table".into(), series(shipped, &pilot), BLUE, false),
                 ("human-data gait".into(), series(human, &pilot), RED, false),
             ],
+            &Timeline::default(),
         )?;
     }
     let steps = shipped.steps.len().max(human.steps.len()).max(1);
