@@ -358,7 +358,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
         }
         println!("{}", run.summary);
         if let Some(e) = &run.ended_by {
-            println!("simulation stopped     {e:?}");
+            println!("simulation stopped     {e}");
         }
     }
     if let Some(path) = &args.plot {

@@ -152,8 +152,8 @@ pub fn run(args: &TableArgs) -> u8 {
     let table = GaitTable::parse(&image);
     if let Ok(t) = table {
         println!(
-            "table {:?}: {} samples, {:.2} s, {} bytes: {}",
-            t.kind(),
+            "table {}: {} samples, {:.2} s, {} bytes: {}",
+            gait_opt::clinical_report::gait_name(t.kind()),
             t.len(),
             t.duration_s(),
             image.len(),
