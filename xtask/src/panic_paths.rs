@@ -17,7 +17,7 @@
 //!    the panic handler. This covers what rule 1 cannot follow: calls
 //!    through function pointers (counted and printed).
 //!
-//! `docs/safety.md` ("No panic path") says what was removed for it.
+//! `docs/safety.md` ("No panic path") says what keeps the images so.
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::path::Path;

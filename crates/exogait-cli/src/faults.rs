@@ -84,7 +84,7 @@ struct BadRunJson {
     /// The joints the controller braked at some tick, in joint order (not
     /// one 0x0404 only held in place; the e-stop's motors disabled are not
     /// listed): for a hip or knee fault, more than its joint is the
-    /// residual's cascade (`docs/safety.md`, session 13).
+    /// residual's cascade (`docs/safety.md`, "The torque residual").
     braked_joints: Vec<&'static str>,
     missed: bool,
     false_trip: bool,

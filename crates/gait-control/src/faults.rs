@@ -150,7 +150,7 @@ macro_rules! fault_table {
             /// braked (or blind), the fault first holds its joint where it
             /// is, its drive on, and brakes it only when raised there again
             /// (`false` unless the row says so): most likely the braked
-            /// joint dragged it (`docs/safety.md`, session 17).
+            /// joint dragged it (`docs/safety.md`, "Reactions").
             #[must_use]
             pub const fn held_in_place_first(self) -> bool {
                 match self {

@@ -446,7 +446,7 @@ impl<'t> Sequencer<'t> {
     /// drives have until the pilot's arms take the load (0.15 s and more
     /// after the hold), and a foot held short of its tread may not reach
     /// the ground below; the stance knee is what lowers the body onto it
-    /// (docs/safety.md, session 23).
+    /// (docs/safety.md, "Swing").
     #[must_use]
     pub fn in_swing_now(&self, asked: InSwing, braked: &[bool; JOINTS]) -> InSwing {
         let Phase::Swing { stance, t_s } = self.phase else {

@@ -31,7 +31,8 @@ pub fn flash_tables() -> GaitTables<'static> {
 /// automatic response starts ≈ 0.1 s after a perturbation, a voluntary one
 /// 0.18–0.23 s), then 1.5 s to move the body to the hold's aim (a
 /// deliberate move of the body by the arms takes 1–2 s). Sources and
-/// what an instant pilot changes: `docs/safety.md`, session 23.
+/// what an instant pilot changes: `docs/safety.md`, "The randomised fault
+/// campaign".
 pub fn strong_pilot() -> PilotConfig {
     PilotConfig {
         torque_limit_nm: 300.0,
@@ -43,7 +44,7 @@ pub fn strong_pilot() -> PilotConfig {
 }
 
 /// [`strong_pilot`] meeting a safe hold on the tick it begins with all
-/// its strength: no person can (the campaign's pilot up to session 22).
+/// its strength: no person can (kept to compare the campaign against).
 pub fn instant_pilot() -> PilotConfig {
     PilotConfig {
         hold_reaction_s: 0.0,

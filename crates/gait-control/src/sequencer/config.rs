@@ -71,7 +71,7 @@ pub struct SequencerConfig {
     /// … its swing hip and knee references moving no faster than this,
     /// rad/s: where the leg nears its reach, the knee's angle changes ever
     /// faster for the same fall of the ankle, past what its drive can
-    /// follow (docs/safety.md, session 23).
+    /// follow (docs/safety.md, "Swing").
     pub set_down_joint_speed_rad_s: f32,
     /// From this fraction of a swing on (walk, stair ascent, stair
     /// descent), a safe hold plays the step on to its landing first,

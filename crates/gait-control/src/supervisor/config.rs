@@ -211,8 +211,8 @@ impl SupervisorConfig {
             max_ankle_jump_counts_per_tick: 100,
             frozen_ticks: 100,
             // A joint following a reference this fast moves 13 counts in
-            // 100 ticks (0.1 until session 24 missed a stance knee frozen
-            // late in an ascent's swing, its reference creeping).
+            // 100 ticks; slower, a stance knee frozen late in an ascent's
+            // swing, its reference creeping, would go unseen.
             frozen_reference_speed_rad_s: 0.05,
             frozen_command_fraction: 0.9,
             frozen_still_reset_ticks: 500,

@@ -257,9 +257,9 @@ mod tests {
 
     /// A foot set down in a hold becomes the plant's stance foot: the
     /// pilot's move starts again from that foot's shank, not from the
-    /// other leg's angle (session 24: a descent's left shank at 0.49 rad,
-    /// the landed right one at −0.03; the move went on from 0.49 and the
-    /// crutches shoved the body over the lower foot at their full 300 N·m).
+    /// other leg's angle (a descent's left shank at 0.49 rad, the landed
+    /// right one at −0.03: going on from 0.49, the crutches would shove the
+    /// body over the lower foot at their full 300 N·m).
     #[test]
     fn a_foot_set_down_in_a_hold_restarts_the_move_from_its_own_shank() {
         let cfg = PilotConfig {
@@ -288,9 +288,10 @@ mod tests {
         assert!((phi(r.aim(&cfg, true, hold, right, || 9.0, 2.3)) - 0.1).abs() < 1e-9);
     }
 
-    /// What the campaign's figures rest on (session 18 measured them
-    /// moving from 369 to 450 or 644 falls with the pilot's aim in a safe
-    /// hold, `docs/safety.md`): a change here must be deliberate.
+    /// What the campaign's figures rest on: the pilot's aim in a safe hold
+    /// moves the falls of a 10,000-run campaign by hundreds
+    /// (`docs/safety.md`, "The randomised fault campaign"), so a change
+    /// here must be deliberate.
     #[test]
     fn the_pilot_aims_at_the_step_s_start_but_in_a_swing_and_a_transfer() {
         let (start, landed) = (0.05, 0.30);
