@@ -77,3 +77,22 @@ fn cost_recomputes_a_clinical_report_and_catches_an_edit() {
     let (code, _, _) = exogait(&["cost", edited.to_str().unwrap()]);
     assert_eq!(code, 1);
 }
+
+#[test]
+fn help_states_each_commands_exit_status_as_it_behaves() {
+    let (_, top, _) = exogait(&["--help"]);
+    let line = |cmd: &str| {
+        top.lines()
+            .find(|l| l.trim_start().starts_with(cmd))
+            .unwrap_or_else(|| panic!("{cmd} not in the help"))
+            .to_string()
+    };
+    assert!(line("simulate").contains("exit 0 when every step"), "{top}");
+    assert!(line("compare").contains("exit 0 when both land"), "{top}");
+    assert!(line("faults").contains("named case"), "{top}");
+    assert!(line("tables").contains("exit 1 if none is cleared"), "{top}");
+    // What compare's help promises, it does: the walk's comparison lands
+    // every step of both gaits and exits 0.
+    let (code, _, err) = exogait(&["compare", "--gait", "walk", "--steps", "2"]);
+    assert_eq!(code, 0, "{err}");
+}
