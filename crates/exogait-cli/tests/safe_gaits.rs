@@ -90,7 +90,10 @@ fn help_states_each_commands_exit_status_as_it_behaves() {
     assert!(line("simulate").contains("exit 0 when every step"), "{top}");
     assert!(line("compare").contains("exit 0 when both land"), "{top}");
     assert!(line("faults").contains("named case"), "{top}");
-    assert!(line("tables").contains("exit 1 if none is cleared"), "{top}");
+    assert!(
+        line("tables").contains("exit 1 if none is cleared"),
+        "{top}"
+    );
     // What compare's help promises, it does: the walk's comparison lands
     // every step of both gaits and exits 0.
     let (code, _, err) = exogait(&["compare", "--gait", "walk", "--steps", "2"]);
