@@ -203,16 +203,15 @@ fn encoder_bus_errors_go_to_a_safe_hold_with_motors_on() {
     assert!(rig.faults().contains(FaultCode::EncoderBusError));
     // The hold keeps the pilot up: motors stay on, the plant does not fall
     // (`unwrap`), and the joints with working encoders hold their posture.
-    // The blind knee gets feed-forward only and may creep.
+    // The blind knee is braked: its drive off, its dynamic brake holds it.
     rig.run_until(1500, |_| false).unwrap();
     let last = rig.trace.last().unwrap();
     assert!(last.report.motors_enabled);
     assert!(matches!(last.report.phase, Phase::SafeHold { .. }));
     // In the clinical walk's standing posture (torso 21° forward, the
-    // trailing heel up) the blind knee's creep drags the others: 0.18 rad
-    // over the 1.5 s (it was under 0.1 rad in the old upright posture). A
-    // joint whose encoder is lost needs a model estimate, not feed-forward
-    // alone: the safety issue's first reaction to build.
+    // trailing heel up, so the closed chain does not give the knee's angle
+    // and it stays braked) the others barely move: 0.023 rad at most over
+    // the 1.5 s.
     let healthy = drift_of(&rig, before, &[0, 2, 3]);
     assert!(
         healthy < 0.25,
@@ -564,9 +563,9 @@ fn a_pilot_leaning_onto_the_toe_mid_walk_is_an_unplanned_heel_off() {
     // against the pilot's pull may reach their limit first (0x0401, a safe
     // hold), or the pull shows in a joint's torque residual first (0x0404:
     // from encoders and commands alone the pilot's push looks like a drive
-    // that does not follow, and that joint is braked; docs/safety.md, "The
-    // randomised campaign", open); where the heel-off is what is caught, it
-    // is caught on time.
+    // that does not follow, and that joint is braked; docs/safety.md,
+    // "What the supervisor does not cover"); where the heel-off is what is
+    // caught, it is caught on time.
     let faults = rig.faults();
     assert!(
         faults.contains(FaultCode::UnplannedHeelOff)

@@ -58,8 +58,8 @@ fn healthy_runs_with_sensor_noise_never_trip() {
 #[test]
 fn an_encoder_step_the_joint_cannot_make_is_a_jump_fault_within_the_debounce() {
     // 8 rad/s (the knee's velocity limit) is 21 counts per tick: a step of
-    // 101–299 counts (2.2–6.6°) slipped through when the allowance was 100
-    // counts per tick elapsed.
+    // 70–299 counts (1.5–6.6°) is one no hip or knee can make, including
+    // the 101–299 counts an allowance of 100 counts per tick would pass.
     for (joint, counts) in [
         ("left-hip", 101),
         ("left-knee", 150),
@@ -197,8 +197,9 @@ fn a_seeded_campaign_detects_every_fault_it_must_and_never_trips_falsely() {
     // 200 random single faults (gait, kind, target, value, time) with
     // sensor noise: every fault the table promises to see is seen, and no
     // fault latches before the injection. Falls and stop crossings are
-    // counted and printed: issue 13's goal of none is not met yet
-    // (docs/safety.md); `cargo xtask faults --runs N` runs the large one.
+    // counted and printed, not asserted here; `cargo xtask faults --runs N`
+    // runs the large campaign, which fails on any that is not a named case
+    // (docs/safety.md, "The randomised fault campaign").
     let device = DeviceConfig::exogait().unwrap();
     let runs = sim::campaign::plan(2026, 200);
     let results = sim::campaign::play_all(&runs, &device, &|| {});
@@ -226,13 +227,13 @@ fn a_panic_resets_the_board_into_a_hold_of_the_posture_it_finds() {
     // Standing, in the weight transfer, early, mid and late in the swing
     // (the walk's first swing runs 1.36–3.54 s): the board is off for the
     // boot (motors limp), then holds with 0x0603 latched, and nobody falls.
-    // Late in a swing the foot found in the air is set down first (walk at
-    // 3.2 s and stair descent at 2.8 s fell with a hold of the posture
-    // found alone). Late in a stair descent's swing (3.2 s) the restart has
-    // lost the step, which a hold from any other fault there plays on to
-    // its landing; with the set-down alone the pilot fell there in session
-    // 23, until session 24 mended the simulated pilot's push when the
-    // set-down foot lands (docs/safety.md).
+    // Late in a swing the foot found in the air is set down first, so the
+    // hold stands on two feet, not on the one leg. Late in a stair
+    // descent's swing (3.2 s) the restart has lost the step, which a hold
+    // from any other fault there plays on to its landing; the set-down
+    // alone keeps the pilot up there, the simulated pilot restarting his
+    // push from the set-down foot's shank when it lands (docs/safety.md,
+    // "If a panic happens anyway" and "The randomised fault campaign").
     for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
         for at in [0.5, 1.2, 1.6, 2.0, 2.4, 2.8, 3.2] {
             let o = run(gait, 3, at + 3.0, None, &[&format!("panic@{at}")]);
@@ -258,9 +259,9 @@ fn motors_disabled_brake_the_joints_instead_of_letting_them_go_limp() {
     // the swing foot is set down first, then the drives are disabled).
     // With the device's dynamic brake (its full 375 N·m·s/rad) nobody
     // falls and no hip or knee reaches a stop; the same device without
-    // the brake lets the joints go limp: 1 of these 12 runs falls, and 8
-    // cross a stop by more than 0.05 rad (2 and 11 with the pilot who met
-    // the stop at once, before session 23).
+    // the brake lets the joints go limp: with the campaign's pilot, who
+    // meets the hold 0.15 s late, 1 of these 12 runs falls and 8
+    // cross a stop by more than 0.05 rad.
     let braked = DeviceConfig::exogait().unwrap();
     let mut limp = braked;
     for d in &mut limp.drives {
@@ -516,11 +517,12 @@ fn braked_joint_runs(kind: &str) -> (usize, usize, Vec<String>) {
 fn a_drive_that_does_not_follow_its_command_is_braked_and_stays_braked() {
     // A drive stuck on its set value (`motor-stuck`: its output keeps the
     // torque it gave, whatever is commanded). Measured: braked in all 36
-    // runs (by its current, 0x0405: the next test), no fall. With the
-    // torque residual alone (0x0404, before session 16) 31 of 36, the
-    // other five a joint the stuck one dragged, and 1 fall; before the
-    // residual the safe hold fought the stuck torque: 49 of 100 such runs
-    // of the campaign fell.
+    // runs (by its current, 0x0405:
+    // `a_drive_stuck_on_its_set_value_is_found_by_its_current_at_its_own_joint`),
+    // no fall. The torque residual (0x0404) alone cannot tell the stuck
+    // joint from one it drags, and a safe hold that fights the stuck
+    // torque instead of braking the joint drops the pilot: the joint is
+    // braked, and stays braked.
     let (braked_right, driven_again, falls) = braked_joint_runs("motor-stuck");
     assert!(falls.len() <= 1, "falls: {falls:?}");
     assert_eq!(driven_again, 0, "a drive that does not follow stays braked");
@@ -534,10 +536,9 @@ fn a_drive_that_does_not_follow_its_command_is_braked_and_stays_braked() {
 fn a_joint_whose_encoder_is_lost_is_braked_while_the_others_hold() {
     // The encoder's bus lost on every hip and knee. Measured: the joint
     // braked in all 36 runs, and driven again from the closed chain once
-    // both feet were down and flat in 4 (session 14); 1 falls (stair
-    // descent, the left knee lost at 2.5 s; 0x0404 follows 0.3 s later). Held
-    // on its feed-forward instead (before), the campaign's encoder runs fell
-    // 45 times in 384.
+    // both feet are down and flat in 2; none falls. A joint without its
+    // angle cannot be held by its own loop: held on its feed-forward
+    // instead of braked, it drops the pilot more often.
     let (braked_right, driven_again, falls) = braked_joint_runs("encoder-bus");
     assert!(falls.len() <= 2, "falls: {falls:?}");
     assert_eq!(braked_right, 36);
@@ -644,9 +645,9 @@ fn campaign_run(gait: Gait, fault: &str, noise_seed: u64) -> sim::campaign::RunR
     sim::campaign::play(&run, &DeviceConfig::exogait().unwrap())
 }
 
-/// [`campaign_run`] with the pilot who meets a hold at once (the
-/// campaign's up to session 22, whose runs these tests found their cases
-/// in): what the campaign tells of a run does not depend on the pilot.
+/// [`campaign_run`] with the pilot who meets a hold at once
+/// (`scenario::instant_pilot`), with whom the runs below reach their
+/// cases: what the campaign tells of a run does not depend on the pilot.
 fn instant_pilot_run(gait: Gait, fault: &str, noise_seed: u64) -> sim::campaign::RunResult {
     let run = sim::campaign::CampaignRun {
         gait,
@@ -673,8 +674,8 @@ fn a_stop_crossed_is_the_device_s_unless_a_named_case_s_reason_took_the_joint_th
     assert!(!estop.unnamed_stop());
     // A stair descent's stance knee whose encoder's bus fails: braked at
     // the drive's full 375 N·m·s/rad while the chain does not give its
-    // angle, it sinks slowly and stays 0.07 rad short of its stop (at the
-    // 167 N·m·s/rad the simulator once gave the brake, it crossed).
+    // angle, it sinks slowly and stays 0.07 rad short of its stop (a brake
+    // of 167 N·m·s/rad, under half that damping, would let it cross).
     let held = instant_pilot_run(Gait::StairDown, "encoder-bus:right-knee@1.925", 732265);
     assert!(held.outcome.braked_joints[3], "{:?}", held.outcome);
     assert!(!held.past_a_stop(), "{:?}", held.outcome);
@@ -692,7 +693,7 @@ fn a_stop_crossed_is_the_device_s_unless_a_named_case_s_reason_took_the_joint_th
 
 #[test]
 fn a_joint_whose_working_drive_gave_all_it_has_is_the_named_case_s() {
-    // Seed 1's campaign with the instant pilot (session 19). A descent's stance knee whose gear
+    // Seed 1's campaign with the instant pilot. A descent's stance knee whose gear
     // slips: the other knee takes the body as the set-down's foot lands,
     // its drive at its full torque against the flexion stop and the knee
     // not being stopped by it (a load the drive cannot overcome), and crosses;
@@ -742,9 +743,10 @@ fn a_joint_whose_working_drive_gave_all_it_has_is_the_named_case_s() {
 fn a_blind_landing_waits_for_the_foot_to_reach_the_tread() {
     // Seed 1's campaign: the ADC (or the landing foot's sensor) lost as an
     // ascent's first swing ends. Landed on the table's end, the transfer
-    // began with the foot still above the upper tread and put the body on
-    // the leading leg, whose hip sank 0.6° past its flexion stop; landed
-    // 0.3 s later, the foot is on the tread first.
+    // would begin with the foot still above the upper tread and put the
+    // body on the leading leg, whose hip would sink 0.6° past its flexion
+    // stop; landed 0.3 s later (`blind_landing_settle_s`), the foot is on
+    // the tread first.
     for (fault, seed) in [
         ("adc-bus@3.712", 515_577),
         ("adc-bus@3.758", 36_852),
@@ -760,12 +762,13 @@ fn a_blind_landing_waits_for_the_foot_to_reach_the_tread() {
 
 #[test]
 fn a_persistent_encoder_jump_is_taken_out_and_the_step_lands_before_the_hold() {
-    // Seed 1's campaign: stair descents whose jump dropped the pilot when
-    // the reading stayed offset (the first three, session 14) or when the
-    // offset was taken out but the hold set the foot down at once (the
-    // last four). With the offset taken out and the step landing first
-    // (0x0205 is marked "land first"), each stands with no joint past a
-    // stop, and its hold begins only after the landing.
+    // Stair descents of seed 1's campaign whose jump drops the pilot if
+    // the reading stays offset (the first three: control then works on a
+    // wrong angle) or if the offset is taken out but the hold sets the foot
+    // down at once (the last four). With the offset taken out, sensors,
+    // table and motors are good, so the step lands first (0x0205 is marked
+    // "land first"): each stands with no joint past a stop, and its hold
+    // begins only after the landing.
     for (fault, seed) in [
         ("encoder-jump=315:right-knee@1.908", 456_424),
         ("encoder-jump=-336:left-knee@4.575", 817_201),
@@ -855,10 +858,9 @@ fn a_slipping_gear_is_found_by_its_residual_not_its_current() {
     // The gearbox passes a third of the motor's torque; the current, and
     // its monitor, stay what was asked: the current check cannot see it,
     // the residual (0x0404) must. Measured with the campaign's pilot, who
-    // meets a hold 0.15 s late (session 23): 20 of 36 braked first at their
-    // own joint by the residual (it shows only under load), 5 at a joint
-    // the slipping one dragged, all on stairs, 11 not within the 4 s
-    // played (with the pilot who pushed at once: 29, 2 and 5).
+    // meets a hold 0.15 s late: 20 of 36 braked first at their own joint
+    // by the residual (it shows only under load), 5 at a joint the
+    // slipping one drags, all on stairs, 11 not within the 4 s played.
     let (mut own, mut other) = (0, 0);
     for (case, slipping, first) in first_brakes("gear-slip=0.3") {
         let Some((code, joint, _)) = first else {
@@ -876,13 +878,13 @@ fn a_slipping_gear_is_found_by_its_residual_not_its_current() {
 
 #[test]
 fn a_hip_encoder_frozen_as_its_swing_ends_is_found_in_the_next_step() {
-    // Seed 1's campaign (session 19's device fall): a walk's right hip
-    // encoder freezes as its swing ends. The weight transfer barely moves
-    // that hip's reference, and the frozen count used to restart on every
-    // such still tick: 0x0204 never came, and as the next step's stance hip
-    // it tipped the torso past 60°. Counted over the driven ticks only, it
-    // was found as that step drove the hip (session 20); since session 24
-    // a reference moving 0.05 rad/s drives a joint, and the transfer's
+    // Seed 1's campaign: a walk's right hip encoder freezes as its swing
+    // ends. The weight transfer barely moves that hip's reference; a
+    // frozen count restarted on every such still tick would never reach
+    // 0x0204, and as the next step's stance hip the unseen joint would tip
+    // the torso past 60°. The count runs over driven ticks only, a
+    // reference moving 0.05 rad/s drives a joint, and only a still stretch
+    // of 0.5 s (longer than the transfer) restarts it, so the transfer's
     // slow move of that hip finds it before the next step. It is braked,
     // and the pilot stays up.
     let r = campaign_run(Gait::Walk, "encoder-stuck:right-hip@3.447", 918_063);
@@ -899,9 +901,9 @@ fn a_hip_encoder_frozen_as_its_swing_ends_is_found_in_the_next_step() {
 #[test]
 fn the_simulated_pilot_reacts_to_a_hold_late_and_slowly() {
     // The campaign's pilot goes on with the step's shank for its reaction
-    // time, then eases it to the hold's aim; an instant one (the campaign's
-    // up to session 22) meets the hold at once with the crutches' full
-    // torque (`docs/safety.md`, "The pilot's reaction to a hold").
+    // time, then eases it to the hold's aim; an instant one
+    // (`scenario::instant_pilot`) meets the hold at once with the crutches'
+    // full torque (`docs/safety.md`, "The randomised fault campaign").
     let device = DeviceConfig::exogait().unwrap();
     let fault: Injection = "dir-fail:right-hip@2.497".parse().unwrap();
     let crutches_after_hold = |pilot: sim::pilot::PilotConfig| {
@@ -955,10 +957,9 @@ fn late_in_a_descent_s_swing_a_hold_lands_the_step_first() {
     // Seed 1's campaign, stair descents, the hold 0.27–0.55 s before the
     // table's landing: the stance hip's drive or encoder lost, the swing
     // knee's encoder or drive lost. Played on to its landing, none falls
-    // or crosses a stop. (Session 23 found each fell when set down at
-    // once; session 24 traced much of that to the simulated pilot's
-    // crutch push jumping when the set-down foot landed, and mended it:
-    // the set-down alone now keeps these up too.)
+    // or crosses a stop. (Set down at once, these stand too: the simulated
+    // pilot's push restarts from the set-down foot's shank when it lands,
+    // `the_pilot_does_not_shove_the_body_when_the_set_down_foot_lands`.)
     stands_clear_of_the_stops(
         Gait::StairDown,
         &[
@@ -969,11 +970,11 @@ fn late_in_a_descent_s_swing_a_hold_lands_the_step_first() {
         ],
     );
     let device = DeviceConfig::exogait().unwrap();
-    // What landing first still buys (session 24, the plan's 3,303
-    // descents: 154 falls and 62 stops crossed, none the device's,
-    // against 158 and 63 with one the device's): a weak stance hip late
-    // in the swing, set down at once, lets the swing knee past its
-    // extension stop; played on, it lands clear of it.
+    // What landing first buys over setting the foot down (on seed 1's
+    // 3,303 descents: 154 falls and 62 stops crossed, none the device's,
+    // against 158 and 63 with one the device's): a weak stance hip late in
+    // the swing, set down at once, lets the swing knee past its extension
+    // stop; played on, the step lands clear of it.
     let mut set_down = device;
     set_down.controller.sequencer.lands_after = [1.0; 3];
     let run = sim::campaign::CampaignRun {
@@ -994,12 +995,12 @@ fn late_in_a_descent_s_swing_a_hold_lands_the_step_first() {
 
 #[test]
 fn a_stance_ankle_frozen_in_a_walk_s_swing_is_found_before_the_step_ends() {
-    // Seed 1's campaign: a walk's stance ankle froze 0.54 s into a 2.2 s
-    // swing. Unseen, its stale reading set the posture the step played on
-    // with past the table's end; the residual braked the stance knee and
-    // the torso pitched past 60° (session 23's main). Found as the plan
-    // turns the shank 0.05 rad with no count changing (0x0207), the step
-    // lands on the plan's shank and the pilot stands.
+    // Seed 1's campaign: a walk's stance ankle freezes 0.54 s into a 2.2 s
+    // swing. Unseen, its stale reading would set the posture the step
+    // plays on with past the table's end; the residual would brake the
+    // stance knee and the torso pitch past 60°. Found as the plan turns
+    // the shank 0.05 rad with no count changing (0x0207), the step lands on
+    // the plan's shank and the pilot stands.
     let o = campaign_run(Gait::Walk, "encoder-stuck:right-ankle@4.486", 932_124).outcome;
     let found = o.faults.iter().find(|f| f.code == FaultCode::AnkleEncoder);
     let found = found.unwrap_or_else(|| panic!("not found: {o:?}"));
@@ -1011,11 +1012,11 @@ fn a_stance_ankle_frozen_in_a_walk_s_swing_is_found_before_the_step_ends() {
 fn the_pilot_does_not_shove_the_body_when_the_set_down_foot_lands() {
     // Seed 1's campaign: a descent's stance knee encoder lost late in the
     // swing (the knee braked, the swing foot set down). The simulated
-    // pilot's eased move in the hold went on from the old stance shank's
-    // angle (0.49 rad) once the landed foot became the plant's stance
-    // foot (its shank at −0.03): the crutches pushed at their full
-    // 300 N·m and the torso pitched past 60°. Restarted from the landed
-    // shank, the pilot stands, with no stop crossed.
+    // pilot's eased move in the hold restarts from the landed shank once
+    // the landed foot becomes the plant's stance foot (its shank at
+    // −0.03): going on from the old stance shank's angle (0.49 rad), the
+    // crutches would push at their full 300 N·m and pitch the torso past
+    // 60°. Restarted, the pilot stands, with no stop crossed.
     stands_clear_of_the_stops(
         Gait::StairDown,
         &[

@@ -2,7 +2,7 @@
 //! foot above the ground (a curb or a tread lower than planned) goes on
 //! lowering the foot until its sensor feels the ground, and lands there;
 //! without the search the foot hovers until the landing times out
-//! (docs/safety.md, "Healthy runs").
+//! (docs/safety.md, "Swing").
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use exogait_device::DeviceConfig;

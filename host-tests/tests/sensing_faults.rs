@@ -1,8 +1,8 @@
 //! Runs of the 10,000-run campaign (`cargo xtask faults --runs 10000
-//! --seed 1`, sessions 9 and 10) in which a sensing fault's reaction dropped the
-//! pilot, replayed as the campaign played them (the same gait, fault, time
-//! and sensor noise). Each now stands (docs/safety.md, "Sensing faults
-//! after session 9").
+//! --seed 1`) in which a sensing fault would drop the pilot if control
+//! acted on the stale or false reading, replayed as the campaign plays them
+//! (the same gait, fault, time and sensor noise). Each stands
+//! (docs/safety.md, "Choices and why" and "Swing").
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use std::str::FromStr;
@@ -24,10 +24,10 @@ fn replay(gait: Gait, fault: &str, noise_seed: u64) -> RunResult {
 
 /// The stance ankle's encoder lost in a stair descent's swing, with the
 /// foot in the air: the step finishes (0x0207) and lands on it. Its held
-/// reading was the swing's, 0.3 rad off the landing's lean; the static
-/// feed-forward built on it was wrong by some 60 N·m at the knee, the
-/// torque residual (0x0404) braked the knee and the body sank onto it.
-/// Now the lean comes through the closed chain or from the plan.
+/// reading is the swing's, 0.3 rad off the landing's lean; a static
+/// feed-forward built on it would be wrong by some 60 N·m at the knee, the
+/// torque residual (0x0404) would brake the knee and the body sink onto
+/// it. So the lean comes through the closed chain or from the plan.
 #[test]
 fn a_lost_ankle_encoder_leaves_the_stair_descent_standing() {
     for (fault, seed) in [
@@ -54,9 +54,9 @@ fn a_lost_ankle_encoder_leaves_the_stair_descent_standing() {
 }
 
 /// A 3 ms force spike on the swing foot late in a swing: taken as the
-/// landing, it swapped the legs with the foot in the air and the torso
-/// tipped over the leg it had just left. A landing is now contact held
-/// 8 ms; the step lands when the foot does, and nothing faults.
+/// landing, it would swap the legs with the foot in the air and tip the
+/// torso over the leg just left. A landing is contact held 8 ms, so the
+/// step lands when the foot does, and nothing faults.
 #[test]
 fn a_force_spike_late_in_a_swing_is_not_taken_for_the_landing() {
     for (gait, fault, seed) in [
@@ -72,14 +72,14 @@ fn a_force_spike_late_in_a_swing_is_not_taken_for_the_landing() {
     }
 }
 
-/// An ankle encoder stuck at toe-off in a stair descent (session 10's
-/// campaign): it read the dorsiflexion stop through the whole swing, and
-/// when its foot landed the stuck reading was taken for the landing's
-/// lean, a heel up on the stop; the feed-forward held a posture 0.3 rad
-/// off and the body sank. Only the ground holds an ankle on its stop:
-/// read there, unchanged, with the foot surely in the air, the encoder is
-/// stuck (0x0207, the step finishes), control stops taking it, and the
-/// landing's lean comes through the closed chain or from the plan.
+/// An ankle encoder stuck at toe-off in a stair descent: it reads the
+/// dorsiflexion stop through the whole swing, and taken for the landing's
+/// lean when its foot lands (a heel up on the stop), the stuck reading
+/// would make the feed-forward hold a posture 0.3 rad off and the body
+/// sink. Only the ground holds an ankle on its stop: read there,
+/// unchanged, with the foot surely in the air, the encoder is stuck
+/// (0x0207, the step finishes), control stops taking it, and the landing's
+/// lean comes through the closed chain or from the plan.
 #[test]
 fn an_ankle_encoder_stuck_at_toe_off_is_found_in_the_air() {
     for (fault, seed) in [

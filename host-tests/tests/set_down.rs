@@ -2,7 +2,7 @@
 //! middle of a swing (here the stance hip's encoder lost, its joint braked)
 //! sets the swing foot down onto the ground below it, so the hold stands on
 //! two feet; without the set-down the foot stays in the air and the body on
-//! the one leg (docs/safety.md, "A hold in a swing").
+//! the one leg (docs/safety.md, "Swing").
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use exogait_device::DeviceConfig;
@@ -66,12 +66,13 @@ fn a_hold_in_a_swing_sets_the_foot_down_sooner_than_it_falls_there() {
     let device = DeviceConfig::exogait().unwrap();
     let mut off = device;
     off.controller.sequencer.set_down_depth_m = 0.0;
-    // With the campaign's pilot, who meets the hold 0.15 s late (session
-    // 23): a stair ascent's set-down at 0.3–0.5 of its swing does not
-    // reach the lower tread (the ankle's target straight below lies beyond
-    // the leg's reach from the hip held high; the pilot stands on the
-    // stance leg, docs/safety.md); from 0.65 of a descent's swing the hold
-    // plays the step on instead (`SequencerConfig::lands_after`).
+    // With the campaign's pilot, who meets the hold 0.15 s late: a stair
+    // ascent's set-down at 0.3–0.5 of its swing does not reach the lower
+    // tread (the ankle's target straight below lies beyond the leg's reach
+    // from the hip held high; the pilot stands on the stance leg,
+    // docs/safety.md, "What the supervisor does not cover"); from 0.65 of a
+    // descent's swing the hold plays the step on instead
+    // (`SequencerConfig::lands_after`).
     for (gait, fraction) in [
         (Gait::StairUp, 0.7),
         (Gait::StairDown, 0.4),

@@ -81,11 +81,10 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
             own_joint_runs += 1;
         }
     }
-    // Since the campaign's pilot meets a hold 0.15 s late (session 23) an
-    // e-stop run is rarely a bad one (3 of 824 on seed 1's 10,000), and
-    // since session 24 no lost encoder or output stage is one in seed 1's
-    // 10,000: checked above when one is. Seed 1's first 60 hold a slipping
-    // hip gear braked at its own hip.
+    // With the campaign's pilot, who meets a hold 0.15 s late, no e-stop
+    // run (824 in seed 1's 10,000) and no lost encoder or output stage is
+    // a bad one: each is checked above when one is. Seed 1's first 60 hold
+    // a slipping hip gear braked at its own hip.
     eprintln!("{estop_runs} e-stop runs among the bad ones");
     assert!(
         own_joint_runs > 0,

@@ -219,10 +219,10 @@ fn row_encoder_frozen() {
         input.joint_reference_rad[0] = STAND_JOINTS[0] + 0.0005 * k as f32;
     });
     assert_row(&v, FaultCode::EncoderFrozen, Reaction::SafeHold, 100);
-    // A reference creeping at 0.06 rad/s (session 24: an ascent's stance
-    // knee late in its swing, whose frozen encoder went unseen for 0.89 s
-    // under the 0.1 rad/s of before) still drives the joint 16 counts in
-    // 100 ticks; at 0.04 rad/s it counts as still.
+    // A reference creeping at 0.06 rad/s still drives the joint 16 counts
+    // in 100 ticks (an ascent's stance knee late in its swing moves under
+    // 0.1 rad/s, and its frozen encoder must still be found); at 0.04 rad/s
+    // it counts as still (the bound is 0.05 rad/s).
     let creeping = |rad_s: f32| {
         inject(150, |k, input| {
             input.joints[0] = frozen;
@@ -363,8 +363,8 @@ fn a_persistent_jump_is_taken_out_of_the_frames_after_it() {
     // bends on at 0.5 rad/s; its reference follows the true angle. The
     // jump latches 0x0205, and from then on the supervisor takes the
     // frames without the offset: they continue from the last accepted
-    // one, control is given the true angle, and nothing else trips (the
-    // reading 44° off used to trip the tracking error).
+    // one, control is given the true angle, and nothing else trips (a
+    // reading left 44° off would trip the tracking error).
     for direction in [Direction::Positive, Direction::Negative] {
         for offset in [2000, -2000, 9000] {
             let mut sup = supervisor();
@@ -537,11 +537,11 @@ fn right_stance_in_a_swing(
 
 #[test]
 fn a_stance_ankle_that_does_not_turn_with_the_plan_is_a_lost_ankle_encoder() {
-    // Session 24: a walk's stance ankle froze mid-swing; its stale reading
-    // set the posture the step played on with past the table's end, the
-    // residual braked the stance knee and the pilot fell. Counts that do
-    // not change once while the plan turns the shank by 0.05 rad: 0x0207,
-    // and control stops taking them.
+    // A walk's stance ankle frozen mid-swing: its stale reading would set
+    // the posture the step plays on with past the table's end, the
+    // residual would brake the stance knee and the pilot fall. Counts that
+    // do not change once while the plan turns the shank by 0.05 rad:
+    // 0x0207, and control stops taking them.
     let cfg = SupervisorConfig::paper();
     let rate = 0.5e-3; // 0.5 rad/s
     let (sup, v) = right_stance_in_a_swing(rate, |_, _| STAND_ANKLES[1]);
