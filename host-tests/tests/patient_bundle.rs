@@ -59,53 +59,57 @@ fn bundle(device: &DeviceConfig) -> Vec<u8> {
     img
 }
 
-#[test]
-fn mode_picks_the_bundles_second_gait_and_go_plays_it() {
+/// Runs `f` on a rig of the device's body standing for the walk, over the
+/// controller's list of the bundle (descent, then walk).
+fn with_rig(f: impl FnOnce(&mut Rig<'_>)) {
     let device = DeviceConfig::exogait().unwrap();
     let image = bundle(&device);
     let b = Bundle::parse(&image, device.fingerprint()).unwrap();
     let mut slots: TableSlots<'_> = [None; MAX_GAITS];
     let (tables, operator) = boot::patient_gaits(&b, &mut slots, device.reset_hold_ticks).unwrap();
     let mut rig = patient_rig(&device, Gait::Walk, strong_pilot(), tables, operator).unwrap();
-    // The first gait of the list is the descent.
-    assert_eq!(rig.controller.planned_gait(), Gait::StairDown);
-    // One short press of MODE, then GO held.
-    Rig::press(&rig.mode, 200, 100);
-    Rig::press(&rig.go, 600, GO_TICKS);
-    run_steps(&mut rig, 2, 16.0).unwrap();
-    assert_eq!(rig.controller.sequencer().gait(), Gait::Walk);
-    assert!(rig.faults().is_empty(), "{:?}", rig.faults());
-    let landings = rig.plant.landings();
-    assert!(landings.len() >= 2);
-    // Walking steps of 0.3 m on level ground.
-    assert!(
-        (landings[0].position_m[0] - 0.3).abs() < 0.05,
-        "{landings:?}"
-    );
-    assert!(landings[1].position_m[1].abs() < 0.01);
+    f(&mut rig);
+}
+
+#[test]
+fn mode_picks_the_bundles_second_gait_and_go_plays_it() {
+    with_rig(|rig| {
+        // The first gait of the list is the descent.
+        assert_eq!(rig.controller.planned_gait(), Gait::StairDown);
+        // One short press of MODE, then GO held.
+        Rig::press(&rig.mode, 200, 100);
+        Rig::press(&rig.go, 600, GO_TICKS);
+        run_steps(rig, 2, 16.0).unwrap();
+        assert_eq!(rig.controller.sequencer().gait(), Gait::Walk);
+        assert!(rig.faults().is_empty(), "{:?}", rig.faults());
+        let landings = rig.plant.landings();
+        assert!(landings.len() >= 2);
+        // Walking steps of 0.3 m on level ground.
+        assert!(
+            (landings[0].position_m[0] - 0.3).abs() < 0.05,
+            "{landings:?}"
+        );
+        assert!(landings[1].position_m[1].abs() < 0.01);
+    });
 }
 
 #[test]
 fn go_on_a_gait_the_pilot_does_not_stand_for_starts_nothing() {
-    let device = DeviceConfig::exogait().unwrap();
-    let image = bundle(&device);
-    let b = Bundle::parse(&image, device.fingerprint()).unwrap();
-    let mut slots: TableSlots<'_> = [None; MAX_GAITS];
-    let (tables, operator) = boot::patient_gaits(&b, &mut slots, device.reset_hold_ticks).unwrap();
     // Standing for the walk, the descent (the list's first) picked.
-    let mut rig = patient_rig(&device, Gait::Walk, strong_pilot(), tables, operator).unwrap();
-    Rig::press(&rig.go, 600, GO_TICKS);
-    for _ in 0..6_000 {
-        let s = rig.tick().unwrap();
-        assert!(
-            !matches!(
-                s.report.phase,
-                Phase::Swing { .. } | Phase::WaitingReady { .. }
-            ),
-            "a step started at {} s",
-            s.state.time_s
-        );
-    }
-    assert!(rig.plant.landings().is_empty());
-    assert!(rig.faults().is_empty(), "{:?}", rig.faults());
+    with_rig(|rig| {
+        Rig::press(&rig.go, 600, GO_TICKS);
+        for _ in 0..6_000 {
+            let s = rig.tick().unwrap();
+            assert!(
+                !matches!(
+                    s.report.phase,
+                    Phase::Swing { .. } | Phase::WaitingReady { .. }
+                ),
+                "a step started at {} s",
+                s.state.time_s
+            );
+        }
+        assert!(rig.plant.landings().is_empty());
+        assert!(rig.faults().is_empty(), "{:?}", rig.faults());
+    });
 }

@@ -73,6 +73,23 @@ fn sector(image: &[u8]) -> Vec<u8> {
     s
 }
 
+/// The board's controller for `gaits` on the device with its own
+/// calibration, no built-in tables.
+fn calibrated<'a>(
+    d: &DeviceConfig,
+    gaits: &Gaits<'a>,
+    slots: &'a mut TableSlots<'a>,
+) -> (DeviceConfig, gait_control::controller::Controller<'a>) {
+    boot::build(
+        d,
+        gaits,
+        &Ok(Record::of_device(d)),
+        GaitTables::default(),
+        slots,
+    )
+    .unwrap()
+}
+
 #[test]
 fn an_erased_sector_plays_the_built_in_gaits() {
     let d = device();
@@ -100,14 +117,7 @@ fn a_verified_bundle_plays_its_gaits_in_order_on_the_fitted_device() {
     };
     assert_eq!(b.len(), 2);
     let mut slots: TableSlots<'_> = [None; MAX_GAITS];
-    let (cfg, c) = boot::build(
-        &d,
-        &gaits,
-        &Ok(Record::of_device(&d)),
-        GaitTables::default(),
-        &mut slots,
-    )
-    .unwrap();
+    let (cfg, c) = calibrated(&d, &gaits, &mut slots);
     // The controller's model is the patient's, the rest the device's.
     assert_eq!(cfg.body.links(), b.patient().model.links());
     assert_ne!(cfg.fingerprint(), d.fingerprint());
@@ -148,14 +158,7 @@ fn a_refused_bundle_plays_nothing_and_latches_0x0604_for_good() {
         // is checked first.
         assert_eq!(e, why);
         let mut slots: TableSlots<'_> = [None; MAX_GAITS];
-        let (cfg, c) = boot::build(
-            &d,
-            &gaits,
-            &Ok(Record::of_device(&d)),
-            GaitTables::default(),
-            &mut slots,
-        )
-        .unwrap();
+        let (cfg, c) = calibrated(&d, &gaits, &mut slots);
         assert_eq!(cfg, d);
         assert!(c.sequencer().tables().slot(0).is_none());
         assert!(c.supervisor().latched().contains(FaultCode::BundleRefused));
