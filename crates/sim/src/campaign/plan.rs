@@ -1,0 +1,159 @@
+//! The seeded plans: which fault runs and which healthy runs a campaign
+//! plays (the same seed gives the same runs).
+
+use gait_control::operator::Gait;
+
+use crate::inject::{Injection, Kind, Target};
+
+use super::{CampaignRun, HealthyRun};
+
+/// A seeded xorshift generator (as [`crate::noise`]: a fixed sequence per
+/// seed across library versions).
+struct Draw(u64);
+
+impl Draw {
+    fn next(&mut self) -> u64 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        self.0 = x;
+        x
+    }
+
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.unit() * n as f64) as usize % n.max(1)
+    }
+
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+}
+
+/// The `runs` runs of campaign `seed`.
+pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
+    let mut d = Draw(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    for _ in 0..8 {
+        d.next();
+    }
+    (0..runs)
+        .map(|_| {
+            let gait = [Gait::Walk, Gait::StairUp, Gait::StairDown][d.below(3)];
+            let joint = Target::Joint(d.below(4));
+            let encoder = if d.below(3) == 0 {
+                Target::Ankle(d.below(2))
+            } else {
+                joint
+            };
+            let force = Target::Force(d.below(4));
+            let sign = if d.below(2) == 0 { -1 } else { 1 };
+            let (kind, target) = match d.below(24) {
+                0 => (Kind::EncoderBus, Some(encoder)),
+                1 => (Kind::EncoderParity, Some(encoder)),
+                2 => (Kind::EncoderErrorFlag, Some(encoder)),
+                3 => (Kind::EncoderStuck, Some(encoder)),
+                4 => (
+                    Kind::EncoderJump(sign * (110 + d.below(400)) as i32),
+                    Some(joint),
+                ),
+                5 => (
+                    Kind::EncoderGlitch(sign * (200 + d.below(3000)) as i32),
+                    Some(encoder),
+                ),
+                6 => (Kind::FsrOpen, Some(force)),
+                7 => (Kind::FsrShort, Some(force)),
+                8 => (Kind::FsrOverRange, Some(force)),
+                9 => (Kind::FsrSpike(d.range(100.0, 500.0)), Some(force)),
+                10 => (Kind::AdcBus, None),
+                11 => (Kind::MotorWeak(d.range(0.2, 0.8)), Some(joint)),
+                12 => (Kind::MotorStuck, Some(joint)),
+                13 => (Kind::PwmFail, Some(joint)),
+                14 => (Kind::DirFail, Some(joint)),
+                15 => (Kind::EStop, None),
+                16 => (Kind::EStopRead, None),
+                17 => (Kind::ButtonRead, None),
+                18 => (Kind::Overrun(3 + d.below(8) as u32), None),
+                19 => (Kind::PilotLean(d.range(0.05, 0.2)), None),
+                20 => (Kind::PilotStopsBalancing, None),
+                21 => (Kind::CurrentOpen, Some(joint)),
+                22 => (Kind::GearSlip(d.range(0.2, 0.8)), Some(joint)),
+                _ => (Kind::CurrentShort, Some(joint)),
+            };
+            // Standing before GO, then anywhere in the first two steps.
+            let at_s = (d.range(0.3, 5.0) * 1000.0).round() / 1000.0;
+            CampaignRun {
+                gait,
+                fault: Injection { kind, target, at_s },
+                noise_seed: d.next() % 1_000_000,
+            }
+        })
+        .collect()
+}
+
+/// `per_gait` healthy runs of each gait, the noise seeds drawn from
+/// `seed` (the same seed gives the same runs; none is a fault run's).
+pub fn healthy_plan(seed: u64, per_gait: usize) -> Vec<HealthyRun> {
+    let mut d = Draw(seed.wrapping_mul(0xD1B5_4A32_D192_ED03) | 1);
+    for _ in 0..8 {
+        d.next();
+    }
+    [Gait::Walk, Gait::StairUp, Gait::StairDown]
+        .into_iter()
+        .flat_map(|gait| (0..per_gait).map(move |_| gait))
+        .map(|gait| HealthyRun {
+            gait,
+            noise_seed: d.next() % 1_000_000,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_plan_is_seeded_valid_and_covers_every_kind() {
+        let a = plan(7, 400);
+        assert_eq!(a, plan(7, 400));
+        assert_ne!(a, plan(8, 400));
+        for r in &a {
+            // Each planned fault reads back as itself.
+            let text = r.fault.to_string();
+            let back: Injection = text.parse().unwrap_or_else(|e| panic!("{text}: {e}"));
+            assert_eq!(back.kind.name(), r.fault.kind.name());
+            assert!((0.3..=5.0).contains(&r.fault.at_s));
+        }
+        for name in [
+            "encoder-bus",
+            "encoder-jump",
+            "fsr-over-range",
+            "motor-stuck",
+            "overrun",
+            "pilot-stops-balancing",
+            "current-open",
+            "current-short",
+        ] {
+            assert!(a.iter().any(|r| r.fault.kind.name() == name), "{name}");
+        }
+    }
+
+    #[test]
+    fn the_healthy_plan_is_seeded_and_gives_each_gait_its_runs() {
+        let a = healthy_plan(3, 50);
+        assert_eq!(a, healthy_plan(3, 50));
+        assert_ne!(a, healthy_plan(4, 50));
+        for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
+            let seeds: std::collections::BTreeSet<u64> = a
+                .iter()
+                .filter(|r| r.gait == gait)
+                .map(|r| r.noise_seed)
+                .collect();
+            assert_eq!(seeds.len(), 50, "{gait:?}: distinct noise seeds");
+        }
+    }
+}

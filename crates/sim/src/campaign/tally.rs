@@ -1,0 +1,107 @@
+//! Counts over a campaign's results, per fault kind or per gait, and in
+//! all.
+
+use gait_control::operator::Gait;
+
+use super::{HealthyResult, RunResult};
+
+/// Counts over a campaign, per kind and in all.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Tally {
+    /// Runs.
+    pub runs: usize,
+    /// Runs in which the pilot fell.
+    pub falls: usize,
+    /// Of them, falls outside the cases named with their physical reason
+    /// ([`NamedCase`]): the device's to fix.
+    pub unnamed_falls: usize,
+    /// Runs in which a hip or knee went past its Table I stop.
+    pub past_a_stop: usize,
+    /// Of them, runs whose stop no named case explains: the device's.
+    pub unnamed_past_a_stop: usize,
+    /// Runs of a must-detect kind that nothing detected.
+    pub missed: usize,
+    /// Runs with a fault latched before the injection.
+    pub false_trips: usize,
+    /// Runs the simulation could not finish (not a fall).
+    pub errors: usize,
+}
+
+impl Tally {
+    /// Adds one run.
+    pub fn add(&mut self, r: &RunResult) {
+        self.runs += 1;
+        self.falls += usize::from(r.outcome.fell.is_some());
+        self.unnamed_falls += usize::from(r.unnamed_fall());
+        self.past_a_stop += usize::from(r.past_a_stop());
+        self.unnamed_past_a_stop += usize::from(r.unnamed_stop());
+        self.missed += usize::from(r.missed());
+        self.false_trips += usize::from(r.false_trip);
+        self.errors += usize::from(r.error.is_some());
+    }
+}
+
+/// The tally of `results` per kind name, in the order kinds first appear,
+/// and over all.
+pub fn tally(results: &[RunResult]) -> (Vec<(&'static str, Tally)>, Tally) {
+    grouped(results, |r| r.run.fault.kind.name(), Tally::add)
+}
+
+/// `results` added up per `key`, in the order keys first appear, and over
+/// all.
+fn grouped<R, K: PartialEq, T: Default>(
+    results: &[R],
+    key: impl Fn(&R) -> K,
+    add: impl Fn(&mut T, &R),
+) -> (Vec<(K, T)>, T) {
+    let mut by: Vec<(K, T)> = Vec::new();
+    let mut all = T::default();
+    for r in results {
+        let k = key(r);
+        match by.iter_mut().find(|(n, _)| *n == k) {
+            Some((_, t)) => add(t, r),
+            None => {
+                let mut t = T::default();
+                add(&mut t, r);
+                by.push((k, t));
+            }
+        }
+        add(&mut all, r);
+    }
+    (by, all)
+}
+
+/// Counts over healthy runs, per gait and in all.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HealthyTally {
+    /// Runs.
+    pub runs: usize,
+    /// Runs in which the pilot fell.
+    pub falls: usize,
+    /// Runs in which a hip or knee went past its Table I stop.
+    pub past_a_stop: usize,
+    /// Runs in which anything latched.
+    pub false_trips: usize,
+    /// Runs with fewer landings than steps asked.
+    pub short: usize,
+    /// Runs the simulation could not finish (not a fall).
+    pub errors: usize,
+}
+
+impl HealthyTally {
+    /// Adds one run.
+    pub fn add(&mut self, r: &HealthyResult) {
+        self.runs += 1;
+        self.falls += usize::from(r.outcome.fell.is_some());
+        self.past_a_stop += usize::from(r.outcome.worst_limit_margin_rad < 0.0);
+        self.false_trips += usize::from(r.false_trip());
+        self.short += usize::from(r.short());
+        self.errors += usize::from(r.error.is_some());
+    }
+}
+
+/// The tally of healthy `results` per gait, in the order gaits first
+/// appear, and over all.
+pub fn healthy_tally(results: &[HealthyResult]) -> (Vec<(Gait, HealthyTally)>, HealthyTally) {
+    grouped(results, |r| r.run.gait, HealthyTally::add)
+}
