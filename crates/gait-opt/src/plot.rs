@@ -6,6 +6,7 @@
 //! font: `$EXOGAIT_FONT`, else DejaVu Sans or Liberation Sans from the usual
 //! Debian paths (`fonts-dejavu-core`).
 
+use std::ops::Range;
 use std::path::Path;
 
 use plotters::coord::Shift;
@@ -14,27 +15,25 @@ use plotters::prelude::*;
 use crate::report::{Report, SampleRow};
 
 pub use plot_font::PlotError;
-use plot_font::{draw_err, font_ready as ensure_font};
+use plot_font::draw_err;
+use sim::plot::{Figure, Series, padded_range, write_figure};
 
 /// Draws `report` to `path` (SVG or PNG by extension), 1200×900 pixels.
 pub fn plot_report(report: &Report, path: &Path) -> Result<(), PlotError> {
-    ensure_font()?;
-    let size = (1200, 900);
-    let svg = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
-    if svg {
-        let root = SVGBackend::new(path, size).into_drawing_area();
-        draw(report, &root)?;
-        root.present().map_err(draw_err)
-    } else {
-        let root = BitMapBackend::new(path, size).into_drawing_area();
-        draw(report, &root)?;
-        root.present().map_err(draw_err)
-    }
+    write_figure(&ReportFigure(report), path, (1200, 900))
 }
 
-type Series = Vec<(f64, f64)>;
+/// A report's figure ([`plot_report`]).
+struct ReportFigure<'a>(&'a Report);
+
+impl Figure for ReportFigure<'_> {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw(self.0, root)
+    }
+}
 
 fn column(rows: &[SampleRow], f: impl Fn(&SampleRow) -> Option<f64>) -> Series {
     rows.iter()
@@ -42,22 +41,57 @@ fn column(rows: &[SampleRow], f: impl Fn(&SampleRow) -> Option<f64>) -> Series {
         .collect()
 }
 
+/// The range of the series' y values, padded.
 fn bounds(series: &[&Series]) -> (f64, f64) {
-    let mut lo = f64::INFINITY;
-    let mut hi = f64::NEG_INFINITY;
-    for s in series {
-        for &(_, y) in s.iter() {
-            if y.is_finite() {
-                lo = lo.min(y);
-                hi = hi.max(y);
-            }
-        }
+    padded_range(series, |p| p.1)
+}
+
+/// The axes and labels of one of the report's four panels.
+struct Axes<'a> {
+    caption: &'a str,
+    x_desc: &'a str,
+    y_desc: Option<&'a str>,
+    x: Range<f64>,
+    y: Range<f64>,
+    /// The legend on a half-transparent white box (over many lines).
+    legend_background: bool,
+}
+
+/// Draws `lines` (series, colour, name) on `area` with `axes`, and their
+/// legend.
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    axes: Axes<'_>,
+    lines: &[(&Series, RGBColor, &str)],
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
+    let mut chart = ChartBuilder::on(area)
+        .caption(axes.caption, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(30)
+        .y_label_area_size(45)
+        .build_cartesian_2d(axes.x, axes.y)
+        .map_err(draw_err)?;
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(axes.x_desc);
+    if let Some(y_desc) = axes.y_desc {
+        mesh.y_desc(y_desc);
     }
-    if !(lo.is_finite() && hi.is_finite()) {
-        return (-1.0, 1.0);
+    mesh.draw().map_err(draw_err)?;
+    for &(s, c, n) in lines {
+        chart
+            .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
+            .map_err(draw_err)?
+            .label(n)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c));
     }
-    let pad = 0.05 * (hi - lo).max(1e-6);
-    (lo - pad, hi + pad)
+    let mut legend = chart.configure_series_labels();
+    if axes.legend_background {
+        legend.background_style(WHITE.mix(0.8));
+    }
+    legend.border_style(BLACK).draw().map_err(draw_err)
 }
 
 fn draw<DB: DrawingBackend>(report: &Report, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError>
@@ -99,31 +133,21 @@ where
             .collect();
         let refs: Vec<&Series> = series.iter().collect();
         let (lo, hi) = bounds(&refs);
-        let mut chart = ChartBuilder::on(panel)
-            .caption(format!("joint angles Θ, {label} (deg)"), ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(45)
-            .build_cartesian_2d(0.0..ts, lo..hi)
-            .map_err(draw_err)?;
-        chart
-            .configure_mesh()
-            .x_desc("t (s)")
-            .draw()
-            .map_err(draw_err)?;
-        for ((s, c), n) in series.iter().zip(colours).zip(names) {
-            chart
-                .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
-                .map_err(draw_err)?
-                .label(n)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c));
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(draw_err)?;
+        let lines: Vec<(&Series, RGBColor, &str)> = series
+            .iter()
+            .zip(colours)
+            .zip(names)
+            .map(|((s, c), n)| (s, c, n))
+            .collect();
+        let axes = Axes {
+            caption: &format!("joint angles Θ, {label} (deg)"),
+            x_desc: "t (s)",
+            y_desc: None,
+            x: 0.0..ts,
+            y: lo..hi,
+            legend_background: true,
+        };
+        draw_panel(panel, axes, &lines)?;
     }
     // Swing-ankle path.
     if let Some(panel) = panels.get(2) {
@@ -133,31 +157,19 @@ where
         let xlo = xs.iter().copied().fold(f64::INFINITY, f64::min);
         let xhi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let (ylo, yhi) = bounds(&[&po, &pb]);
-        let mut chart = ChartBuilder::on(panel)
-            .caption("swing-ankle path p5 (m)", ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(45)
-            .build_cartesian_2d((xlo - 0.02)..(xhi + 0.02), ylo..yhi)
-            .map_err(draw_err)?;
-        chart
-            .configure_mesh()
-            .x_desc("x (m)")
-            .y_desc("y (m)")
-            .draw()
-            .map_err(draw_err)?;
-        for (s, c, n) in [(&po, BLUE, "optimised"), (&pb, RED, "baseline")] {
-            chart
-                .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
-                .map_err(draw_err)?
-                .label(n)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c));
-        }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .draw()
-            .map_err(draw_err)?;
+        let axes = Axes {
+            caption: "swing-ankle path p5 (m)",
+            x_desc: "x (m)",
+            y_desc: Some("y (m)"),
+            x: (xlo - 0.02)..(xhi + 0.02),
+            y: ylo..yhi,
+            legend_background: false,
+        };
+        draw_panel(
+            panel,
+            axes,
+            &[(&po, BLUE, "optimised"), (&pb, RED, "baseline")],
+        )?;
     }
     // Stance-ankle torque τ where it counts (c_k = 1).
     if let Some(panel) = panels.get(3) {
@@ -172,33 +184,19 @@ where
         };
         let (to, tb) = (tau(opt), tau(base));
         let (lo, hi) = bounds(&[&to, &tb]);
-        let mut chart = ChartBuilder::on(panel)
-            .caption(
-                "stance-ankle torque τ where c_k = 1 (N·m)",
-                ("sans-serif", 18),
-            )
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(45)
-            .build_cartesian_2d(0.0..ts, lo..hi)
-            .map_err(draw_err)?;
-        chart
-            .configure_mesh()
-            .x_desc("t (s)")
-            .draw()
-            .map_err(draw_err)?;
-        for (s, c, n) in [(&to, BLUE, "optimised"), (&tb, RED, "baseline")] {
-            chart
-                .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
-                .map_err(draw_err)?
-                .label(n)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c));
-        }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .draw()
-            .map_err(draw_err)?;
+        let axes = Axes {
+            caption: "stance-ankle torque τ where c_k = 1 (N·m)",
+            x_desc: "t (s)",
+            y_desc: None,
+            x: 0.0..ts,
+            y: lo..hi,
+            legend_background: false,
+        };
+        draw_panel(
+            panel,
+            axes,
+            &[(&to, BLUE, "optimised"), (&tb, RED, "baseline")],
+        )?;
     }
     Ok(())
 }

@@ -21,25 +21,44 @@ use plot_font::{draw_err, font_ready as ensure_font};
 
 /// Draws a run to `path` (SVG or PNG by extension), 1400×900 pixels.
 pub fn plot_run(trace: &[Sample], summary: &RunSummary, path: &Path) -> Result<(), PlotError> {
+    write_figure(&RunFigure { trace, summary }, path, (1400, 900))
+}
+
+/// A figure that draws itself on any plotters backend, so that the choice
+/// of SVG or bitmap by the file's extension is written once
+/// ([`write_figure`]), for sim's plots and gait-opt's alike.
+pub trait Figure {
+    /// Draws the whole figure on `root`.
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError>
+    where
+        DB::ErrorType: 'static;
+}
+
+/// Draws `figure` to `path`, `size` pixels: SVG when the extension is
+/// `.svg`, any other (`.png`) through the bitmap backend.
+pub fn write_figure(figure: &impl Figure, path: &Path, size: (u32, u32)) -> Result<(), PlotError> {
     ensure_font()?;
-    let size = (1400, 900);
     let svg = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
     if svg {
         let root = SVGBackend::new(path, size).into_drawing_area();
-        draw(trace, summary, &root)?;
+        figure.draw_on(&root)?;
         root.present().map_err(draw_err)
     } else {
         let root = BitMapBackend::new(path, size).into_drawing_area();
-        draw(trace, summary, &root)?;
+        figure.draw_on(&root)?;
         root.present().map_err(draw_err)
     }
 }
 
-type Series = Vec<(f64, f64)>;
+/// Points of one line, (x, y).
+pub type Series = Vec<(f64, f64)>;
 
-fn range(series: &[&Series], axis: impl Fn(&(f64, f64)) -> f64) -> (f64, f64) {
+/// The range of `axis` over the finite points of `series`, padded by 5 %
+/// on each side so that no line runs along the frame; (−1, 1) when there
+/// is none.
+pub fn padded_range(series: &[&Series], axis: impl Fn(&(f64, f64)) -> f64) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for s in series {
         for p in s.iter() {
@@ -118,8 +137,8 @@ where
     DB::ErrorType: 'static,
 {
     let all: Vec<&Series> = lines.iter().map(|l| &l.1).collect();
-    let (x0, x1) = range(&all, |p| p.0);
-    let (y0, y1) = range(&all, |p| p.1);
+    let (x0, x1) = padded_range(&all, |p| p.0);
+    let (y0, y1) = padded_range(&all, |p| p.1);
     let mut chart = ChartBuilder::on(area)
         .caption(caption, ("sans-serif", 18))
         .margin(10)
@@ -185,6 +204,21 @@ where
         .draw()
         .map_err(draw_err)?;
     Ok(())
+}
+
+/// A closed-loop run's figure ([`plot_run`]).
+struct RunFigure<'a> {
+    trace: &'a [Sample],
+    summary: &'a RunSummary,
+}
+
+impl Figure for RunFigure<'_> {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw(self.trace, self.summary, root)
+    }
 }
 
 fn draw<DB: DrawingBackend>(
@@ -318,19 +352,27 @@ pub fn plot_comparison(
     human: &crate::compare::GaitRun,
     path: &Path,
 ) -> Result<(), PlotError> {
-    ensure_font()?;
-    let size = (1400, 900);
-    let svg = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
-    if svg {
-        let root = SVGBackend::new(path, size).into_drawing_area();
-        draw_comparison(title, shipped, human, &root)?;
-        root.present().map_err(draw_err)
-    } else {
-        let root = BitMapBackend::new(path, size).into_drawing_area();
-        draw_comparison(title, shipped, human, &root)?;
-        root.present().map_err(draw_err)
+    let figure = ComparisonFigure {
+        title,
+        shipped,
+        human,
+    };
+    write_figure(&figure, path, (1400, 900))
+}
+
+/// Two gaits' comparison figure ([`plot_comparison`]).
+struct ComparisonFigure<'a> {
+    title: &'a str,
+    shipped: &'a crate::compare::GaitRun,
+    human: &'a crate::compare::GaitRun,
+}
+
+impl Figure for ComparisonFigure<'_> {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw_comparison(self.title, self.shipped, self.human, root)
     }
 }
 
@@ -362,28 +404,19 @@ where
     };
     let total = |x: &([f64; 2], f64)| x.0[0] + x.0[1];
     let pilot = |x: &([f64; 2], f64)| x.1.abs();
-    if let Some(area) = panels.first() {
+    let quantities: [(&str, &str, &Pick); 2] = [
+        ("crutch force, both crutches (N)", "N", &total),
+        ("|pilot ankle torque| (N·m)", "N·m", &pilot),
+    ];
+    for (area, (caption, unit, pick)) in panels.iter().zip(quantities) {
         panel(
             area,
-            "crutch force, both crutches (N)",
+            caption,
             "t from the first swing (s)",
-            "N",
+            unit,
             &[
-                ("shipped table".into(), series(shipped, &total), BLUE, false),
-                ("human-data gait".into(), series(human, &total), RED, false),
-            ],
-            &Timeline::default(),
-        )?;
-    }
-    if let Some(area) = panels.get(1) {
-        panel(
-            area,
-            "|pilot ankle torque| (N·m)",
-            "t from the first swing (s)",
-            "N·m",
-            &[
-                ("shipped table".into(), series(shipped, &pilot), BLUE, false),
-                ("human-data gait".into(), series(human, &pilot), RED, false),
+                ("shipped table".into(), series(shipped, pick), BLUE, false),
+                ("human-data gait".into(), series(human, pick), RED, false),
             ],
             &Timeline::default(),
         )?;
