@@ -30,7 +30,7 @@ use std::rc::Rc;
 use embedded_hal::spi::{self, ErrorType, Operation, SpiDevice};
 
 use crate::shared::SharedF64;
-use crate::spi::{SimSpiError, bits_msb_first, bytes_msb_first, deliver_miso, mosi_bytes};
+use crate::spi::{BusFaults, SimSpiError, answer, bits_msb_first, bytes_msb_first};
 
 /// Counts per revolution.
 const COUNTS: i64 = 1 << 14;
@@ -110,8 +110,7 @@ struct Chip {
     agc: u8,
     weak_field: bool,
     // Fault injection.
-    bus_errors: u32,
-    bus_error_kind: spi::ErrorKind,
+    bus_faults: BusFaults,
     corrupt_answers: u32,
     frozen: Option<u16>,
     jump_counts: i64,
@@ -135,8 +134,7 @@ impl Chip {
             magnitude: 0x0F00,
             agc: 0x80,
             weak_field: false,
-            bus_errors: 0,
-            bus_error_kind: spi::ErrorKind::Other,
+            bus_faults: BusFaults::default(),
             corrupt_answers: 0,
             frozen: None,
             jump_counts: 0,
@@ -361,9 +359,7 @@ impl SimAs5048a {
     /// Fault: the next `n` transactions fail on the bus with `kind` (the
     /// chip sees nothing of them).
     pub fn fail_transactions(&self, n: u32, kind: spi::ErrorKind) {
-        let mut c = self.0.borrow_mut();
-        c.bus_errors = n;
-        c.bus_error_kind = kind;
+        self.0.borrow_mut().bus_faults.fail_next(n, kind);
     }
 
     /// Fault: the answers to the next `n` register reads (other than NOP)
@@ -410,15 +406,8 @@ impl SpiDevice<u8> for SimAs5048a {
     fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), SimSpiError> {
         let mut chip = self.0.borrow_mut();
         chip.transactions += 1;
-        if chip.bus_errors > 0 {
-            chip.bus_errors -= 1;
-            return Err(SimSpiError {
-                kind: chip.bus_error_kind,
-            });
-        }
-        let mosi = mosi_bytes(operations);
-        let miso = chip.window(&mosi);
-        deliver_miso(operations, &miso);
+        chip.bus_faults.take()?;
+        answer(operations, |mosi| chip.window(mosi));
         Ok(())
     }
 }

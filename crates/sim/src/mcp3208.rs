@@ -24,7 +24,7 @@ use std::rc::Rc;
 use embedded_hal::spi::{self, ErrorType, Operation, SpiDevice};
 
 use crate::shared::SharedF64;
-use crate::spi::{SimSpiError, bits_msb_first, bytes_msb_first, deliver_miso, mosi_bytes};
+use crate::spi::{BusFaults, SimSpiError, answer, bits_msb_first, bytes_msb_first};
 
 /// Largest count.
 pub const FULL_SCALE: u16 = 4095;
@@ -94,8 +94,7 @@ struct Input {
 struct Chip {
     inputs: [Option<Input>; 8],
     hi_z_level: bool,
-    bus_errors: u32,
-    bus_error_kind: spi::ErrorKind,
+    bus_faults: BusFaults,
     conversions: u64,
     noise: crate::noise::Noise,
 }
@@ -105,8 +104,7 @@ impl Chip {
         Self {
             inputs: Default::default(),
             hi_z_level: true,
-            bus_errors: 0,
-            bus_error_kind: spi::ErrorKind::Other,
+            bus_faults: BusFaults::default(),
             conversions: 0,
             noise: crate::noise::Noise::none(),
         }
@@ -229,9 +227,7 @@ impl SimMcp3208 {
 
     /// Fault: the next `n` transactions fail on the bus with `kind`.
     pub fn fail_transactions(&self, n: u32, kind: spi::ErrorKind) {
-        let mut c = self.0.borrow_mut();
-        c.bus_errors = n;
-        c.bus_error_kind = kind;
+        self.0.borrow_mut().bus_faults.fail_next(n, kind);
     }
 
     /// Conversions performed (start bits seen).
@@ -252,15 +248,8 @@ impl ErrorType for SimMcp3208 {
 impl SpiDevice<u8> for SimMcp3208 {
     fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), SimSpiError> {
         let mut chip = self.0.borrow_mut();
-        if chip.bus_errors > 0 {
-            chip.bus_errors -= 1;
-            return Err(SimSpiError {
-                kind: chip.bus_error_kind,
-            });
-        }
-        let mosi = mosi_bytes(operations);
-        let miso = chip.window(&mosi);
-        deliver_miso(operations, &miso);
+        chip.bus_faults.take()?;
+        answer(operations, |mosi| chip.window(mosi));
         Ok(())
     }
 }

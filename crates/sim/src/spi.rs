@@ -30,6 +30,50 @@ impl core::fmt::Display for SimSpiError {
 
 impl std::error::Error for SimSpiError {}
 
+/// Bus failures queued on a simulated chip by fault injection: the next
+/// `count` transactions fail with `kind`, and the chip sees nothing of
+/// them.
+#[derive(Clone, Copy, Debug)]
+pub struct BusFaults {
+    count: u32,
+    kind: spi::ErrorKind,
+}
+
+impl Default for BusFaults {
+    fn default() -> Self {
+        Self {
+            count: 0,
+            kind: spi::ErrorKind::Other,
+        }
+    }
+}
+
+impl BusFaults {
+    /// The next `n` transactions fail with `kind` (replacing what was
+    /// queued).
+    pub fn fail_next(&mut self, n: u32, kind: spi::ErrorKind) {
+        self.count = n;
+        self.kind = kind;
+    }
+
+    /// Takes one transaction: `Err` while failures are queued.
+    pub fn take(&mut self) -> Result<(), SimSpiError> {
+        if self.count > 0 {
+            self.count -= 1;
+            return Err(SimSpiError { kind: self.kind });
+        }
+        Ok(())
+    }
+}
+
+/// One chip-select window that reached the chip: `window` answers the
+/// MOSI stream byte for byte, and its answer goes back to the operations
+/// that read.
+pub fn answer(operations: &mut [Operation<'_, u8>], window: impl FnOnce(&[u8]) -> Vec<u8>) {
+    let miso = window(&mosi_bytes(operations));
+    deliver_miso(operations, &miso);
+}
+
 /// The bytes shifted out on MOSI during the whole transaction. Bytes a
 /// `Read` clocks (and the tail of a shorter `Transfer` write buffer) are
 /// 0x00, as most HALs send.
