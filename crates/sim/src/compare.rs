@@ -21,7 +21,7 @@ use gait_core::tables::{GaitKind, GaitTable};
 
 use crate::closed_loop::{Rig, RigError};
 use crate::pilot::PilotConfig;
-use crate::scenario::{GO_AT_TICK, GO_TICKS, run_steps_then, table_geometry, table_rig};
+use crate::scenario::{run_steps_then, started_rig, table_geometry};
 
 /// One step's crutch load.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -165,9 +165,7 @@ fn play_then<'t>(
 ) -> Result<(GaitRun, Rig<'t>), RigError> {
     let gait = gait_of(table.kind());
     let geometry = table_geometry(&table, &device.body);
-    let mut rig = table_rig(device, gait, pilot, tables_of(table))?;
-    Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
-    prepare(&mut rig);
+    let mut rig = started_rig(device, tables_of(table), gait, pilot, prepare)?;
     let ended_by = run_steps_then(&mut rig, steps, max_s, tail_s)
         .err()
         .map(|e| e.to_string());

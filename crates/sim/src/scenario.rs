@@ -303,6 +303,22 @@ pub fn run_steps_then(
     Ok(())
 }
 
+/// The rig of `gait` from `tables` on `device` with `pilot` (see
+/// [`table_rig`]), standing, GO pressed at [`GO_AT_TICK`] for
+/// [`GO_TICKS`], `prepare` applied: what every played gait starts from.
+pub fn started_rig<'t>(
+    device: &DeviceConfig,
+    tables: GaitTables<'t>,
+    gait: Gait,
+    pilot: PilotConfig,
+    prepare: impl FnOnce(&mut Rig<'t>),
+) -> Result<Rig<'t>, RigError> {
+    let mut rig = table_rig(device, gait, pilot, tables)?;
+    Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
+    prepare(&mut rig);
+    Ok(rig)
+}
+
 /// `gait` from `tables` on `device` with `pilot`, from standing (see
 /// [`table_rig`]): GO, then steps until `steps` landings have happened and
 /// 1.5 s more (or a safe hold has lasted 1 s, or `max_s` in all).
@@ -320,9 +336,7 @@ pub fn run_tables_with<'t>(
         .copied()
         .ok_or(RigError::Config("no verified table for the gait"))?;
     let planned_landing_x_m = table_geometry(&table, &device.body).landing_m[0];
-    let mut rig = table_rig(device, gait, pilot, tables)?;
-    Rig::press(&rig.go, GO_AT_TICK, GO_TICKS);
-    prepare(&mut rig);
+    let mut rig = started_rig(device, tables, gait, pilot, prepare)?;
     let result = run_steps(&mut rig, steps, max_s);
     let faults = rig.faults().iter().map(|c| c.name()).collect();
     let on_board = rig
