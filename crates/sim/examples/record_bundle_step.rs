@@ -4,60 +4,37 @@
 //! `cargo xtask qemu --bundle` runs it. Exit 2 when the bundle is refused.
 #![allow(missing_docs)]
 
+mod recording;
+
 use std::process::ExitCode;
 
 use gait_core::bundle::Bundle;
+use recording::Stop;
 
 fn main() -> ExitCode {
+    recording::finish(run())
+}
+
+fn run() -> Result<String, Stop> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [bundle_path, out] = args.as_slice() else {
-        eprintln!("usage: record_bundle_step <bundle> <file>");
-        return ExitCode::from(2);
+        return Err(Stop::refused(
+            "usage: record_bundle_step <bundle> <file>".into(),
+        ));
     };
-    let device = match exogait_device::DeviceConfig::exogait() {
-        Ok(d) => d,
-        Err(e) => {
-            eprintln!("device configuration refused: {e:?}");
-            return ExitCode::FAILURE;
-        }
-    };
-    let bytes = match std::fs::read(bundle_path) {
-        Ok(b) => b,
-        Err(e) => {
-            eprintln!("{bundle_path}: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let bundle = match Bundle::parse(&bytes, device.fingerprint()) {
-        Ok(b) => b,
-        Err(e) => {
-            eprintln!("{bundle_path}: bundle refused: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let fitted = match device.fitted(&bundle.patient().model) {
-        Ok(d) => d,
-        Err(e) => {
-            eprintln!("{bundle_path}: patient model: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let recording = match sim::replay::record_bundle_step(&fitted, &bundle, 1) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("recording failed: {e:?}");
-            return ExitCode::FAILURE;
-        }
-    };
-    let file = sim::replay::encode(std::slice::from_ref(&recording));
-    if let Err(e) = std::fs::write(out, &file) {
-        eprintln!("cannot write {out}: {e}");
-        return ExitCode::FAILURE;
-    }
-    println!(
-        "recorded one step of the bundle's first gait, {} ticks, {} bytes: {out}",
-        recording.ticks.len(),
-        file.len()
-    );
-    ExitCode::SUCCESS
+    let device = recording::device()?;
+    let bytes =
+        std::fs::read(bundle_path).map_err(|e| Stop::refused(format!("{bundle_path}: {e}")))?;
+    let bundle = Bundle::parse(&bytes, device.fingerprint())
+        .map_err(|e| Stop::refused(format!("{bundle_path}: bundle refused: {e}")))?;
+    let fitted = device
+        .fitted(&bundle.patient().model)
+        .map_err(|e| Stop::refused(format!("{bundle_path}: patient model: {e}")))?;
+    let step = sim::replay::record_bundle_step(&fitted, &bundle, 1)
+        .map_err(|e| Stop::failed(format!("recording failed: {e:?}")))?;
+    let size = recording::write(out, std::slice::from_ref(&step))?;
+    Ok(format!(
+        "recorded one step of the bundle's first gait, {} ticks, {size} bytes: {out}",
+        step.ticks.len()
+    ))
 }

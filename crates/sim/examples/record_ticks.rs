@@ -3,37 +3,27 @@
 //! runs it before building the QEMU image.
 #![allow(missing_docs)]
 
+mod recording;
+
 use std::process::ExitCode;
 
+use recording::Stop;
+
 fn main() -> ExitCode {
+    recording::finish(run())
+}
+
+fn run() -> Result<String, Stop> {
     let Some(path) = std::env::args().nth(1) else {
-        eprintln!("usage: record_ticks <file>");
-        return ExitCode::from(2);
+        return Err(Stop::refused("usage: record_ticks <file>".into()));
     };
-    let device = match exogait_device::DeviceConfig::exogait() {
-        Ok(d) => d,
-        Err(e) => {
-            eprintln!("device configuration refused: {e:?}");
-            return ExitCode::FAILURE;
-        }
-    };
-    let recordings = match sim::replay::record_gaits(&device) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("recording failed: {e:?}");
-            return ExitCode::FAILURE;
-        }
-    };
-    let bytes = sim::replay::encode(&recordings);
-    if let Err(e) = std::fs::write(&path, &bytes) {
-        eprintln!("cannot write {path}: {e}");
-        return ExitCode::FAILURE;
-    }
+    let device = recording::device()?;
+    let recordings = sim::replay::record_gaits(&device)
+        .map_err(|e| Stop::failed(format!("recording failed: {e:?}")))?;
+    let bytes = recording::write(&path, &recordings)?;
     let ticks: usize = recordings.iter().map(|r| r.ticks.len()).sum();
-    println!(
-        "recorded {} runs, {ticks} ticks, {} bytes: {path}",
-        recordings.len(),
-        bytes.len()
-    );
-    ExitCode::SUCCESS
+    Ok(format!(
+        "recorded {} runs, {ticks} ticks, {bytes} bytes: {path}",
+        recordings.len()
+    ))
 }
