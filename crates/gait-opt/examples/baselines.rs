@@ -1,16 +1,9 @@
 //! Prints every baseline's J and parts.
-use gait_core::problem::PaperCase;
 use gait_opt::{Source, baseline_from, default_data_dir};
 
 fn main() {
     let dir = default_data_dir();
-    for (case, src) in [
-        (PaperCase::Walk, Source::Fukuchi2018Walk),
-        (PaperCase::Walk, Source::WinterWalk),
-        (PaperCase::Walk, Source::ViconWalk),
-        (PaperCase::StairUp, Source::ReznickStairI20),
-        (PaperCase::StairUp, Source::RienerStairAscent),
-    ] {
+    for (case, src) in Source::PAPER_BASELINES {
         match baseline_from(case, src, &dir) {
             Ok(b) => {
                 let c = b.cost.unwrap_or_else(|| unreachable!());

@@ -58,6 +58,17 @@ pub enum Source {
 }
 
 impl Source {
+    /// Every source a paper case's baseline can be built from, with that
+    /// case (stair descent is not a paper case): the list the baseline
+    /// examples and tests go through.
+    pub const PAPER_BASELINES: [(PaperCase, Self); 5] = [
+        (PaperCase::Walk, Self::Fukuchi2018Walk),
+        (PaperCase::Walk, Self::WinterWalk),
+        (PaperCase::Walk, Self::ViconWalk),
+        (PaperCase::StairUp, Self::ReznickStairI20),
+        (PaperCase::StairUp, Self::RienerStairAscent),
+    ];
+
     /// The primary source for a case.
     pub fn primary(case: PaperCase) -> Self {
         match case {
