@@ -137,15 +137,13 @@ const HIP_GAINS: JointGains = JointGains {
     slew_nm_per_tick: 12.0,
 };
 
-/// Knee position loop (joints 1 and 3): the shank and foot are lighter
-/// (≈ 0.25 kg·m² about the knee), Kd 60, integral clamp 20 N·m.
+/// Knee position loop (joints 1 and 3): the hip's, but the shank and foot
+/// are lighter (≈ 0.25 kg·m² about the knee): Kd 60, integral clamp
+/// 20 N·m.
 const KNEE_GAINS: JointGains = JointGains {
-    kp_nm_per_rad: 2_000.0,
-    ki_nm_per_rad_s: 1_000.0,
     kd_nm_s_per_rad: 60.0,
     integral_limit_nm: 20.0,
-    torque_limit_nm: 0.0, // the drive's peak torque, set in `exogait`
-    slew_nm_per_tick: 12.0,
+    ..HIP_GAINS
 };
 
 /// Gait execution: 30 N on each crutch tip (planted, not only touching),
