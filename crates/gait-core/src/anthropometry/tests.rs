@@ -10,6 +10,11 @@ fn rel(a: f64, b: f64) -> f64 {
     (a - b) / b
 }
 
+/// A pilot of `height_m` and `mass_kg`.
+fn pilot(height_m: f64, mass_kg: f64) -> Pilot<f64> {
+    Pilot { height_m, mass_kg }
+}
+
 /// Table III lengths and masses within 10 % for the paper's pilot; the
 /// numbers printed here are the ones quoted in docs/anthropometry.md
 /// (`cargo test -p gait-core anthropometry -- --nocapture`).
@@ -85,10 +90,7 @@ fn hip_to_shoulder_option() -> Result<(), AnthropometryError> {
 
 #[test]
 fn pilot_alone_matches_winter_by_hand() -> Result<(), AnthropometryError> {
-    let p = Pilot {
-        height_m: 1.80_f64,
-        mass_kg: 80.0,
-    };
+    let p = pilot(1.80, 80.0);
     let m = body_model_for(&p, &ExoSegments::none())?;
     let l = m.links();
     // Thigh: 0.245 H, 0.100 M, COM 0.433 l from the hip, k = 0.323 l.
@@ -122,10 +124,7 @@ fn pilot_alone_matches_winter_by_hand() -> Result<(), AnthropometryError> {
 
 #[test]
 fn exo_parallel_axis_by_hand() -> Result<(), AnthropometryError> {
-    let p = Pilot {
-        height_m: 1.75_f64,
-        mass_kg: 70.0,
-    };
+    let p = pilot(1.75, 70.0);
     let exo = ExoSegments {
         torso: ExoSegment::of_mass(0.0),
         thigh: ExoSegment {
@@ -152,15 +151,7 @@ fn exo_parallel_axis_by_hand() -> Result<(), AnthropometryError> {
 #[test]
 fn rejects_bad_input() {
     let exo = ExoSegments::<f64>::paper_default();
-    let bad = |h: f64, m: f64| {
-        body_model_for(
-            &Pilot {
-                height_m: h,
-                mass_kg: m,
-            },
-            &exo,
-        )
-    };
+    let bad = |h: f64, m: f64| body_model_for(&pilot(h, m), &exo);
     use AnthropometryError as E;
     assert_eq!(bad(f64::NAN, 70.0), Err(E::NonFiniteHeight));
     assert_eq!(bad(1.7, f64::INFINITY), Err(E::NonFiniteMass));
@@ -224,10 +215,9 @@ proptest! {
         exo in exo_strategy(),
         shoulder in any::<bool>(),
     ) {
-        let pilot = Pilot { height_m: h, mass_kg: m };
         let torso = if shoulder { TorsoSpan::HipToShoulder } else { TorsoSpan::HipToVertex };
         let opts = Options { torso, ..Options::default() };
-        let model = body_model_with(&pilot, &exo, &opts);
+        let model = body_model_with(&pilot(h, m), &exo, &opts);
         prop_assert!(model.is_ok(), "{:?}", model);
         let model = model.map_err(|e| TestCaseError::fail(std::format!("{e}")))?;
         // Passes BodyModel::new again (the builder went through it).
@@ -241,8 +231,7 @@ proptest! {
         h in MIN_HEIGHT_M..=MAX_HEIGHT_M,
         m in MIN_MASS_KG..=MAX_MASS_KG,
     ) {
-        let pilot = Pilot { height_m: h, mass_kg: m };
-        let model = body_model_for(&pilot, &ExoSegments::paper_default()).map_err(|e| TestCaseError::fail(std::format!("{e}")))?;
+        let model = body_model_for(&pilot(h, m), &ExoSegments::paper_default()).map_err(|e| TestCaseError::fail(std::format!("{e}")))?;
         prop_assert!((model.total_mass_kg() - (m + 17.0)).abs() < 1e-9);
     }
 }
