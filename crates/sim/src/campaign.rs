@@ -5,6 +5,11 @@
 //! noise and no fault, in which anything latched is a false trip. The same
 //! seed gives the same runs. `exogait faults` and the campaign tests run
 //! them; docs/safety.md has the figures.
+//!
+//! In modules: the seeded plans (`plan`), a fault run's result and what
+//! it must detect (`run`), playing and judging it (`play`), healthy runs
+//! (`healthy`), the counts (`tally`), the falls named with their physical
+//! reason (`named`), and spreading runs over the cores (`parallel`).
 
 mod healthy;
 mod named;
