@@ -40,7 +40,10 @@ use crate::operator::{self, ControllerStatus, Input, Operator, OperatorConfig, R
 use crate::position_loop::{JointGains, JointLoop};
 use crate::posture::JOINTS;
 use crate::reference::Reference;
-use crate::sequencer::{GaitTables, Phase, SeqEvent, Sequencer, SequencerConfig};
+use crate::sequencer::{
+    GaitTables, Orders, Phase, SeqEvent, SeqInput, SeqRequest, SeqStatus, Sequencer,
+    SequencerConfig,
+};
 use crate::supervisor::{MotorSense, Supervisor, SupervisorInput, Verdict};
 
 use act::Actuation;
@@ -169,6 +172,11 @@ pub struct Controller<'t> {
     /// The e-stop's stop: whether it has been seen since it last
     /// cleared, and the set-down of a swing it struck in.
     estop: estop::EStopStop,
+    /// Where gait execution is after the last tick (its verdict's orders
+    /// obeyed).
+    seq_status: SeqStatus,
+    /// The last verdict's orders, for the next update.
+    orders: Orders,
     tick: u32,
     /// Last: its per-gait tables are read once a tick at most, and the
     /// fields before them stay within a short load's reach.
@@ -222,6 +230,8 @@ impl<'t> Controller<'t> {
             pending_reset: None,
             other_foot_integral_n: 0.0,
             estop: estop::EStopStop::default(),
+            seq_status: SeqStatus::STANDING,
+            orders: Orders::NONE,
             tick: 0,
         })
     }
@@ -234,14 +244,15 @@ impl<'t> Controller<'t> {
     /// The gait the next start would play: the one being played while a
     /// gait runs, else the clinician's selection.
     pub fn planned_gait(&self) -> crate::operator::Gait {
-        if self.seq.walking() {
-            self.seq.gait()
+        if self.seq_status.walking() {
+            self.seq_status.gait
         } else {
             self.operator.selected()
         }
     }
 
-    /// The sequencer (phase, reference).
+    /// The sequencer (phase, reference), for observers: the tick itself
+    /// only calls its [`Sequencer::update`].
     pub fn sequencer(&self) -> &Sequencer<'t> {
         &self.seq
     }
@@ -303,7 +314,8 @@ impl<'t> Controller<'t> {
         self.write(hw, &senses, &plan, &actuation, &verdict)
     }
 
-    /// Stage 2: the operator's requests, then the sequencer's reference.
+    /// Stage 2: the operator's requests and the last verdict's orders to
+    /// the sequencer, and its reference.
     #[inline(always)]
     fn plan<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
         &mut self,
@@ -315,14 +327,12 @@ impl<'t> Controller<'t> {
         DIR: OutputPin<Error = PinE>,
         EN: OutputPin<Error = PinE>,
     {
-        if !self.primed {
-            // First tick: hold the posture the device is in.
-            self.seq.restart_at(s.joints);
-            self.primed = true;
-        }
+        // First tick: hold the posture the device is in.
+        let restart = !self.primed;
+        self.primed = true;
         let status = ControllerStatus {
-            walking: self.seq.walking(),
-            step_in_progress: self.seq.step_in_progress(),
+            walking: self.seq_status.walking(),
+            step_in_progress: self.seq_status.step_in_progress(),
             safe_posture: self.safe_posture(&s.sensed),
             faulted: !self.supervisor.latched().is_empty(),
         };
@@ -331,31 +341,38 @@ impl<'t> Controller<'t> {
             go: s.go,
             status,
         });
-        match operator.request {
-            Some(Request::Start(gait)) => {
-                self.seq.request_start(gait, &s.sensed);
-            }
-            Some(Request::StopAfterStep) => self.seq.request_stop(),
+        let request = match operator.request {
+            Some(Request::Start(gait)) => Some(SeqRequest::Start(gait)),
+            Some(Request::StopAfterStep) => Some(SeqRequest::StopAfterStep),
             Some(Request::ResetFaults) => {
                 // Motor drivers latch their own faults: clear them first.
                 for m in hw.motors.iter_mut() {
                     let _ = m.reset_fault();
                 }
                 self.pending_reset = Some(PendingReset::new(status.safe_posture));
+                None
             }
-            None => self.complete_reset(status.safe_posture),
-        }
+            None => self
+                .complete_reset(status.safe_posture)
+                .then_some(SeqRequest::ResetAfterFaults),
+        };
+        let reference = self.seq.update(&SeqInput {
+            sensed: &s.sensed,
+            selected: self.operator.choice(),
+            request,
+            orders: &self.orders,
+            hold_joint_at: s.chain_hold,
+            restart,
+            dt_s: self.cfg.dt_s,
+        });
         let mut step = StepEdges::default();
-        let reference = self.seq.update(
-            &s.sensed,
-            self.operator.choice(),
-            self.cfg.dt_s,
-            &mut |ev| match ev {
+        for ev in reference.events.iter() {
+            match ev {
                 SeqEvent::SwingStarted(..) => step.began = true,
                 SeqEvent::Stopped => step.ended = true,
                 _ => {}
-            },
-        );
+            }
+        }
         Planned {
             reference,
             operator,
@@ -365,32 +382,35 @@ impl<'t> Controller<'t> {
 
     /// The clinician's reset, once the supervisor has seen the motor
     /// drivers' cleared flags: granted only in a safe posture, both when
-    /// asked and now.
-    fn complete_reset(&mut self, safe_now: bool) {
+    /// asked and now. `true` when granted (the sequencer then stands where
+    /// it is and allows steps again).
+    fn complete_reset(&mut self, safe_now: bool) -> bool {
         let Some(pending) = self.pending_reset else {
-            return;
+            return false;
         };
         if pending.ticks_left > 0 {
             self.pending_reset = Some(PendingReset {
                 ticks_left: pending.ticks_left - 1,
                 ..pending
             });
-            return;
+            return false;
         }
         self.pending_reset = None;
-        if pending.safe_when_asked && safe_now && self.supervisor.request_reset(true).is_ok() {
-            self.seq.reset_after_faults();
+        let granted =
+            pending.safe_when_asked && safe_now && self.supervisor.request_reset(true).is_ok();
+        if granted {
             self.loops.iter_mut().for_each(JointLoop::reset);
         }
+        granted
     }
 
     /// The swing leg while its foot is surely in the air: the sequencer's
-    /// landing window ([`Sequencer::airborne_leg`]) and its sensor feeling
+    /// landing window ([`SeqStatus::airborne_leg`]) and its sensor feeling
     /// no contact (a failed sensor cannot tell: not airborne). For the
     /// supervisor's stuck-ankle check.
-    fn airborne_leg(&self, s: &Senses) -> Option<Side> {
+    fn airborne_leg(&self, s: &Senses, status: &SeqStatus) -> Option<Side> {
         let contact = self.cfg.sequencer.landing_contact_n;
-        self.seq.airborne_leg().filter(|leg| {
+        status.airborne_leg.filter(|leg| {
             s.forces_n
                 .get(leg.foot())
                 .is_some_and(|&load| load < contact)
@@ -398,7 +418,7 @@ impl<'t> Controller<'t> {
     }
 
     /// Stage 4: the supervisor's verdict on everything sensed and
-    /// commanded, and the sequencer's reaction to it.
+    /// commanded, and the orders it gives the sequencer's next update.
     #[inline(always)]
     fn guard(
         &mut self,
@@ -418,7 +438,7 @@ impl<'t> Controller<'t> {
             m.feedforward_nm = f;
             m.limit_nm = g.torque_limit_nm;
         }
-        let swing_leg = self.seq.swing_leg();
+        let status = &r.status;
         let input = SupervisorInput {
             tick: self.tick,
             joints: [0, 1, 2, 3].map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
@@ -429,40 +449,20 @@ impl<'t> Controller<'t> {
             e_stop_pressed: s.e_stop_pressed,
             e_stop_read_error: s.e_stop_read_error,
             deadline_missed,
-            step_in_progress: self.seq.step_in_progress(),
+            step_in_progress: status.step_in_progress(),
             button_input_fault: s.mode.input_fault || s.go.input_fault,
             ankle_plan_rad: r.ankle_plan_rad,
-            swing_leg,
-            airborne_leg: self.airborne_leg(s),
+            swing_leg: status.swing_leg,
+            airborne_leg: self.airborne_leg(s, status),
             chain_closed: s.chain_closed,
             drive_current: Some(s.drive_current),
         };
         let mut verdict = self.supervisor.check(&input);
-        self.stop_for_estop(&mut verdict, &s.joints);
-        for (i, (&re, &m)) in verdict.rehold_joints.iter().zip(&s.joints).enumerate() {
-            if re {
-                self.seq.rehold_joint(i, m);
-            }
-        }
-        match verdict.reaction {
-            Reaction::None => {}
-            Reaction::FinishStepThenHold => self.seq.block_new_steps(),
-            Reaction::SafeHold
-                if verdict.latched.contains(FaultCode::RestartedAfterPanic)
-                    || verdict.latched.contains(FaultCode::BundleRefused) =>
-            {
-                self.seq.enter_safe_hold_after_restart(&s.joints, &s.sensed);
-            }
-            Reaction::SafeHold => {
-                let in_swing = self
-                    .seq
-                    .in_swing_now(verdict.latched.in_swing(), &verdict.braked_joints);
-                self.seq.enter_safe_hold(&s.joints, in_swing);
-            }
-            Reaction::DisableMotors => {
-                self.seq.follow_measured(&s.joints);
-                self.loops.iter_mut().for_each(JointLoop::reset);
-            }
+        let estop_hold = self.stop_for_estop(&mut verdict, status);
+        self.orders = Orders::from_verdict(&verdict, estop_hold, &s.sensed);
+        self.seq_status = status.obeying(&self.orders, &self.cfg.sequencer);
+        if verdict.reaction == Reaction::DisableMotors {
+            self.loops.iter_mut().for_each(JointLoop::reset);
         }
         verdict
     }
@@ -498,7 +498,7 @@ impl<'t> Controller<'t> {
             feedforward_nm: a.feedforward_nm,
             command_nm: written,
             forces_n: s.forces_n,
-            phase: self.seq.phase(),
+            phase: self.seq_status.phase,
             reaction: verdict.reaction,
             faults: verdict.latched,
             motors_enabled: self.motors_enabled,
@@ -587,7 +587,7 @@ impl<'t> Controller<'t> {
         }
         self.crutch
             .sample(s.forces_n[2], s.forces_n[3], self.cfg.dt_s);
-        if matches!(self.seq.phase(), Phase::Standing | Phase::SafeHold { .. })
+        if self.seq_status.at_rest()
             && self.crutch.current().is_some()
             && reaction >= Reaction::SafeHold
         {
@@ -601,7 +601,7 @@ impl<'t> Controller<'t> {
             .rate
             .iter()
             .all(|r| r.abs() <= self.cfg.still_rate_rad_s);
-        let standing = matches!(self.seq.phase(), Phase::Standing | Phase::SafeHold { .. });
+        let standing = self.seq_status.at_rest();
         let crutches = sensed
             .crutches_n
             .iter()

@@ -11,6 +11,7 @@ use gait_core::kinematics::{Phi, Posture};
 use gait_core::tables::GaitTable;
 
 use crate::posture::{JOINTS, Side};
+use crate::sequencer::{SeqEvents, SeqStatus};
 
 /// What the joints, the feed-forward and the supervisor follow this tick.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,6 +40,10 @@ pub struct Reference {
     /// ([`gait_core::playback::other_foot_share`]); `None` in a safe hold,
     /// where only the foot's sensor can tell.
     pub other_foot_share: Option<f32>,
+    /// Where gait execution is after this tick.
+    pub status: SeqStatus,
+    /// What happened this tick.
+    pub events: SeqEvents,
 }
 
 /// The table's motion at one time, stance frame.

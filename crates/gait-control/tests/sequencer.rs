@@ -14,7 +14,8 @@ use gait_control::faults::InSwing;
 use gait_control::operator::Gait;
 use gait_control::posture::{JOINTS, Side, joints_from_phi};
 use gait_control::sequencer::{
-    GaitTables, Phase, RefuseReason, Sensed, SeqEvent, Sequencer, SequencerConfig,
+    GaitTables, Order, Orders, Phase, Reference, RefuseReason, Sensed, SeqEvent, SeqInput,
+    SeqRequest, Sequencer, SequencerConfig,
 };
 use gait_core::gait::GaitError;
 use gait_core::ik::IkOptions;
@@ -59,10 +60,15 @@ fn sensed(joints: [f32; JOINTS], feet: [f32; 2], crutches: [f32; 2]) -> Sensed {
     }
 }
 
+/// A sequencer ticked as the controller ticks it: one `update` a tick,
+/// the orders and requests given between two ticks taking effect in the
+/// next.
 struct Rig<'t> {
     seq: Sequencer<'t>,
     table: GaitTable<'t>,
     events: Vec<SeqEvent>,
+    orders: Orders,
+    request: Option<SeqRequest<Gait>>,
 }
 
 impl<'t> Rig<'t> {
@@ -82,14 +88,62 @@ impl<'t> Rig<'t> {
             seq: Sequencer::new(cfg, tables, start),
             table,
             events: Vec::new(),
+            orders: Orders::NONE,
+            request: None,
         }
     }
 
+    /// One tick with the orders and request given since the last.
+    fn tick(&mut self, s: &Sensed) -> Reference {
+        let orders = std::mem::replace(&mut self.orders, Orders::NONE);
+        let r = self.seq.update(&SeqInput {
+            sensed: s,
+            selected: Gait::Walk,
+            request: self.request.take(),
+            orders: &orders,
+            hold_joint_at: None,
+            restart: false,
+            dt_s: DT,
+        });
+        self.events.extend(r.events.iter());
+        r
+    }
+
     fn step(&mut self, s: &Sensed) -> [f32; JOINTS] {
-        let ev = &mut self.events;
-        self.seq
-            .update(s, Gait::Walk, DT, &mut |e| ev.push(e))
-            .angle_rad
+        self.tick(s).angle_rad
+    }
+
+    /// Asks for a start of `gait` from `s`'s posture, in a tick whose
+    /// crutches are unloaded (the pilot is not ready yet: the swing waits);
+    /// the answer.
+    fn start(&mut self, gait: Gait, s: &Sensed) -> SeqEvent {
+        self.request = Some(SeqRequest::Start(gait));
+        let mut unready = *s;
+        unready.crutches_n = [0.0; 2];
+        let r = self.tick(&unready);
+        r.events.iter().next().unwrap()
+    }
+
+    /// The verdict's `order`, with `measured` the posture of its tick, for
+    /// the next tick.
+    fn order(&mut self, order: Order, measured: [f32; JOINTS]) {
+        self.orders.order = order;
+        self.orders.sensed = Sensed {
+            joints_rad: measured,
+            ..Sensed::UNKNOWN
+        };
+    }
+
+    /// A safe hold of `measured`, for the next tick.
+    fn hold(&mut self, measured: [f32; JOINTS], in_swing: InSwing) {
+        self.order(Order::SafeHold(in_swing), measured);
+    }
+
+    /// Joint `i` to be held at `measured` (the verdict's re-hold), for the
+    /// next tick.
+    fn rehold(&mut self, i: usize, measured: f32) {
+        self.orders.rehold[i] = true;
+        self.orders.sensed.joints_rad[i] = measured;
     }
 
     fn start_pose(&self, stance: Side) -> [f32; JOINTS] {
@@ -107,25 +161,24 @@ fn start_needs_a_table_and_the_start_posture() {
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
     assert_eq!(
-        rig.seq.request_start(Gait::StairUp, &s),
+        rig.start(Gait::StairUp, &s),
         SeqEvent::StartRefused(RefuseReason::NoTable)
     );
     let mut off = pose;
     off[1] += 0.3;
     assert_eq!(
-        rig.seq
-            .request_start(Gait::Walk, &sensed(off, READY_FEET, READY_CRUTCHES)),
+        rig.start(Gait::Walk, &sensed(off, READY_FEET, READY_CRUTCHES)),
         SeqEvent::StartRefused(RefuseReason::NotInStartPosture)
     );
     assert_eq!(
-        rig.seq.request_start(Gait::Walk, &s),
+        rig.start(Gait::Walk, &s),
         SeqEvent::StartAccepted(Gait::Walk, Side::Left)
     );
     // The mirrored posture starts with the other leg as stance.
     let mut rig = Rig::new(&img);
     let s = sensed(rig.start_pose(Side::Right), [0.0, 500.0], READY_CRUTCHES);
     assert_eq!(
-        rig.seq.request_start(Gait::Walk, &s),
+        rig.start(Gait::Walk, &s),
         SeqEvent::StartAccepted(Gait::Walk, Side::Right)
     );
 }
@@ -135,8 +188,7 @@ fn swing_waits_for_the_stance_shank_at_the_planned_angle() {
     let img = walk_image();
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
-    rig.seq
-        .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
+    rig.start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
     let tol = SequencerConfig::DEFAULT.start_ankle_tolerance_rad;
     // Forces ready, but the body is ahead of the planned start (stance
     // ankle dorsiflexed 0.1 rad more), or its ankle reading is NaN: wait.
@@ -165,8 +217,7 @@ fn swing_waits_for_crutches_and_the_feet() {
     let img = walk_image();
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
-    rig.seq
-        .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
+    rig.start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
     // One crutch unloaded: keep waiting, however long.
     for _ in 0..2000 {
         rig.step(&sensed(pose, READY_FEET, [100.0, 10.0]));
@@ -232,8 +283,7 @@ fn swing_plays_the_table_and_lands_on_the_foot_sensor() {
     let img = walk_image();
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
-    rig.seq
-        .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
+    rig.start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
     // An early scuff at 20 % of the step is not a landing.
     let scuff = 0.2 * rig.table.duration_s();
     let trace = swing_and_land(&mut rig, Side::Left, Some(scuff));
@@ -283,14 +333,14 @@ fn stop_request_ends_at_the_landing_and_no_gait_change_mid_step() {
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
+    rig.start(Gait::Walk, &s);
     rig.step(&s);
-    assert!(rig.seq.step_in_progress());
+    assert!(rig.seq.status().step_in_progress());
     assert_eq!(
-        rig.seq.request_start(Gait::Walk, &s),
+        rig.start(Gait::Walk, &s),
         SeqEvent::StartRefused(RefuseReason::Busy)
     );
-    rig.seq.request_stop();
+    rig.request = Some(SeqRequest::StopAfterStep);
     swing_and_land(&mut rig, Side::Left, None);
     assert_eq!(rig.seq.phase(), Phase::Standing);
     assert!(rig.events.contains(&SeqEvent::Stopped));
@@ -308,7 +358,7 @@ fn landing_timeout_holds_the_posture() {
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
+    rig.start(Gait::Walk, &s);
     let steps =
         ((rig.table.duration_s() + SequencerConfig::DEFAULT.landing_timeout_s + 0.2) / DT) as usize;
     for _ in 0..steps {
@@ -328,7 +378,7 @@ fn a_blind_swing_foot_lands_once_it_has_had_time_to_follow_the_table() {
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
+    rig.start(Gait::Walk, &s);
     let mut blind = s;
     blind.feet_n[Side::Right.foot()] = f32::NAN;
     let duration = rig.table.duration_s();
@@ -367,7 +417,7 @@ fn walking_in_a_swing(img: &[u8]) -> (Rig<'_>, Sensed) {
     let mut rig = Rig::new(img);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
+    rig.start(Gait::Walk, &s);
     for _ in 0..700 {
         rig.step(&s);
     }
@@ -391,7 +441,7 @@ fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
     let ticks =
         ((rig.table.duration_s() + SequencerConfig::DEFAULT.landing_timeout_s) / DT) as usize;
     for _ in 0..ticks {
-        rig.seq.enter_safe_hold(&measured, InSwing::LandFirst);
+        rig.hold(measured, InSwing::LandFirst);
         let r = rig.step(&sensed(measured, READY_FEET, READY_CRUTCHES));
         for i in 0..JOINTS {
             max_step = max_step.max((r[i] - last[i]).abs());
@@ -425,19 +475,20 @@ fn safe_hold_ramps_to_the_measured_posture_and_blocks_starts() {
         "reference jumped {max_step} rad in one tick"
     );
     assert_eq!(
-        rig.seq.request_start(Gait::Walk, &s),
+        rig.start(Gait::Walk, &s),
         SeqEvent::StartRefused(RefuseReason::Busy)
     );
-    rig.seq.reset_after_faults();
+    rig.request = Some(SeqRequest::ResetAfterFaults);
+    rig.step(&s);
     assert_eq!(rig.seq.phase(), Phase::Standing);
 }
 
 #[test]
 fn a_safe_hold_for_a_motor_fault_holds_a_swing_at_once() {
     let img = walk_image();
-    let (mut rig, _) = walking_in_a_swing(&img);
-    rig.seq
-        .enter_safe_hold(&[0.3, 0.2, 0.1, 0.4], InSwing::HoldNow);
+    let (mut rig, s) = walking_in_a_swing(&img);
+    rig.hold([0.3, 0.2, 0.1, 0.4], InSwing::HoldNow);
+    rig.step(&s);
     assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
 }
 
@@ -452,14 +503,14 @@ fn late_in_a_swing_a_hold_lands_the_step_while_the_stance_knee_works() {
     let mut rig = Rig::with_config(&img, cfg);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
+    rig.start(Gait::Walk, &s);
     let none = [false; JOINTS];
     let mut stance_knee = [false; JOINTS];
     stance_knee[Side::Left.hip() + 1] = true;
     let mut swing_knee = [false; JOINTS];
     swing_knee[Side::Right.hip() + 1] = true;
     assert_eq!(
-        rig.seq.in_swing_now(InSwing::HoldNow, &none),
+        rig.seq.status().in_swing_now(InSwing::HoldNow, &none),
         InSwing::HoldNow
     );
     let duration = rig.table.duration_s();
@@ -469,18 +520,22 @@ fn late_in_a_swing_a_hold_lands_the_step_while_the_stance_knee_works() {
         let Phase::Swing { t_s, .. } = rig.seq.phase() else {
             continue;
         };
-        let now = rig.seq.in_swing_now(InSwing::HoldNow, &none);
+        let now = rig.seq.status().in_swing_now(InSwing::HoldNow, &none);
         if t_s < 0.59 * duration {
             assert_eq!(now, InSwing::HoldNow, "{t_s} s");
             seen.0 = true;
         } else if t_s > 0.61 * duration {
             assert_eq!(now, InSwing::LandFirst, "{t_s} s");
             assert_eq!(
-                rig.seq.in_swing_now(InSwing::HoldInAir, &swing_knee),
+                rig.seq
+                    .status()
+                    .in_swing_now(InSwing::HoldInAir, &swing_knee),
                 InSwing::LandFirst
             );
             assert_eq!(
-                rig.seq.in_swing_now(InSwing::HoldNow, &stance_knee),
+                rig.seq
+                    .status()
+                    .in_swing_now(InSwing::HoldNow, &stance_knee),
                 InSwing::HoldNow
             );
             seen.1 = true;
@@ -490,7 +545,7 @@ fn late_in_a_swing_a_hold_lands_the_step_while_the_stance_knee_works() {
     // The shipped configuration's walk never lands first this way.
     let (rig, _) = walking_in_a_swing(&img);
     assert_eq!(
-        rig.seq.in_swing_now(InSwing::HoldNow, &none),
+        rig.seq.status().in_swing_now(InSwing::HoldNow, &none),
         InSwing::HoldNow
     );
 }
@@ -501,15 +556,15 @@ fn non_fatal_block_finishes_the_step_then_refuses_new_ones() {
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
+    rig.start(Gait::Walk, &s);
     rig.step(&s);
-    rig.seq.block_new_steps();
-    assert!(rig.seq.step_in_progress(), "the step goes on");
+    rig.order(Order::FinishStepThenHold, pose);
+    assert!(rig.seq.status().step_in_progress(), "the step goes on");
     swing_and_land(&mut rig, Side::Left, None);
     assert_eq!(rig.seq.phase(), Phase::Standing);
     let s2 = sensed(rig.start_pose(Side::Right), [0.0, 500.0], READY_CRUTCHES);
     assert_eq!(
-        rig.seq.request_start(Gait::Walk, &s2),
+        rig.start(Gait::Walk, &s2),
         SeqEvent::StartRefused(RefuseReason::Busy)
     );
 }
@@ -581,8 +636,7 @@ fn landed_with_the_model(image: &[u8]) -> (Rig<'_>, [f32; JOINTS]) {
     let model: gait_core::BodyModel<f32> = gait_core::BodyModel::<f64>::paper_table_iii().cast();
     rig.seq = rig.seq.with_model(model);
     let pose = rig.start_pose(Side::Left);
-    rig.seq
-        .request_start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
+    rig.start(Gait::Walk, &sensed(pose, READY_FEET, READY_CRUTCHES));
     swing_and_land(&mut rig, Side::Left, None);
     (rig, pose)
 }
@@ -657,7 +711,7 @@ fn started_with_a_model(img: &[u8]) -> (Rig<'_>, gait_core::BodyModel<f32>, Sens
     rig.seq = rig.seq.with_model(model);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
+    rig.start(Gait::Walk, &s);
     (rig, model, s, pose)
 }
 
@@ -763,7 +817,7 @@ fn without_a_model_a_swing_holds_the_tables_end_until_the_timeout() {
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.request_start(Gait::Walk, &s);
+    rig.start(Gait::Walk, &s);
     let end = joints_from_phi(&rig.table.at_time(rig.table.duration_s()), Side::Left);
     for _ in 0..20_000 {
         let r = rig.step(&s);
@@ -793,16 +847,17 @@ fn a_safe_hold_in_a_swing_sets_the_foot_down_until_it_feels_the_ground() {
         }
     }
     assert!(phi1.is_finite());
-    rig.seq.enter_safe_hold(&held, InSwing::HoldNow);
+    rig.hold(held, InSwing::HoldNow);
+    let in_air = sensed(held, READY_FEET, READY_CRUTCHES);
+    rig.step(&in_air);
     assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
     assert_eq!(
-        rig.seq.swing_leg(),
+        rig.seq.status().swing_leg,
         Some(Side::Right),
         "moved as a swing leg"
     );
     let cfg = SequencerConfig::DEFAULT;
     let start = swing_ankle(&model, &held, phi1);
-    let in_air = sensed(held, READY_FEET, READY_CRUTCHES);
     let mut heights = Vec::new();
     for _ in 0..(0.5 * cfg.set_down_s / DT) as usize {
         let last = rig.step(&in_air);
@@ -830,7 +885,7 @@ fn a_safe_hold_in_a_swing_sets_the_foot_down_until_it_feels_the_ground() {
     // The ground felt: the foot stays where it is, a stance leg's again.
     let contact = sensed(held, [500.0, 150.0], READY_CRUTCHES);
     let at_contact = rig.step(&contact);
-    assert_eq!(rig.seq.swing_leg(), None);
+    assert_eq!(rig.seq.status().swing_leg, None);
     for _ in 0..2_000 {
         assert_eq!(rig.step(&contact), at_contact);
         // Lifting off again does not restart it.
@@ -845,7 +900,7 @@ fn a_safe_hold_in_a_swing_sets_the_foot_down_until_it_feels_the_ground() {
 fn set_down_joint_speed(img: &[u8], cfg: SequencerConfig) -> f32 {
     let (mut rig, model, s, pose) = started_with_a_model(img);
     rig.seq = Rig::with_config(img, cfg).seq.with_model(model);
-    rig.seq.request_start(Gait::Walk, &s);
+    rig.start(Gait::Walk, &s);
     let mut held = pose;
     for _ in 0..20_000 {
         held = rig.step(&s);
@@ -854,7 +909,7 @@ fn set_down_joint_speed(img: &[u8], cfg: SequencerConfig) -> f32 {
             break;
         }
     }
-    rig.seq.enter_safe_hold(&held, InSwing::HoldNow);
+    rig.hold(held, InSwing::HoldNow);
     let in_air = sensed(held, READY_FEET, READY_CRUTCHES);
     let mut last = rig.step(&in_air);
     let mut fastest = 0.0f32;
@@ -893,8 +948,9 @@ fn a_safe_hold_standing_or_without_a_model_moves_no_foot() {
     // Without a model: the swing's joints hold what was measured.
     let (mut rig, s) = walking_in_a_swing(&img);
     let measured = rig.seq.reference();
-    rig.seq.enter_safe_hold(&measured, InSwing::HoldNow);
-    assert_eq!(rig.seq.swing_leg(), None);
+    rig.hold(measured, InSwing::HoldNow);
+    assert_eq!(rig.step(&s), measured);
+    assert_eq!(rig.seq.status().swing_leg, None);
     for _ in 0..2_000 {
         assert_eq!(rig.step(&s), measured);
     }
@@ -903,7 +959,7 @@ fn a_safe_hold_standing_or_without_a_model_moves_no_foot() {
     let model: gait_core::BodyModel<f32> = gait_core::BodyModel::<f64>::paper_table_iii().cast();
     rig.seq = rig.seq.with_model(model);
     let pose = rig.start_pose(Side::Left);
-    rig.seq.enter_safe_hold(&pose, InSwing::HoldNow);
+    rig.hold(pose, InSwing::HoldNow);
     for _ in 0..2_000 {
         assert_eq!(rig.step(&sensed(pose, READY_FEET, READY_CRUTCHES)), pose);
     }
@@ -918,14 +974,14 @@ fn a_joint_held_in_place_keeps_its_measured_angle_in_the_hold() {
     let mut rig = Rig::new(&img);
     let pose = rig.start_pose(Side::Left);
     let s = sensed(pose, READY_FEET, READY_CRUTCHES);
-    rig.seq.rehold_joint(1, 0.9);
+    rig.rehold(1, 0.9);
     assert_eq!(rig.step(&s), pose, "standing: not a hold, nothing moves");
-    rig.seq.enter_safe_hold(&pose, InSwing::HoldNow);
+    rig.hold(pose, InSwing::HoldNow);
     for _ in 0..50 {
         rig.step(&s);
     }
-    rig.seq.rehold_joint(1, 0.9);
-    rig.seq.rehold_joint(2, f32::NAN);
+    rig.rehold(1, 0.9);
+    rig.rehold(2, f32::NAN);
     let mut want = pose;
     want[1] = 0.9;
     for _ in 0..2_000 {
@@ -956,13 +1012,15 @@ fn after_a_restart_the_foot_found_unloaded_is_set_down() {
             crutches_n: READY_CRUTCHES,
             ankles_rad: [0.05, 0.05],
         };
-        rig.seq.enter_safe_hold_after_restart(&found, &s);
+        rig.orders.order = Order::HoldWhereFound;
+        rig.orders.sensed = s;
+        rig.step(&s);
         assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
-        assert_eq!(rig.seq.swing_leg(), lifted, "{feet:?}");
+        assert_eq!(rig.seq.status().swing_leg, lifted, "{feet:?}");
         let mut last = found;
         let mut stance_fed_forward = Side::Left;
         for _ in 0..300 {
-            let r = rig.seq.update(&s, Gait::Walk, DT, &mut |_| {});
+            let r = rig.tick(&s);
             last = r.angle_rad;
             stance_fed_forward = r.stance;
         }
@@ -991,8 +1049,9 @@ fn a_hold_for_a_saturated_drive_leaves_the_foot_in_the_air() {
     while !matches!(rig.seq.phase(), Phase::Swing { t_s, .. } if t_s > 0.3) {
         held = rig.step(&s);
     }
-    rig.seq.enter_safe_hold(&held, InSwing::HoldInAir);
-    assert_eq!(rig.seq.swing_leg(), None);
+    rig.hold(held, InSwing::HoldInAir);
+    assert_eq!(rig.step(&s), held);
+    assert_eq!(rig.seq.status().swing_leg, None);
     for _ in 0..2_000 {
         assert_eq!(rig.step(&s), held);
     }
@@ -1011,25 +1070,25 @@ fn the_swing_foot_is_surely_in_the_air_only_in_its_landing_window() {
         rig.step(&s);
         match rig.seq.phase() {
             Phase::Swing { t_s, .. } if t_s < window => {
-                assert_eq!(rig.seq.swing_leg(), Some(Side::Right));
-                assert_eq!(rig.seq.airborne_leg(), None, "{t_s} s");
+                assert_eq!(rig.seq.status().swing_leg, Some(Side::Right));
+                assert_eq!(rig.seq.status().airborne_leg, None, "{t_s} s");
                 early += 1;
             }
             Phase::Swing { t_s, .. } => {
-                if rig.seq.airborne_leg().is_some() {
-                    assert_eq!(rig.seq.airborne_leg(), Some(Side::Right), "{t_s} s");
+                if rig.seq.status().airborne_leg.is_some() {
+                    assert_eq!(rig.seq.status().airborne_leg, Some(Side::Right), "{t_s} s");
                     late += 1;
                 }
             }
             _ if early > 0 => break,
-            _ => assert_eq!(rig.seq.airborne_leg(), None),
+            _ => assert_eq!(rig.seq.status().airborne_leg, None),
         }
     }
     assert!(
         early > 100 && late > 100,
         "{early} early, {late} late ticks"
     );
-    rig.seq
-        .enter_safe_hold(&rig.seq.reference(), InSwing::HoldNow);
-    assert_eq!(rig.seq.airborne_leg(), None, "a hold plays no table");
+    rig.hold(rig.seq.reference(), InSwing::HoldNow);
+    rig.step(&s);
+    assert_eq!(rig.seq.status().airborne_leg, None, "a hold plays no table");
 }

@@ -50,15 +50,17 @@ impl Controller<'_> {
     /// cannot read (`lost`: the supervisor's lost encoders; or untaken
     /// frames), and once the chain has stayed closed for
     /// [`CHAIN_SETTLE_TICKS`] puts it in place of the joint's angle and
-    /// rate. Returns the joints whose angle comes from the chain this tick.
+    /// rate. Returns the joints whose angle comes from the chain this tick,
+    /// and, on the tick the estimate settles, the joint and angle a hold
+    /// is to keep it at from then on (`SeqInput::hold_joint_at`).
     pub(super) fn close_chain(
         &mut self,
         forces_n: &[f32],
         lost: &[bool; JOINTS],
         alpha: f32,
-    ) -> [bool; JOINTS] {
+    ) -> ([bool; JOINTS], Option<(usize, f32)>) {
         let mut closed = [false; JOINTS];
-        let swinging = self.seq.swing_leg();
+        let swinging = self.seq_status.swing_leg;
         let contact = self.cfg.sequencer.landing_contact_n;
         let feet = [Side::Left, Side::Right].into_iter();
         let c = &mut self.chain;
@@ -77,7 +79,7 @@ impl Controller<'_> {
         }
         let Some((joint, estimate)) = self.chain_estimate(lost) else {
             self.chain.ticks = 0;
-            return closed;
+            return (closed, None);
         };
         let c = &mut self.chain;
         if c.ticks == 0 || c.joint != joint {
@@ -90,9 +92,7 @@ impl Controller<'_> {
         c.angle_rad = estimate;
         c.ticks = c.ticks.saturating_add(1);
         let (angle, rate, ticks) = (c.angle_rad, c.rate_rad_s, c.ticks);
-        if ticks == CHAIN_SETTLE_TICKS {
-            self.seq.hold_joint_at(joint, angle);
-        }
+        let hold = (ticks == CHAIN_SETTLE_TICKS).then_some((joint, angle));
         if ticks >= CHAIN_SETTLE_TICKS {
             if let (Some(a), Some(r), Some(f)) = (
                 self.last_angle.get_mut(joint),
@@ -104,7 +104,7 @@ impl Controller<'_> {
                 *f = true;
             }
         }
-        closed
+        (closed, hold)
     }
 
     /// The joint to estimate and its angle, when exactly one hip or knee

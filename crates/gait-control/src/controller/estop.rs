@@ -11,9 +11,8 @@
 //! meanwhile: a joint whose drive a fault brakes stays braked. Drives
 //! already off stay off.
 
-use crate::faults::{InSwing, Reaction};
-use crate::posture::JOINTS;
-use crate::sequencer::Phase;
+use crate::faults::Reaction;
+use crate::sequencer::SeqStatus;
 use crate::supervisor::Verdict;
 
 use super::Controller;
@@ -39,17 +38,24 @@ impl Controller<'_> {
     /// (the hold and its set-down start then) or in a safe hold whose
     /// set-down is under way (it goes on), with the drives on. Never turns
     /// a drive on: with the drives off the e-stop disables at once.
-    pub(super) fn stop_for_estop(&mut self, verdict: &mut Verdict, measured: &[f32; JOINTS]) {
+    /// `status`: the sequencer's after this tick's update. Returns whether
+    /// the sequencer is to hold now and begin the set-down.
+    pub(super) fn stop_for_estop(&mut self, verdict: &mut Verdict, status: &SeqStatus) -> bool {
         if verdict.reaction != Reaction::DisableMotors {
             self.estop = EStopStop::default();
-            return;
+            return false;
         }
+        let mut hold = false;
+        // A hold struck in a swing begins its set-down (the controller's
+        // sequencer always has the model it needs).
+        let mut set_down_pending = status.set_down_pending();
         if !self.estop.seen {
             self.estop.seen = true;
-            if self.motors_enabled && matches!(self.seq.phase(), Phase::Swing { .. }) {
-                self.seq.enter_safe_hold(measured, InSwing::HoldNow);
+            if self.motors_enabled && status.swinging() {
+                hold = true;
+                set_down_pending = true;
             }
-            if self.motors_enabled && self.seq.set_down_pending() {
+            if self.motors_enabled && set_down_pending {
                 let s = self.cfg.sequencer.set_down_s.min(MAX_SET_DOWN_S);
                 let ticks = s / self.cfg.dt_s;
                 self.estop.set_down_ticks = if ticks.is_finite() {
@@ -59,11 +65,12 @@ impl Controller<'_> {
                 };
             }
         }
-        if self.estop.set_down_ticks > 0 && self.motors_enabled && self.seq.set_down_pending() {
+        if self.estop.set_down_ticks > 0 && self.motors_enabled && set_down_pending {
             self.estop.set_down_ticks -= 1;
             verdict.reaction = Reaction::SafeHold;
         } else {
             self.estop.set_down_ticks = 0;
         }
+        hold
     }
 }

@@ -34,6 +34,8 @@ pub(super) struct Senses {
     /// Joints whose angle (and rate) comes from the closed chain this
     /// tick ([`Controller::close_chain`]).
     pub chain_closed: [bool; JOINTS],
+    /// The joint (and angle) whose chain estimate settled this tick.
+    pub chain_hold: Option<(usize, f32)>,
     /// Joints whose encoder the supervisor has found lost.
     pub lost: [bool; JOINTS],
     /// Calibrated forces (NaN if faulted), N.
@@ -66,7 +68,7 @@ impl Controller<'_> {
         let forces = self.read_forces(hw);
         let drive_current = self.read_drive_current(hw);
         let forces_n = forces.map(|f| f.newtons);
-        let chain_closed = self.close_chain(&forces_n, &lost, alpha);
+        let (chain_closed, chain_hold) = self.close_chain(&forces_n, &lost, alpha);
         let mode = hw.mode.tick();
         let go = hw.go.tick();
         let (e_stop_pressed, e_stop_read_error) = match hw.e_stop.is_high() {
@@ -97,6 +99,7 @@ impl Controller<'_> {
             e_stop_read_error,
             joints,
             chain_closed,
+            chain_hold,
             lost,
             forces_n,
             sensed,

@@ -12,7 +12,7 @@ use gait_core::kinematics::{Phi, forward_kinematics, swap_legs};
 use crate::operator::{Gait, MAX_GAITS};
 use crate::posture::{JOINTS, Side, joints_from_phi};
 
-use super::{Sequencer, smoothstep};
+use super::{Phase, SeqEvent, SeqEvents, Sequencer, smoothstep};
 
 /// A weight transfer in double support: both feet stay where they are, the
 /// stance shank, torso and knee choice move from the landing posture to the
@@ -74,6 +74,38 @@ pub(super) const fn kind_index(gait: Gait) -> usize {
 }
 
 impl Sequencer<'_> {
+    /// A tick of the weight transfer `t_s + dt_s` after the landing: on to
+    /// the next step's start posture, then waiting for the pilot (or
+    /// standing, when a stop was asked for).
+    pub(super) fn transfer_tick(
+        &mut self,
+        stance: Side,
+        t_s: f32,
+        dt_s: f32,
+        events: &mut SeqEvents,
+    ) -> [f32; JOINTS] {
+        let cfg = self.cfg;
+        let t = t_s + dt_s;
+        let frac = if cfg.transfer_s > 0.0 {
+            t / cfg.transfer_s
+        } else {
+            1.0
+        };
+        if frac >= 1.0 {
+            if self.stop_requested {
+                self.phase = Phase::Standing;
+                events.push(SeqEvent::Stopped);
+            } else {
+                self.phase = Phase::WaitingReady { stance };
+            }
+            self.blend_from = self.blend_to;
+            self.blend_to
+        } else {
+            self.phase = Phase::Transfer { stance, t_s: t };
+            self.transfer_reference(frac, stance)
+        }
+    }
+
     /// The double-support plan from the reference Φ at landing (old stance
     /// frame) to the next table's first posture (new stance frame, its
     /// parameters computed with the tables: [`transfer_targets`]).
@@ -124,7 +156,7 @@ impl Sequencer<'_> {
     /// The transfer reference at `fraction` (smoothstepped), or the joint
     /// blend when there is no plan or the IK fails. The first call of a
     /// transfer solves the landing's offset and holds the landing reference.
-    pub(super) fn transfer_reference(&mut self, fraction: f32, stance: Side) -> [f32; JOINTS] {
+    fn transfer_reference(&mut self, fraction: f32, stance: Side) -> [f32; JOINTS] {
         let planned = self.transfer.and_then(|plan| {
             let model = self.model.as_ref()?;
             let ik = self.transfer_ik(model)?;

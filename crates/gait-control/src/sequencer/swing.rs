@@ -1,0 +1,217 @@
+//! The swing: the table plays, the landing is the swing foot's sensor
+//! feeling the ground inside the landing window (or, a blind sensor, the
+//! table's own timing); a swing whose table has ended without a landing
+//! goes on lowering the foot (the ground search,
+//! [`SequencerConfig::ground_search_depth_m`](super::SequencerConfig))
+//! until the foot's sensor feels the ground or the landing times out.
+
+use gait_core::kinematics::Posture;
+
+use crate::posture::{Side, joints_from_phi};
+
+use super::{JOINTS, Phase, Sensed, SeqEvent, SeqEvents, Sequencer, smoothstep, transfer};
+
+/// The ground search stops where the swing knee would straighten past this
+/// flexion, rad (6°): a leg locked straight takes the landing on its stop.
+pub(super) const SEARCH_MIN_KNEE_FLEXION_RAD: f32 = 0.1;
+
+/// The table's posture at the swing's time while it plays: (stance, t, Φ).
+pub(super) type Playing = (Side, f32, Option<Posture<f32>>);
+
+/// The present swing's landing detection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct SwingState {
+    /// The swing foot's toe at the start of the table being played (stance
+    /// foot's flat frame), m.
+    start_m: [f32; 2],
+    /// When the table's swing foot was planned fully lifted in the present
+    /// swing, s (landing is looked for only after that).
+    lifted_at_s: Option<f32>,
+    /// How long the swing foot has felt the ground in the landing window
+    /// without a break, s (`SequencerConfig::landing_confirm_s`).
+    contact_s: f32,
+    /// The present swing has reached its landing window (set each swing
+    /// tick; a swing starts without it).
+    pub(super) in_landing_window: bool,
+    /// The table's stance-shank angle φ1 at the last tick of a swing, rad
+    /// (a hold's set-down starts from it).
+    pub(super) phi1: f32,
+}
+
+impl SwingState {
+    /// Before any swing.
+    pub(super) const START: Self = Self {
+        start_m: [0.0; 2],
+        lifted_at_s: None,
+        contact_s: 0.0,
+        in_landing_window: false,
+        phi1: f32::NAN,
+    };
+
+    /// A swing begins with its swing toe at `start_m` (φ1 stays the last
+    /// swing's until the table is first read).
+    pub(super) fn begin(&mut self, start_m: [f32; 2]) {
+        self.start_m = start_m;
+        self.lifted_at_s = None;
+        self.in_landing_window = false;
+        self.contact_s = 0.0;
+    }
+}
+
+impl Sequencer<'_> {
+    /// A swing tick `t_s + dt_s` into the swing: the reference, the table's
+    /// posture while the swing goes on, and the other foot's share.
+    pub(super) fn swing_tick(
+        &mut self,
+        sensed: &Sensed,
+        stance: Side,
+        t_s: f32,
+        dt_s: f32,
+        events: &mut SeqEvents,
+    ) -> ([f32; JOINTS], Option<Playing>, f32) {
+        let cfg = self.cfg;
+        let t = t_s + dt_s;
+        let duration = self.table.as_ref().map_or(0.0, |tb| tb.duration_s());
+        let swing_foot = sensed
+            .feet_n
+            .get(stance.other().foot())
+            .copied()
+            .unwrap_or(f32::NAN);
+        // Past the table's end without a landing, the foot goes on down
+        // looking for the ground.
+        let phi_t = self
+            .tables
+            .get(self.gait)
+            .map(|tb| self.searching_for_ground(&tb.at_time(t), t - duration));
+        let posture_t = phi_t.map(|p| Posture::new(&p));
+        self.swing.phi1 = phi_t.map_or(f32::NAN, |p| p[0]);
+        let share = self.swing_share(posture_t.as_ref());
+        if self.swing.lifted_at_s.is_none() && share <= 0.0 {
+            self.swing.lifted_at_s = Some(t);
+        }
+        // Contact counts as the landing only once the table has lifted the
+        // foot and played the given fraction of its time in the air
+        // (earlier contact is a scuff).
+        let in_window = self
+            .swing
+            .lifted_at_s
+            .is_some_and(|lift| t >= lift + cfg.landing_window_fraction * (duration - lift));
+        self.swing.in_landing_window = in_window;
+        // A foot whose sensor has failed (NaN) cannot report the contact:
+        // the step ends on the table's own timing, where the table has put
+        // the foot down, once the foot has had the time to follow it there.
+        let blind = !swing_foot.is_finite();
+        // Never past the landing timeout (a NaN setting is the timeout).
+        let settle = cfg.blind_landing_settle_s.min(cfg.landing_timeout_s);
+        let blind_landed = blind && t >= duration + settle;
+        // Contact counts once it has held `landing_confirm_s`: a spike of
+        // a few ticks is not the ground.
+        self.swing.contact_s = if in_window && swing_foot >= cfg.landing_contact_n {
+            self.swing.contact_s + dt_s
+        } else {
+            0.0
+        };
+        let contact_s = self.swing.contact_s;
+        let touched = contact_s > 0.0 && contact_s >= cfg.landing_confirm_s - 0.5 * dt_s;
+        let landed = in_window && (touched || blind_landed);
+        let reference = phi_t.map_or(self.reference, |p| joints_from_phi(&p, stance));
+        let mut playing = None;
+        if landed {
+            events.push(SeqEvent::Landed);
+            if self.stop_requested {
+                self.blend_from = reference;
+                self.blend_to = reference;
+                self.phase = Phase::Standing;
+                self.stance = stance.other();
+                events.push(SeqEvent::Stopped);
+            } else {
+                let new_stance = stance.other();
+                self.stance = new_stance;
+                self.blend_from = reference;
+                let table = self.table.as_ref().copied();
+                self.blend_to =
+                    table.map_or(reference, |tb| joints_from_phi(&tb.first(), new_stance));
+                self.transfer = phi_t.and_then(|p| self.plan_transfer(&p, new_stance));
+                self.phase = Phase::Transfer {
+                    stance: new_stance,
+                    t_s: 0.0,
+                };
+            }
+        } else if t > duration + cfg.landing_timeout_s {
+            events.push(SeqEvent::LandingTimeout);
+            self.blend_from = reference;
+            self.blend_to = reference;
+            self.phase = Phase::Standing;
+            events.push(SeqEvent::Stopped);
+        } else {
+            self.phase = Phase::Swing { stance, t_s: t };
+            playing = Some((stance, t, posture_t));
+        }
+        (reference, playing, share)
+    }
+
+    /// From when in the present swing a safe hold lands the step first, s
+    /// ([`SeqStatus::in_swing_now`](super::SeqStatus::in_swing_now));
+    /// infinite outside a swing or without a table.
+    pub(super) fn lands_first_from_s(&self) -> f32 {
+        if !matches!(self.phase, Phase::Swing { .. }) {
+            return f32::INFINITY;
+        }
+        let duration = self.table.as_ref().map_or(0.0, |tb| tb.duration_s());
+        let slot = transfer::kind_index(self.gait);
+        let after = self.cfg.lands_after.get(slot).copied().unwrap_or(1.0);
+        if duration > 0.0 {
+            after * duration
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// The swing foot's toe at the table's posture (stance foot's flat
+    /// frame), m; `None` without a model or table.
+    pub(super) fn planned_swing_toe(&self, posture: Option<&Posture<f32>>) -> Option<[f32; 2]> {
+        let model = self.model.as_ref()?;
+        let posture = posture?;
+        let foot = gait_core::foot::StanceFoot::for_model(model);
+        Some(gait_core::playback::swing_toe_at(model, &foot, posture))
+    }
+
+    /// The ground search: `phi` (the table's last posture) with the swing
+    /// ankle lowered by how far the search has gone `since_end_s` after the
+    /// table's end (from `ground_search_after_s` on, eased in and out over
+    /// `ground_search_s` to the full `ground_search_depth_m`); `phi` itself
+    /// before then or without a model. A tread a few millimetres lower
+    /// than planned, or a foot tracking a little high, would otherwise
+    /// leave the foot hovering until the landing timed out, the step
+    /// standing on one leg.
+    fn searching_for_ground(
+        &self,
+        phi: &[f32; gait_core::LINKS],
+        since_end_s: f32,
+    ) -> [f32; gait_core::LINKS] {
+        let Some(model) = self.model.as_ref() else {
+            return *phi;
+        };
+        let c = self.cfg;
+        let searching_s = since_end_s - c.ground_search_after_s;
+        if !(searching_s.is_finite() && searching_s > 0.0) {
+            return *phi;
+        }
+        let frac = if c.ground_search_s > 0.0 {
+            searching_s / c.ground_search_s
+        } else {
+            1.0
+        };
+        let depth = c.ground_search_depth_m * smoothstep(frac);
+        gait_core::reach::lower_swing_ankle(model, phi, depth, SEARCH_MIN_KNEE_FLEXION_RAD)
+    }
+
+    /// The other foot's share at the table's posture in the present swing
+    /// (0 without a model: the foot is taken as lifted from the start, and
+    /// the landing window counts from the swing's start).
+    fn swing_share(&self, posture: Option<&Posture<f32>>) -> f32 {
+        self.planned_swing_toe(posture).map_or(0.0, |p| {
+            gait_core::playback::other_foot_share(p, self.swing.start_m)
+        })
+    }
+}
