@@ -1,15 +1,6 @@
 //! MCP3208 driver: frame encoding, mock-bus sequences, force calibration.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
-mod common;
-
-use common::{FaultySpi, frame, frames};
+use crate::common::{FaultySpi, frame, frames};
 use embedded_hal::spi::ErrorKind;
 use gait_control::drivers::mcp3208::{
     CalibrationError, Channel, DriveCurrentCalibration, Error, ForceCalibration, ForceFault,

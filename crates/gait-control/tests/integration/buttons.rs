@@ -1,11 +1,4 @@
 //! Buttons (debounce, long press, input faults) and status indicators.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
 use std::io::ErrorKind;
 

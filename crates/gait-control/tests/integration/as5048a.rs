@@ -1,15 +1,6 @@
 //! AS5048A driver: frame encoding, mock-bus sequences, calibration.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
-mod common;
-
-use common::{FaultySpi, frame, frames};
+use crate::common::{FaultySpi, frame, frames};
 use core::f32::consts::PI;
 use embedded_hal::spi::ErrorKind;
 use gait_control::drivers::as5048a::{

@@ -1,5 +1,4 @@
 //! The panic-free ring log keeps the newest records, oldest first.
-#![allow(missing_docs)]
 
 use gait_control::ring_log::RingLog;
 

@@ -1,18 +1,8 @@
 //! Safety supervisor: healthy runs, the configuration, latching and reset,
-//! severity and the log. The fault table's rows: `supervisor_rows.rs`;
-//! NaN handling: `supervisor_nan.rs`.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    clippy::cast_possible_truncation,
-    missing_docs
-)]
+//! severity and the log. The fault table's rows: `rows/`; NaN handling:
+//! `nan.rs`.
 
-mod supervisor_support;
-
-use supervisor_support::*;
+use super::support::*;
 
 // ------------------------------------------------------ healthy operation
 

@@ -1,11 +1,5 @@
 //! Fixtures shared by the supervisor's tests: healthy inputs standing and
 //! moving, fault injection into them, and the check of one fault-table row.
-#![allow(
-    dead_code,
-    unused_imports,
-    clippy::indexing_slicing,
-    clippy::cast_possible_truncation
-)]
 
 pub use gait_control::drivers::as5048a::{COUNTS_PER_REV, Calibration, Direction};
 pub use gait_control::faults::{FaultCode, FaultSet, Reaction};

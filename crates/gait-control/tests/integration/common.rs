@@ -1,5 +1,4 @@
-//! Shared test helpers.
-#![allow(dead_code, missing_docs)]
+//! Mock SPI, PWM and pins shared by the driver tests.
 
 use core::cell::RefCell;
 use core::convert::Infallible;

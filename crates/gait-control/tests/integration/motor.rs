@@ -1,17 +1,8 @@
 //! Motor output: exact pin/PWM sequences, limits, thermal model, faults.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    missing_docs
-)]
-
-mod common;
 
 use std::io::ErrorKind;
 
-use common::{RecordingPin, RecordingPwm};
+use crate::common::{RecordingPin, RecordingPwm};
 use embedded_hal_mock::eh1::MockError;
 use embedded_hal_mock::eh1::digital::{Mock as PinMock, State, Transaction as PinT};
 use embedded_hal_mock::eh1::pwm::{Mock as PwmMock, Transaction as PwmT};

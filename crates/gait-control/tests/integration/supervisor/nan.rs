@@ -1,17 +1,7 @@
 //! Safety supervisor: a NaN anywhere in its input can only trip a fault,
 //! never pass a check.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    clippy::cast_possible_truncation,
-    missing_docs
-)]
 
-mod supervisor_support;
-
-use supervisor_support::*;
+use super::support::*;
 
 // ------------------------------------------------------------------ NaN
 

@@ -1,11 +1,4 @@
 //! The clinician button scheme, driven through real debouncers.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
 use gait_control::drivers::buttons::{ButtonConfig, Debouncer};
 use gait_control::drivers::status::Pattern;
