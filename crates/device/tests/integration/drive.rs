@@ -1,5 +1,4 @@
 //! The joint-level figures derived from the parts' datasheets.
-#![allow(clippy::unwrap_used, clippy::indexing_slicing, missing_docs)]
 
 use exogait_device::DeviceConfig;
 use exogait_device::parts::{JOINT_DRIVE, JOINT_PEAK_TORQUE_NM};

@@ -1,13 +1,6 @@
 //! What the board plays from its bundle sector: the built-in tables when
 //! it is erased, a verified patient's gaits in the clinician's order, and
 //! nothing (fault 0x0604 latched, no reset) when a bundle is refused.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
 use exogait_device::DeviceConfig;
 use exogait_device::boot::{self, Gaits, TableSlots};
