@@ -2,7 +2,6 @@
 //! simulator's live controller, supervisor, drivers and parts run with is
 //! the firmware's (`exogait_device::DeviceConfig::exogait`); `cargo xtask
 //! qemu` checks the firmware's side (its image prints the same CRC).
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use exogait_device::DeviceConfig;
 use host_tests::{standing_rig, strong_pilot};

@@ -2,12 +2,6 @@
 //! simulated exoskeleton-plus-pilot through simulated peripherals speaking
 //! the real wire formats; faults are injected at the peripherals, as they
 //! would happen on a device.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
 use gait_control::faults::{FaultCode, Reaction};
 use gait_control::sequencer::Phase;

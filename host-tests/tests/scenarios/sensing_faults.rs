@@ -3,24 +3,11 @@
 //! acted on the stale or false reading, replayed as the campaign plays them
 //! (the same gait, fault, time and sensor noise). Each stands
 //! (docs/safety.md, "Choices and why" and "Swing").
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use std::str::FromStr;
-
-use exogait_device::DeviceConfig;
 use gait_control::faults::FaultCode;
 use gait_control::operator::Gait;
-use sim::campaign::{CampaignRun, RunResult, play};
-use sim::inject::Injection;
 
-fn replay(gait: Gait, fault: &str, noise_seed: u64) -> RunResult {
-    let run = CampaignRun {
-        gait,
-        fault: Injection::from_str(fault).unwrap(),
-        noise_seed,
-    };
-    play(&run, &DeviceConfig::exogait().unwrap())
-}
+use crate::common::campaign_run;
 
 /// The stance ankle's encoder lost in a stair descent's swing, with the
 /// foot in the air: the step finishes (0x0207) and lands on it. Its held
@@ -35,7 +22,7 @@ fn a_lost_ankle_encoder_leaves_the_stair_descent_standing() {
         ("encoder-parity:left-ankle@4.248", 122_854),
         ("encoder-error-flag:left-ankle@4.003", 95_741),
     ] {
-        let r = replay(Gait::StairDown, fault, seed);
+        let r = campaign_run(Gait::StairDown, fault, seed);
         let o = &r.outcome;
         assert_eq!(o.fell, None, "{fault}");
         assert!(r.detected && !r.false_trip && r.error.is_none(), "{fault}");
@@ -64,7 +51,7 @@ fn a_force_spike_late_in_a_swing_is_not_taken_for_the_landing() {
         (Gait::StairUp, "fsr-spike=204.9:right-foot@3.184", 890_305),
         (Gait::Walk, "fsr-spike=261.6:right-foot@3.429", 527_790),
     ] {
-        let r = replay(gait, fault, seed);
+        let r = campaign_run(gait, fault, seed);
         let o = &r.outcome;
         assert_eq!(o.fell, None, "{fault}");
         assert!(o.faults.is_empty(), "{fault}: {:?}", o.faults);
@@ -86,7 +73,7 @@ fn an_ankle_encoder_stuck_at_toe_off_is_found_in_the_air() {
         ("encoder-stuck:left-ankle@3.841", 954_929),
         ("encoder-stuck:left-ankle@3.59", 64_989),
     ] {
-        let r = replay(Gait::StairDown, fault, seed);
+        let r = campaign_run(Gait::StairDown, fault, seed);
         let o = &r.outcome;
         assert_eq!(o.fell, None, "{fault}");
         assert!(!r.false_trip && r.error.is_none(), "{fault}");

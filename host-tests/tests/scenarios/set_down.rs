@@ -3,7 +3,6 @@
 //! sets the swing foot down onto the ground below it, so the hold stands on
 //! two feet; without the set-down the foot stays in the air and the body on
 //! the one leg (docs/safety.md, "Swing").
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;

@@ -2,12 +2,6 @@
 //! for it (`exogait_device::boot::patient_gaits`) offers its gaits in the
 //! bundle's order; MODE picks the next, GO plays the one picked, and GO on
 //! a gait whose start posture the pilot is not in starts nothing.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
 use exogait_device::DeviceConfig;
 use exogait_device::boot::{self, TableSlots};

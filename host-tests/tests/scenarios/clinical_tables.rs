@@ -4,12 +4,6 @@
 //! derates (the requirements on the tables themselves are in gait-opt's
 //! `clinical_tables` test; the comparison with the human gait in
 //! exogait-cli's `compare` test).
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
 use exogait_device::DeviceConfig;
 use gait_core::tables::{GaitKind, GaitTable};

@@ -1,7 +1,6 @@
 //! The product's documents describe the product as it is: none narrates
 //! how or when it was built ("session 12", "sessions 3 and 4"), which is
 //! git's and the closing notes' to keep.
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,6 @@
 //! lowering the foot until its sensor feels the ground, and lands there;
 //! without the search the foot hovers until the landing times out
 //! (docs/safety.md, "Swing").
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
