@@ -7,9 +7,9 @@ use gait_control::faults::FaultCode;
 use gait_control::operator::Gait;
 use sim::inject::Injection;
 use sim::outcome::outcome;
-use sim::scenario::{flash_tables, instant_pilot, run_tables_with, strong_pilot};
+use sim::scenario::{flash_tables, instant_pilot, run_tables_with};
 
-use super::run;
+use super::{run, run_faulted};
 
 #[test]
 fn a_joint_whose_encoder_is_lost_is_not_driven_on_its_stale_angle() {
@@ -35,17 +35,8 @@ fn each_joint_run(kind: &str, mut each: impl FnMut(&str, usize, f64, &sim::scena
     for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
         for (j, name) in joints.iter().enumerate() {
             for at in [0.8, 2.5, 3.0] {
-                let injection: Injection = format!("{kind}:{name}@{at}").parse().unwrap();
-                let run = run_tables_with(
-                    &device,
-                    flash_tables(),
-                    gait,
-                    strong_pilot(),
-                    at + 4.0,
-                    2,
-                    |rig| rig.schedule(injection),
-                )
-                .unwrap();
+                let fault = format!("{kind}:{name}@{at}");
+                let run = run_faulted(&device, gait, at + 4.0, 2, None, &[&fault]);
                 each(
                     &format!("{gait:?}, {kind} on {name} at {at} s"),
                     j,

@@ -5,11 +5,9 @@
 use exogait_device::DeviceConfig;
 use gait_control::faults::FaultCode;
 use gait_control::operator::Gait;
-use sim::inject::Injection;
 use sim::outcome::outcome;
-use sim::scenario::{flash_tables, run_tables_with, strong_pilot};
 
-use super::run;
+use super::{run, run_faulted};
 use crate::common::campaign_run;
 
 #[test]
@@ -57,21 +55,8 @@ fn a_frame_the_supervisor_drops_never_reaches_control() {
     // debounce).
     for at in [0.5, 2.6] {
         let device = DeviceConfig::exogait().unwrap();
-        let fault: Injection = format!("encoder-glitch=2000:left-knee@{at}")
-            .parse()
-            .unwrap();
-        let run = run_tables_with(
-            &device,
-            flash_tables(),
-            Gait::Walk,
-            strong_pilot(),
-            4.0,
-            1,
-            |rig| {
-                rig.schedule(fault);
-            },
-        )
-        .unwrap();
+        let fault = format!("encoder-glitch=2000:left-knee@{at}");
+        let run = run_faulted(&device, Gait::Walk, 4.0, 1, None, &[&fault]);
         let trace = &run.rig.trace;
         let k = trace
             .iter()

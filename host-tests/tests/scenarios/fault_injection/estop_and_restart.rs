@@ -6,11 +6,9 @@ use exogait_device::DeviceConfig;
 use gait_control::faults::{FaultCode, Reaction};
 use gait_control::operator::Gait;
 use gait_control::sequencer::Phase;
-use sim::inject::Injection;
 use sim::outcome::outcome;
-use sim::scenario::{flash_tables, run_tables_with, strong_pilot};
 
-use super::run;
+use super::{run, run_faulted};
 
 #[test]
 fn a_panic_resets_the_board_into_a_hold_of_the_posture_it_finds() {
@@ -58,19 +56,7 @@ fn motors_disabled_brake_the_joints_instead_of_letting_them_go_limp() {
         d.brake = None;
     }
     let play = |device: &DeviceConfig, gait: Gait, at: f64| {
-        let injection: Injection = format!("estop@{at}").parse().unwrap();
-        let run = run_tables_with(
-            device,
-            flash_tables(),
-            gait,
-            strong_pilot(),
-            at + 4.0,
-            2,
-            |rig| {
-                rig.schedule(injection);
-            },
-        )
-        .unwrap();
+        let run = run_faulted(device, gait, at + 4.0, 2, None, &[&format!("estop@{at}")]);
         outcome(&run.rig, run.ended_by.as_ref())
     };
     let (mut braked_falls, mut limp_falls, mut limp_crossed) = (Vec::new(), 0, 0);
@@ -102,21 +88,8 @@ fn an_e_stop_in_a_swing_sets_the_foot_down_before_it_disables_the_drives() {
     let device = DeviceConfig::exogait().unwrap();
     let contact = f64::from(device.controller.sequencer.landing_contact_n);
     let set_down_s = f64::from(device.controller.sequencer.set_down_s);
-    let play = |device: &DeviceConfig| {
-        let injection: Injection = "estop@2.4".parse().unwrap();
-        run_tables_with(
-            device,
-            flash_tables(),
-            Gait::StairDown,
-            strong_pilot(),
-            6.4,
-            2,
-            |rig| {
-                rig.schedule(injection);
-            },
-        )
-        .unwrap()
-    };
+    let play =
+        |device: &DeviceConfig| run_faulted(device, Gait::StairDown, 6.4, 2, None, &["estop@2.4"]);
     let run = play(&device);
     let o = outcome(&run.rig, run.ended_by.as_ref());
     assert!(o.fell.is_none(), "{o:?}");
@@ -152,22 +125,8 @@ fn an_e_stop_in_a_swing_sets_the_foot_down_before_it_disables_the_drives() {
     // A fault's set-down already under way when the e-stop comes goes on
     // to the tread, the faulted joint still braked, and the drives are
     // off as the foot lands.
-    let both =
-        ["encoder-parity:left-hip@2.35", "estop@2.4"].map(|f| f.parse::<Injection>().unwrap());
-    let run = run_tables_with(
-        &device,
-        flash_tables(),
-        Gait::StairDown,
-        strong_pilot(),
-        6.4,
-        2,
-        |rig| {
-            for f in both {
-                rig.schedule(f);
-            }
-        },
-    )
-    .unwrap();
+    let both = ["encoder-parity:left-hip@2.35", "estop@2.4"];
+    let run = run_faulted(&device, Gait::StairDown, 6.4, 2, None, &both);
     let trace = &run.rig.trace;
     let pressed = trace
         .iter()

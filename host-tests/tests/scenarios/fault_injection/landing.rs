@@ -4,11 +4,9 @@
 use exogait_device::DeviceConfig;
 use gait_control::faults::FaultCode;
 use gait_control::operator::Gait;
-use sim::inject::Injection;
 use sim::outcome::outcome;
-use sim::scenario::{flash_tables, run_tables_with, strong_pilot};
 
-use super::{run, stands_clear_of_the_stops};
+use super::{run, run_faulted, stands_clear_of_the_stops};
 use crate::common::campaign_run;
 
 #[test]
@@ -19,19 +17,7 @@ fn a_step_whose_landing_cannot_be_sensed_ends_on_the_tables_timing_plus_its_sett
     // ADC) fails in the swing.
     for fault in ["fsr-open:right-foot@2.6", "adc-bus@2.6"] {
         let device = DeviceConfig::exogait().unwrap();
-        let f: Injection = fault.parse().unwrap();
-        let run = run_tables_with(
-            &device,
-            flash_tables(),
-            Gait::Walk,
-            strong_pilot(),
-            8.0,
-            2,
-            |rig| {
-                rig.schedule(f);
-            },
-        )
-        .unwrap();
+        let run = run_faulted(&device, Gait::Walk, 8.0, 2, None, &[fault]);
         let trace = &run.rig.trace;
         let start = trace
             .iter()

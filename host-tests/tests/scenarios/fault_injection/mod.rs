@@ -15,10 +15,11 @@ use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
 use sim::inject::Injection;
 use sim::outcome::outcome;
-use sim::scenario::{flash_tables, run_tables_with, strong_pilot};
+use sim::scenario::{StepRun, flash_tables, run_tables_with, strong_pilot};
 
 use crate::common::campaign_run;
 
+/// The outcome of [`run_faulted`] on the device as shipped.
 fn run(
     gait: Gait,
     steps: usize,
@@ -27,9 +28,25 @@ fn run(
     faults: &[&str],
 ) -> sim::outcome::Outcome {
     let device = DeviceConfig::exogait().unwrap();
+    let run = run_faulted(&device, gait, max_s, steps, noise_seed, faults);
+    outcome(&run.rig, run.ended_by.as_ref())
+}
+
+/// `gait` on `device` with its flash tables and the campaign's pilot, the
+/// `faults` (in `sim::inject`'s syntax) scheduled and, given a seed, the
+/// sensors' noise on: GO, then steps until `steps` landings and 1.5 s more
+/// (`sim::scenario::run_tables_with`).
+fn run_faulted(
+    device: &DeviceConfig,
+    gait: Gait,
+    max_s: f64,
+    steps: usize,
+    noise_seed: Option<u64>,
+    faults: &[&str],
+) -> StepRun<'static> {
     let injections: Vec<Injection> = faults.iter().map(|f| f.parse().unwrap()).collect();
-    let run = run_tables_with(
-        &device,
+    run_tables_with(
+        device,
         flash_tables(),
         gait,
         strong_pilot(),
@@ -44,8 +61,7 @@ fn run(
             }
         },
     )
-    .unwrap();
-    outcome(&run.rig, run.ended_by.as_ref())
+    .unwrap()
 }
 
 /// Each of seed 1's campaign runs (`fault`, noise seed) of `gait` lands a
