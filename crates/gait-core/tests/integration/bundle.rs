@@ -1,11 +1,5 @@
 //! The bundle format: what is written reads back, and every corruption,
 //! truncation, foreign device or malformed part is refused.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing
-)]
 
 use gait_core::BodyModel;
 use gait_core::anthropometry::{self, ExoSegments, Options, Pilot, SegmentLengths};

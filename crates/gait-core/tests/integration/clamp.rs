@@ -1,6 +1,5 @@
 //! The panic-free clamp agrees with `f32::clamp` wherever that one is
 //! defined, and does not panic where it would.
-#![allow(missing_docs)]
 
 use gait_core::scalar::clamp_f32;
 

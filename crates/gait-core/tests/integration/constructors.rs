@@ -1,6 +1,5 @@
 //! gait-core's checked constructors (what a report or a caller may hand in)
 //! and the names of P's rows.
-#![allow(clippy::unwrap_used, clippy::indexing_slicing, missing_docs)]
 
 use gait_core::foot::{FootError, StanceFoot};
 use gait_core::gait::{

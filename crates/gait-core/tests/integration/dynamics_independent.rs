@@ -1,14 +1,8 @@
 //! The paper's dynamics checked against derivations that share no code with
 //! it: the mass matrix from the kinetic energy through centre-of-mass
-//! Jacobians, the full equation of motion from the Lagrangian by numerical
+//! Jacobians (`chain.rs`), the full equation of motion from the Lagrangian by numerical
 //! differentiation, energy conservation of the free chain, and Aᵀ by virtual
 //! work.
-#![allow(
-    clippy::unwrap_used,
-    clippy::indexing_slicing,
-    clippy::needless_range_loop,
-    missing_docs
-)]
 
 use gait_core::dynamics::{energy, forward_dynamics, inverse_dynamics, rk4_step, terms};
 use gait_core::kinematics::{joint_torques, phi_from_theta};
@@ -16,106 +10,7 @@ use gait_core::model::GRAVITY_M_S2;
 use gait_core::{BodyModel, LINKS};
 use proptest::prelude::*;
 
-/// The tree, written independently of the model's tables: the link whose
-/// distal end each link hangs from (None: the stance ankle).
-const PARENT: [Option<usize>; LINKS] = [None, Some(0), Some(1), Some(1), Some(3)];
-
-fn ancestors(k: usize) -> Vec<usize> {
-    let mut out = Vec::new();
-    let mut cur = PARENT[k];
-    while let Some(a) = cur {
-        out.push(a);
-        cur = PARENT[a];
-    }
-    out
-}
-
-/// COM of link k and its Jacobian ∂c_k/∂φ (2×5), built from the tree.
-fn com_and_jacobian(
-    m: &BodyModel<f64>,
-    phi: &[f64; LINKS],
-    k: usize,
-) -> ([f64; 2], [[f64; LINKS]; 2]) {
-    let links = m.links();
-    let mut c = [0.0; 2];
-    let mut j = [[0.0; LINKS]; 2];
-    for a in ancestors(k) {
-        let l = links[a].length_m;
-        c[0] += l * phi[a].sin();
-        c[1] += l * phi[a].cos();
-        j[0][a] += l * phi[a].cos();
-        j[1][a] -= l * phi[a].sin();
-    }
-    let d = links[k].com_m;
-    c[0] += d * phi[k].sin();
-    c[1] += d * phi[k].cos();
-    j[0][k] += d * phi[k].cos();
-    j[1][k] -= d * phi[k].sin();
-    (c, j)
-}
-
-/// D from K = ½ Σ m_k |J_k φ̇|² + ½ Σ I_k φ̇_k².
-fn mass_matrix_from_energy(m: &BodyModel<f64>, phi: &[f64; LINKS]) -> [[f64; LINKS]; LINKS] {
-    let mut d = [[0.0; LINKS]; LINKS];
-    for (k, link) in m.links().iter().enumerate() {
-        let (_, jac) = com_and_jacobian(m, phi, k);
-        for a in 0..LINKS {
-            for b in 0..LINKS {
-                d[a][b] += link.mass_kg * (jac[0][a] * jac[0][b] + jac[1][a] * jac[1][b]);
-            }
-        }
-        d[k][k] += link.inertia_kgm2;
-    }
-    d
-}
-
-fn potential(m: &BodyModel<f64>, phi: &[f64; LINKS]) -> f64 {
-    (0..LINKS)
-        .map(|k| m.links()[k].mass_kg * GRAVITY_M_S2 * com_and_jacobian(m, phi, k).0[1])
-        .sum()
-}
-
-/// T = D q̈ + C(q, q̇) + ∂P/∂q, with Christoffel terms and ∂P/∂q by central
-/// differences of the energy-derived D and P.
-fn lagrange_torques(
-    m: &BodyModel<f64>,
-    q: &[f64; LINKS],
-    w: &[f64; LINKS],
-    a: &[f64; LINKS],
-) -> [f64; LINKS] {
-    let h = 1e-6;
-    let d = mass_matrix_from_energy(m, q);
-    let mut dd = [[[0.0; LINKS]; LINKS]; LINKS]; // dd[k][i][j] = ∂D_ij/∂q_k
-    let mut dp = [0.0; LINKS];
-    for k in 0..LINKS {
-        let mut qp = *q;
-        let mut qm = *q;
-        qp[k] += h;
-        qm[k] -= h;
-        let (dpk, dmk) = (
-            mass_matrix_from_energy(m, &qp),
-            mass_matrix_from_energy(m, &qm),
-        );
-        for i in 0..LINKS {
-            for j in 0..LINKS {
-                dd[k][i][j] = (dpk[i][j] - dmk[i][j]) / (2.0 * h);
-            }
-        }
-        dp[k] = (potential(m, &qp) - potential(m, &qm)) / (2.0 * h);
-    }
-    let mut t = [0.0; LINKS];
-    for i in 0..LINKS {
-        let mut s = dp[i];
-        for j in 0..LINKS {
-            s += d[i][j] * a[j];
-            for k in 0..LINKS {
-                s += (dd[k][i][j] - 0.5 * dd[i][j][k]) * w[j] * w[k];
-            }
-        }
-        t[i] = s;
-    }
-    t
-}
+use crate::chain::{fixed, lagrange_torques, mass_matrix, potential};
 
 fn state() -> impl Strategy<Value = ([f64; LINKS], [f64; LINKS], [f64; LINKS])> {
     let ang = prop::array::uniform5(-3.5f64..3.5);
@@ -131,7 +26,7 @@ fn printed_coupling_index_is_wrong_and_corrected_one_is_right() {
     // l1 l2 m2 to the true coupling.
     let m = BodyModel::<f64>::paper_table_iii();
     let phi = [0.1, -0.2, 0.05, 2.9, 3.3];
-    let d_energy = mass_matrix_from_energy(&m, &phi);
+    let d_energy = mass_matrix(&m, &fixed, &phi);
     let c = (phi[0] - phi[1]).cos();
     let printed = 0.441 * 10.5 * 0.228 + 0.441 * 0.395 * (10.5 + 57.7 + 11.5 + 6.05);
     assert!((d_energy[0][1] - printed * c).abs() > 1.0);
@@ -146,7 +41,7 @@ proptest! {
     fn mass_matrix_matches_kinetic_energy((q, _w, _a) in state()) {
         let m = BodyModel::<f64>::paper_table_iii();
         let d_model = terms(&m, &q, &[0.0; LINKS]).d;
-        let d_energy = mass_matrix_from_energy(&m, &q);
+        let d_energy = mass_matrix(&m, &fixed, &q);
         for i in 0..LINKS {
             for j in 0..LINKS {
                 prop_assert!((d_model[(i, j)] - d_energy[i][j]).abs() < 1e-12,
@@ -159,7 +54,7 @@ proptest! {
     fn inverse_dynamics_matches_lagrangian((q, w, a) in state()) {
         let m = BodyModel::<f64>::paper_table_iii();
         let t = inverse_dynamics(&m, &q, &w, &a);
-        let r = lagrange_torques(&m, &q, &w, &a);
+        let r = lagrange_torques(&m, &fixed, &q, &w, &a);
         let scale = r.iter().fold(1.0f64, |s, x| s.max(x.abs()));
         for i in 0..LINKS {
             prop_assert!((t[i] - r[i]).abs() < 1e-6 * scale, "T[{i}] {} vs {}", t[i], r[i]);
@@ -236,14 +131,14 @@ fn energy_matches_independent_kinetic_and_potential() {
     let m = BodyModel::<f64>::paper_table_iii();
     let q = [0.2, -0.1, 0.05, 2.7, 3.5];
     let w = [0.4, -0.9, 0.2, -2.1, 3.3];
-    let d = mass_matrix_from_energy(&m, &q);
+    let d = mass_matrix(&m, &fixed, &q);
     let mut k = 0.0;
     for i in 0..LINKS {
         for j in 0..LINKS {
             k += 0.5 * w[i] * d[i][j] * w[j];
         }
     }
-    let e = k + potential(&m, &q);
+    let e = k + potential(&m, &fixed, &q);
     assert!((energy(&m, &q, &w) - e).abs() < 1e-9 * e.abs());
 }
 

@@ -1,7 +1,6 @@
 //! What the device relies on in the tables it carries: each step chains into
 //! the next with the legs swapped (periodic), and no hip or knee is asked to
 //! move faster than the supervisor allows, with margin for tracking.
-#![allow(clippy::expect_used, clippy::indexing_slicing)]
 
 use gait_core::flash_tables;
 use gait_core::kinematics::{swap_legs, theta_from_phi, wrap_pi};

@@ -1,12 +1,6 @@
 //! Bézier gait description, time sampling, derivatives and the paper-mode
 //! cost: properties that hold for any control points, and the paper's
 //! definitions checked one by one.
-#![allow(
-    clippy::unwrap_used,
-    clippy::indexing_slicing,
-    clippy::needless_range_loop,
-    missing_docs
-)]
 
 use gait_core::BodyModel;
 use gait_core::bezier::Bezier;

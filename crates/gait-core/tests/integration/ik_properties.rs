@@ -1,12 +1,6 @@
 //! Inverse kinematics: FK∘IK round trips over the reachable workspace, typed
 //! errors (never NaN) everywhere else, and the properties of the paper's IK
 //! that the optimiser must live with (kinks, jumps, the 45° stance-knee cap).
-#![allow(
-    clippy::unwrap_used,
-    clippy::indexing_slicing,
-    clippy::needless_range_loop,
-    missing_docs
-)]
 
 use gait_core::BodyModel;
 use gait_core::ik::{IkError, IkSolver, IkTarget};

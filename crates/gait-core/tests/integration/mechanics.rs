@@ -1,6 +1,5 @@
 //! gait-core's one dynamics API (`mechanics`): the foot is an input, and
 //! forward dynamics undo the inverse on either foot.
-#![allow(clippy::unwrap_used, missing_docs)]
 
 use gait_core::BodyModel;
 use gait_core::foot::StanceFoot;

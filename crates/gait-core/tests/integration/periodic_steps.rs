@@ -2,7 +2,6 @@
 //! is the start posture, so consecutive steps chain without moving a joint
 //! in the weight transfer. Checked against the IK and FK independently of
 //! how `StepCase::periodic` computes it.
-#![allow(clippy::expect_used, clippy::indexing_slicing)]
 
 use gait_core::BodyModel;
 use gait_core::ik::{IkSolver, IkTarget};

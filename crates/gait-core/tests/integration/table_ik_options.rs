@@ -1,12 +1,6 @@
 //! The IK options in a gait table's header (format version 2): written by
 //! the encoder, read back by the parser, checked with `IkOptions::new`, and
 //! the flash tables carry the options they were generated with.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
 use gait_core::flash_tables;
 use gait_core::ik::{IkOptions, KneeRange};

@@ -1,14 +1,9 @@
 //! The toe rocker (`gait_core::foot`) checked against derivations that
 //! share no code with it: the ankle's circle written as an angle about the
-//! toe, centre-of-mass Jacobians built here, the Lagrangian of that kinetic
-//! energy by numerical differentiation, angular momenta summed link by
-//! link, and energy conservation of the free chain on its toe.
-#![allow(
-    clippy::unwrap_used,
-    clippy::indexing_slicing,
-    clippy::needless_range_loop,
-    missing_docs
-)]
+//! toe, centre-of-mass Jacobians built on that base (`chain.rs`), the
+//! Lagrangian of that kinetic energy by numerical differentiation, angular
+//! momenta summed link by link, and energy conservation of the free chain
+//! on its toe.
 
 use gait_core::dynamics;
 use gait_core::foot::{self, StanceFoot};
@@ -17,7 +12,7 @@ use gait_core::model::GRAVITY_M_S2;
 use gait_core::{BodyModel, LINKS};
 use proptest::prelude::*;
 
-const PARENT: [Option<usize>; LINKS] = [None, Some(0), Some(1), Some(1), Some(3)];
+use crate::chain::{com_and_jacobian, lagrange_torques, mass_matrix, potential};
 
 fn model() -> (BodyModel<f64>, StanceFoot<f64>) {
     let m = BodyModel::<f64>::paper_table_iii();
@@ -41,98 +36,10 @@ fn ankle(f: &StanceFoot<f64>, phi1: f64, on_toe: bool) -> ([f64; 2], [f64; 2]) {
     )
 }
 
-/// COM of link k and ∂c_k/∂φ, the base included.
-fn com_and_jacobian(
-    m: &BodyModel<f64>,
-    f: &StanceFoot<f64>,
-    phi: &[f64; LINKS],
-    k: usize,
-    on_toe: bool,
-) -> ([f64; 2], [[f64; LINKS]; 2]) {
-    let links = m.links();
-    let (a, da) = ankle(f, phi[0], on_toe);
-    let mut c = a;
-    let mut j = [[0.0; LINKS]; 2];
-    j[0][0] += da[0];
-    j[1][0] += da[1];
-    let mut cur = PARENT[k];
-    while let Some(p) = cur {
-        let l = links[p].length_m;
-        c[0] += l * phi[p].sin();
-        c[1] += l * phi[p].cos();
-        j[0][p] += l * phi[p].cos();
-        j[1][p] -= l * phi[p].sin();
-        cur = PARENT[p];
-    }
-    let d = links[k].com_m;
-    c[0] += d * phi[k].sin();
-    c[1] += d * phi[k].cos();
-    j[0][k] += d * phi[k].cos();
-    j[1][k] -= d * phi[k].sin();
-    (c, j)
-}
-
-fn mass_matrix(
-    m: &BodyModel<f64>,
-    f: &StanceFoot<f64>,
-    phi: &[f64; LINKS],
-    on_toe: bool,
-) -> [[f64; LINKS]; LINKS] {
-    let mut d = [[0.0; LINKS]; LINKS];
-    for (k, link) in m.links().iter().enumerate() {
-        let (_, jac) = com_and_jacobian(m, f, phi, k, on_toe);
-        for a in 0..LINKS {
-            for b in 0..LINKS {
-                d[a][b] += link.mass_kg * (jac[0][a] * jac[0][b] + jac[1][a] * jac[1][b]);
-            }
-        }
-        d[k][k] += link.inertia_kgm2;
-    }
-    d
-}
-
-fn potential(m: &BodyModel<f64>, f: &StanceFoot<f64>, phi: &[f64; LINKS]) -> f64 {
-    (0..LINKS)
-        .map(|k| m.links()[k].mass_kg * GRAVITY_M_S2 * com_and_jacobian(m, f, phi, k, true).0[1])
-        .sum()
-}
-
-/// T = D q̈ + Christoffel terms + ∂P/∂q, all from the explicit energy.
-fn lagrange_torques(
-    m: &BodyModel<f64>,
-    f: &StanceFoot<f64>,
-    q: &[f64; LINKS],
-    w: &[f64; LINKS],
-    a: &[f64; LINKS],
-) -> [f64; LINKS] {
-    let h = 1e-6;
-    let d = mass_matrix(m, f, q, true);
-    let mut dd = [[[0.0; LINKS]; LINKS]; LINKS];
-    let mut dp = [0.0; LINKS];
-    for k in 0..LINKS {
-        let (mut qp, mut qm) = (*q, *q);
-        qp[k] += h;
-        qm[k] -= h;
-        let (dpk, dmk) = (mass_matrix(m, f, &qp, true), mass_matrix(m, f, &qm, true));
-        for i in 0..LINKS {
-            for j in 0..LINKS {
-                dd[k][i][j] = (dpk[i][j] - dmk[i][j]) / (2.0 * h);
-            }
-        }
-        dp[k] = (potential(m, f, &qp) - potential(m, f, &qm)) / (2.0 * h);
-    }
-    let mut t = [0.0; LINKS];
-    for i in 0..LINKS {
-        let mut s = dp[i];
-        for j in 0..LINKS {
-            s += d[i][j] * a[j];
-            for k in 0..LINKS {
-                s += (dd[k][i][j] - 0.5 * dd[i][j][k]) * w[j] * w[k];
-            }
-        }
-        t[i] = s;
-    }
-    t
+/// The stance ankle on the toe rocker (`on_toe`) or flat, as the chain's
+/// base (see [`ankle`]).
+fn rocker(f: &StanceFoot<f64>, on_toe: bool) -> impl Fn(f64) -> ([f64; 2], [f64; 2]) + '_ {
+    move |phi1| ankle(f, phi1, on_toe)
 }
 
 /// Angular momentum (anticlockwise) of the links in `set` about `point`.
@@ -148,7 +55,7 @@ fn angular_momentum(
     let mut l = 0.0;
     for &k in set {
         let link = m.links()[k];
-        let (c, j) = com_and_jacobian(m, f, phi, k, on_toe);
+        let (c, j) = com_and_jacobian(m, &rocker(f, on_toe), phi, k);
         let v = [
             (0..LINKS).map(|i| j[0][i] * dphi[i]).sum::<f64>(),
             (0..LINKS).map(|i| j[1][i] * dphi[i]).sum::<f64>(),
@@ -262,7 +169,7 @@ proptest! {
     fn mass_matrix_on_the_toe_matches_kinetic_energy((q, _w, _a) in toe_state()) {
         let (m, f) = model();
         let d = foot::terms(&m, &f, &q, &[0.0; LINKS]).d;
-        let e = mass_matrix(&m, &f, &q, true);
+        let e = mass_matrix(&m, &rocker(&f, true), &q);
         for i in 0..LINKS {
             for j in 0..LINKS {
                 prop_assert!((d[(i, j)] - e[i][j]).abs() < 1e-10, "D[{i}][{j}] {} vs {}", d[(i, j)], e[i][j]);
@@ -274,7 +181,7 @@ proptest! {
     fn inverse_dynamics_on_the_toe_matches_lagrangian((q, w, a) in toe_state()) {
         let (m, f) = model();
         let t = foot::inverse_dynamics(&m, &f, &q, &w, &a);
-        let l = lagrange_torques(&m, &f, &q, &w, &a);
+        let l = lagrange_torques(&m, &rocker(&f, true), &q, &w, &a);
         for i in 0..LINKS {
             prop_assert!((t[i] - l[i]).abs() < 1e-4 * (1.0 + l[i].abs()), "{i}: {} vs {}", t[i], l[i]);
         }
@@ -309,7 +216,7 @@ proptest! {
         // Gravity's moment about the toe (anticlockwise): Σ (c − toe) × (−m g ŷ).
         let mut gravity = 0.0;
         for k in 0..LINKS {
-            let (c, _) = com_and_jacobian(&m, &f, &q, k, true);
+            let (c, _) = com_and_jacobian(&m, &rocker(&f, true), &q, k);
             gravity += -(c[0] - toe[0]) * m.links()[k].mass_kg * GRAVITY_M_S2;
         }
         // Applied torque + gravity moment = dL/dt.
@@ -338,8 +245,8 @@ proptest! {
             prop_assert!((jb[i] - ja[i]).abs() < 1e-6 * (1.0 + jb[i].abs()), "joint {i}: {} vs {}", jb[i], ja[i]);
         }
         // A plastic contact switch never adds energy.
-        let kb = kinetic(&mass_matrix(&m, &f, &phi, false), &w);
-        let ka = kinetic(&mass_matrix(&m, &f, &phi, true), &up);
+        let kb = kinetic(&mass_matrix(&m, &rocker(&f, false), &phi), &w);
+        let ka = kinetic(&mass_matrix(&m, &rocker(&f, true), &phi), &up);
         prop_assert!(ka <= kb * (1.0 + 1e-9) + 1e-12, "{kb} -> {ka}");
         // Heel strike: about the ankle.
         let down = foot::contact_switch_velocities(&m, &f, &phi, &w, false).unwrap();
@@ -351,8 +258,8 @@ proptest! {
         for i in 0..4 {
             prop_assert!((jb[i] - ja[i]).abs() < 1e-6 * (1.0 + jb[i].abs()));
         }
-        let kb = kinetic(&mass_matrix(&m, &f, &phi, true), &w);
-        let ka = kinetic(&mass_matrix(&m, &f, &phi, false), &down);
+        let kb = kinetic(&mass_matrix(&m, &rocker(&f, true), &phi), &w);
+        let ka = kinetic(&mass_matrix(&m, &rocker(&f, false), &phi), &down);
         prop_assert!(ka <= kb * (1.0 + 1e-9) + 1e-12);
     }
 }
@@ -376,7 +283,8 @@ fn free_chain_on_the_toe_conserves_energy() {
     let e1 = foot::energy(&m, &f, &q, &w);
     assert!((e1 - e0).abs() < 1e-6 * e0.abs().max(1.0), "{e0} -> {e1}");
     // Energy also matches the explicit kinetic + potential energy.
-    let explicit = kinetic(&mass_matrix(&m, &f, &q, true), &w) + potential(&m, &f, &q);
+    let explicit =
+        kinetic(&mass_matrix(&m, &rocker(&f, true), &q), &w) + potential(&m, &rocker(&f, true), &q);
     assert!((explicit - e1).abs() < 1e-8 * e1.abs().max(1.0));
 
     // Falling backwards from the toe onto the heel: energy drops at the
