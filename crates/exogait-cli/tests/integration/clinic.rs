@@ -1,39 +1,17 @@
 //! The clinic's workflow through the built `exogait` binary: fit a patient,
 //! design a gait family into a bundle, list it, play its gaits in the
 //! closed loop; and every bad input refused with exit status 2.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 
 use serde_json::Value;
 
-struct Out {
-    status: i32,
-    stdout: String,
-    stderr: String,
-}
-
-fn exogait(args: &[&str]) -> Out {
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(args)
-        .output()
-        .expect("run exogait");
-    Out {
-        status: out.status.code().expect("exit code"),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
+use crate::common::{exogait, s};
 
 fn dir(name: &str) -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 #[test]

@@ -1,7 +1,6 @@
 //! `exogait faults` end to end: the built binary plays a short seeded
 //! campaign, says by its exit status whether the goal held, and its JSON
 //! tells each bad run's braked joints.
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use std::process::Command;
 

@@ -1,18 +1,17 @@
 //! Runs the built `exogait` binary with stdin and checks its answers and
 //! exit status.
-// Clippy's allow-unwrap-in-tests does not cover the tests/ folder.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::f64::consts::PI;
-use std::io::Write;
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
+use std::process::Command;
 
 use gait_core::BodyModel;
 use gait_core::anthropometry::{ExoSegments, Pilot, body_model_for};
 use gait_core::dynamics::inverse_dynamics;
 use gait_core::kinematics::{forward_kinematics, joint_torques};
 use serde_json::Value;
+
+use crate::common::run_piped;
 
 struct Run {
     status: i32,
@@ -21,20 +20,7 @@ struct Run {
 }
 
 fn exogait(args: &[&str], stdin: &str) -> Run {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn exogait");
-    child
-        .stdin
-        .take()
-        .expect("stdin")
-        .write_all(stdin.as_bytes())
-        .expect("write stdin");
-    let out = child.wait_with_output().expect("wait");
+    let out = run_piped(args, stdin.as_bytes());
     let text = String::from_utf8(out.stdout).expect("utf-8 stdout");
     Run {
         status: out.status.code().expect("exit code"),

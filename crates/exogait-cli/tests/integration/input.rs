@@ -2,21 +2,11 @@
 //! UTF-8 is answered and the lines after it still are; a negative number
 //! reaches the range check; a plot that cannot be written is refused
 //! before the run; the text report holds no Rust debug text.
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use std::io::Write;
-use std::process::{Command, Stdio};
+use crate::common::run_piped;
 
 fn exogait(args: &[&str], stdin: &[u8]) -> (i32, String, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child.stdin.take().unwrap().write_all(stdin).unwrap();
-    let out = child.wait_with_output().unwrap();
+    let out = run_piped(args, stdin);
     (
         out.status.code().unwrap(),
         String::from_utf8_lossy(&out.stdout).into_owned(),

@@ -2,7 +2,6 @@
 //! infeasible search exits 1 and says why, `table` and `simulate --table`
 //! refuse a table whose first step does not land, and a short run says
 //! why; the default run time fits the steps asked.
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use std::path::PathBuf;
 use std::process::Command;

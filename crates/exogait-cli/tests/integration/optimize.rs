@@ -1,41 +1,18 @@
 //! Runs the built `exogait optimize` and `exogait cost` and checks the
 //! report, the recomputed J and the refusals. Small budgets (--evals) keep
 //! each search under a second.
-// Clippy's allow-unwrap-in-tests does not cover the tests/ folder.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::OnceLock;
 
 use serde_json::Value;
 
-struct Run {
-    status: i32,
-    stdout: String,
-    stderr: String,
-}
-
-fn exogait(args: &[&str]) -> Run {
-    let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
-        .args(args)
-        .output()
-        .expect("run exogait");
-    Run {
-        status: out.status.code().expect("exit code"),
-        stdout: String::from_utf8(out.stdout).expect("utf-8 stdout"),
-        stderr: String::from_utf8(out.stderr).expect("utf-8 stderr"),
-    }
-}
+use crate::common::{Run, exogait, s};
 
 fn dir() -> PathBuf {
     let d = std::env::temp_dir().join(format!("exogait-opt-test-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// One paper-mode walk search (2,000 evaluations) with its report and

@@ -1,12 +1,6 @@
 //! `exogait compare`: the paper's Table II in the closed loop, as JSON, and
 //! the reductions the shipped tables hold against the human-data gait on
 //! the same device (targets and margins in docs/optimiser.md).
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::indexing_slicing,
-    missing_docs
-)]
 
 use std::process::Command;
 

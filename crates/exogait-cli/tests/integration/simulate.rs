@@ -1,7 +1,6 @@
 //! `exogait simulate` end to end: the built binary runs the closed loop,
 //! prints its metrics, writes the plot, and says by its exit status whether
 //! the step landed on the plan.
-#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use std::process::Command;
 
