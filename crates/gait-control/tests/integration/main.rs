@@ -1,0 +1,22 @@
+//! gait-control's integration tests, in one binary (one link, one lint
+//! header): the drivers on mock buses, the clinician buttons, the ring log,
+//! the safety supervisor and its fault table. The sequencer's are in
+//! `tests/sequencer.rs`.
+// Clippy's allow-*-in-tests covers `#[test]` fns, not the helpers here.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    missing_docs
+)]
+
+mod as5048a;
+mod buttons;
+mod common;
+mod fault_table;
+mod mcp3208;
+mod motor;
+mod operator;
+mod ring_log;
+mod supervisor;

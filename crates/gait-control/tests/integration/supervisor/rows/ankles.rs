@@ -1,0 +1,211 @@
+//! Fault-table rows of the passive ankles: position limit, unplanned
+//! heel-off, a lost ankle encoder.
+
+use crate::supervisor::support::*;
+
+#[test]
+fn row_ankle_position_limit() {
+    let max = SupervisorConfig::paper().ankle_range[0].max_rad;
+    let ramp = |k: u32| STAND_ANKLES[0] + 0.001 * k as f32;
+    let expected = (1..).find(|&k| encoder(ramp(k)).angle_rad > max).unwrap();
+    let (_, v) = inject(expected + 5, |k, input| input.ankles[0] = encoder(ramp(k)));
+    assert_row(
+        &v,
+        FaultCode::AnklePositionLimit,
+        Reaction::FinishStepThenHold,
+        expected,
+    );
+}
+
+#[test]
+fn row_unplanned_heel_off() {
+    // The left ankle on its 20° stop (the heel lifting onto the toe) while
+    // the plan keeps it at 6° (a walk): 50 ticks on the stop trip it.
+    // The ankle rolls onto the stop at 0.02 rad per tick (no jump), then
+    // stays: the 50th tick on the stop trips.
+    let cfg = SupervisorConfig::paper();
+    let stop = cfg.heel_off_rad;
+    let ramp = |k: u32| (STAND_ANKLES[0] + 0.02 * k as f32).min(stop);
+    let on_stop = |k: u32| encoder(ramp(k)).angle_rad >= stop - cfg.heel_off_reading_tolerance_rad;
+    let first = (1..).find(|&k| on_stop(k)).unwrap();
+    let (_, v) = inject(first + 60, |k, input| {
+        input.ankles[0] = encoder(ramp(k));
+        input.ankle_plan_rad[0] = 0.1;
+    });
+    assert_row(
+        &v,
+        FaultCode::UnplannedHeelOff,
+        Reaction::FinishStepThenHold,
+        first + cfg.heel_off_ticks - 1,
+    );
+    // Planned (a descent's stance heel lifts on schedule), nothing planned
+    // (NaN: standing, the swing ankle), or off the stop: nothing.
+    for (reading, plan) in [
+        (stop, stop + 0.2),
+        (stop, stop - 3.0 * DEG),
+        (stop, f32::NAN),
+        (stop - 1.0 * DEG, 0.1),
+    ] {
+        let (_, v) = inject(200, |k, input| {
+            input.ankles[0] = encoder((STAND_ANKLES[0] + 0.02 * k as f32).min(reading));
+            input.ankle_plan_rad[0] = plan;
+        });
+        assert!(
+            v.iter().all(|x| x.reaction == Reaction::None),
+            "reading {reading}, plan {plan}"
+        );
+    }
+    // Leaving the stop restarts the count: 49 on, 1 off, 49 on: nothing.
+    let (_, v) = inject(first + 98, |k, input| {
+        let dip = k == first + 49;
+        input.ankles[0] = encoder(if dip { stop - 2.0 * DEG } else { ramp(k) });
+        input.ankle_plan_rad[0] = 0.1;
+    });
+    assert!(v.iter().all(|x| x.reaction == Reaction::None));
+}
+
+#[test]
+fn row_ankle_encoder() {
+    let (_, v) = inject(10, |_, input| {
+        input.ankles[1].status = EncoderStatus::Parity
+    });
+    assert_row(&v, FaultCode::AnkleEncoder, Reaction::FinishStepThenHold, 3);
+    let (_, v) = inject(10, |_, input| input.ankles[1].angle_rad = f32::INFINITY);
+    assert_row(&v, FaultCode::AnkleEncoder, Reaction::FinishStepThenHold, 1);
+}
+
+/// The right foot in the air, its ankle frozen at `reading` (the warm-up's
+/// dither stops: the counts no longer change).
+/// It rolls there at 0.02 rad a tick (no jump), then stays.
+fn right_ankle_frozen_in_the_air(reading: f32, airborne: bool) -> (Supervisor, Vec<Verdict>) {
+    inject(150, |k, input| {
+        let step = 0.02 * k as f32;
+        let start = STAND_ANKLES[1];
+        input.ankles[1] = encoder(if reading > start {
+            (start + step).min(reading)
+        } else {
+            (start - step).max(reading)
+        });
+        input.swing_leg = Some(gait_control::layout::Side::Right);
+        input.airborne_leg = airborne.then_some(gait_control::layout::Side::Right);
+        input.forces[1].newtons = 0.0;
+    })
+}
+
+#[test]
+fn an_ankle_stuck_on_its_stop_in_the_air_is_a_lost_ankle_encoder() {
+    // Only the ground holds an ankle on its dorsiflexion stop; in the air
+    // its spring takes it off. Counts that stay there, unchanged, for 100
+    // ticks of a foot surely in the air: 0x0207, and control stops taking
+    // them (a stuck reading taken for the landing's lean dropped the
+    // pilot in a stair descent).
+    let cfg = SupervisorConfig::paper();
+    let stop = cfg.heel_off_rad;
+    let (sup, v) = right_ankle_frozen_in_the_air(stop, true);
+    // 15 ticks to roll onto the stop (0.35 rad); the 100th frame read
+    // unchanged there trips.
+    let on_stop = (1..)
+        .find(|&k| STAND_ANKLES[1] + 0.02 * k as f32 >= stop)
+        .unwrap();
+    assert_row(
+        &v,
+        FaultCode::AnkleEncoder,
+        Reaction::FinishStepThenHold,
+        on_stop + cfg.frozen_ticks,
+    );
+    assert!(!sup.accepts_encoder(JOINTS + 1, &encoder(stop)));
+    // The other ankle's frames are still taken.
+    assert!(sup.accepts_encoder(JOINTS, &encoder(STAND_ANKLES[0])));
+    // Counts that move again are taken again.
+    let mut sup = sup;
+    let mut input = healthy_input(WARMUP + 200);
+    input.ankles[1] = encoder(stop - 2.0 * RAD_PER_COUNT);
+    assert!(!sup.accepts_encoder(JOINTS + 1, &input.ankles[1]));
+    sup.check(&input);
+    assert!(sup.accepts_encoder(JOINTS + 1, &encoder(stop - 3.0 * RAD_PER_COUNT)));
+
+    // Not yet surely in the air (a trailing toe may still hold the stop),
+    // off the stop (at the spring's rest), or moving: nothing.
+    for (reading, airborne) in [(stop, false), (0.0, true), (stop - 1.0 * DEG, true)] {
+        let (sup, v) = right_ankle_frozen_in_the_air(reading, airborne);
+        assert!(
+            v.iter().all(|x| x.reaction == Reaction::None),
+            "reading {reading}, airborne {airborne}"
+        );
+        assert!(sup.accepts_encoder(JOINTS + 1, &encoder(reading)));
+    }
+    let (_, v) = inject(300, |k, input| {
+        let ramp = (STAND_ANKLES[1] + 0.02 * k as f32).min(stop);
+        input.ankles[1] = encoder(ramp - 2.0 * RAD_PER_COUNT * (k % 2) as f32);
+        input.airborne_leg = Some(gait_control::layout::Side::Right);
+    });
+    assert!(v.iter().all(|x| x.reaction == Reaction::None));
+}
+
+/// A left swing (right stance) whose plan turns the right shank by
+/// `rate` rad a tick from the standing angle, the right ankle reading
+/// `reading(k, planned)` at tick k.
+fn right_stance_in_a_swing(
+    rate: f32,
+    reading: impl Fn(u32, f32) -> f32,
+) -> (Supervisor, Vec<Verdict>) {
+    inject(200, |k, input| {
+        let planned = STAND_ANKLES[1] + rate * k as f32;
+        input.ankles[1] = encoder(reading(k, planned));
+        input.swing_leg = Some(gait_control::layout::Side::Left);
+        input.ankle_plan_rad = [f32::NAN, planned];
+        input.forces[0].newtons = 0.0;
+    })
+}
+
+#[test]
+fn a_stance_ankle_that_does_not_turn_with_the_plan_is_a_lost_ankle_encoder() {
+    // A walk's stance ankle frozen mid-swing: its stale reading would set
+    // the posture the step plays on with past the table's end, the
+    // residual would brake the stance knee and the pilot fall. Counts that
+    // do not change once while the plan turns the shank by 0.05 rad:
+    // 0x0207, and control stops taking them.
+    let cfg = SupervisorConfig::paper();
+    let rate = 0.5e-3; // 0.5 rad/s
+    let (sup, v) = right_stance_in_a_swing(rate, |_, _| STAND_ANKLES[1]);
+    let bound = (cfg.frozen_ankle_plan_rad / rate).ceil() as u32;
+    let at = detected_at(&v, FaultCode::AnkleEncoder).unwrap();
+    assert!(at.abs_diff(bound) <= 1, "{at} against {bound}");
+    assert_row(
+        &v,
+        FaultCode::AnkleEncoder,
+        Reaction::FinishStepThenHold,
+        at,
+    );
+    assert!(!sup.accepts_encoder(JOINTS + 1, &encoder(STAND_ANKLES[1])));
+    assert!(sup.accepts_encoder(JOINTS, &encoder(STAND_ANKLES[0])));
+
+    // Following the plan, lagging it by 0.1 rad, or still with a count of
+    // noise, as a pilot who stops the shank may: nothing. Nor when the
+    // plan does not turn it (a frozen reading on a held shank is a good
+    // one), nor on the dorsiflexion stop (a heel up), nor with no swing.
+    let quiet = |v: &[Verdict]| v.iter().all(|x| x.reaction == Reaction::None);
+    assert!(quiet(&right_stance_in_a_swing(rate, |_, p| p).1));
+    assert!(quiet(&right_stance_in_a_swing(rate, |_, p| p - 0.1).1));
+    let noisy = |k: u32, _| STAND_ANKLES[1] + RAD_PER_COUNT * (k % 2) as f32;
+    assert!(quiet(&right_stance_in_a_swing(rate, noisy).1));
+    assert!(quiet(
+        &right_stance_in_a_swing(0.0, |_, _| STAND_ANKLES[1]).1
+    ));
+    let stop = cfg.heel_off_rad;
+    let (_, v) = inject(200, |k, input| {
+        input.ankles[1] = encoder((STAND_ANKLES[1] + 0.02 * k as f32).min(stop));
+        input.swing_leg = Some(gait_control::layout::Side::Left);
+        input.ankle_plan_rad = [f32::NAN, stop + rate * k as f32];
+        input.forces[0].newtons = 0.0;
+    });
+    assert!(
+        quiet(&v),
+        "{:?}",
+        v.iter().find(|x| x.reaction != Reaction::None)
+    );
+    let (_, v) = inject(200, |k, input| {
+        input.ankle_plan_rad = [f32::NAN, STAND_ANKLES[1] + rate * k as f32];
+    });
+    assert!(quiet(&v));
+}

@@ -1,0 +1,82 @@
+//! The simulated pilot in a hold: he reacts late and slowly, and does not
+//! shove the body when a set-down foot lands.
+
+use exogait_device::DeviceConfig;
+use gait_control::operator::Gait;
+use gait_control::sequencer::Phase;
+use sim::inject::Injection;
+use sim::scenario::{flash_tables, instant_pilot, run_tables_with, strong_pilot};
+
+use super::stands_clear_of_the_stops;
+
+#[test]
+fn the_simulated_pilot_reacts_to_a_hold_late_and_slowly() {
+    // The campaign's pilot goes on with the step's shank for its reaction
+    // time, then eases it to the hold's aim; an instant one
+    // (`scenario::instant_pilot`) meets the hold at once with the crutches'
+    // full torque (`docs/safety.md`, "The randomised fault campaign").
+    let device = DeviceConfig::exogait().unwrap();
+    let fault: Injection = "dir-fail:right-hip@2.497".parse().unwrap();
+    let crutches_after_hold = |pilot: sim::pilot::PilotConfig| {
+        let run = run_tables_with(
+            &device,
+            flash_tables(),
+            Gait::StairDown,
+            pilot,
+            fault.at_s + 1.0,
+            2,
+            |rig| {
+                rig.set_sensor_noise(3, 10, 730_010);
+                rig.schedule(fault);
+            },
+        )
+        .unwrap();
+        let trace = &run.rig.trace;
+        let held = trace
+            .iter()
+            .position(|s| matches!(s.report.phase, Phase::SafeHold { .. }))
+            .unwrap();
+        let before = trace[held - 1].state.crutch_forces_n[0];
+        let peak = |ms: usize| {
+            trace[held..held + ms]
+                .iter()
+                .map(|s| s.state.crutch_forces_n[0])
+                .fold(0.0, f64::max)
+        };
+        (before, peak(10), peak(140), peak(400))
+    };
+    let instant = instant_pilot();
+    let most =
+        0.5 * (instant.torque_limit_nm / instant.crutch_lever_m + instant.baseline_crutch_load_n);
+    let (_, first_10ms, _, _) = crutches_after_hold(instant);
+    assert!(first_10ms > 0.95 * most, "{first_10ms} N of {most}");
+    let reacting = strong_pilot();
+    assert_eq!(
+        (reacting.hold_reaction_s, reacting.hold_recovery_s),
+        (0.15, 1.5)
+    );
+    let (before, _, reaction, later) = crutches_after_hold(reacting);
+    assert!(
+        reaction < before + 60.0,
+        "{reaction} N within the reaction time, {before} N before"
+    );
+    assert!(later > reaction + 20.0, "then it pushes: {later} N");
+}
+
+#[test]
+fn the_pilot_does_not_shove_the_body_when_the_set_down_foot_lands() {
+    // Seed 1's campaign: a descent's stance knee encoder lost late in the
+    // swing (the knee braked, the swing foot set down). The simulated
+    // pilot's eased move in the hold restarts from the landed shank once
+    // the landed foot becomes the plant's stance foot (its shank at
+    // −0.03): going on from the old stance shank's angle (0.49 rad), the
+    // crutches would push at their full 300 N·m and pitch the torso past
+    // 60°. Restarted, the pilot stands, with no stop crossed.
+    stands_clear_of_the_stops(
+        Gait::StairDown,
+        &[
+            ("encoder-parity:left-knee@2.97", 886_658),
+            ("encoder-error-flag:left-knee@2.97", 7_735),
+        ],
+    );
+}
