@@ -35,7 +35,7 @@ use crate::drivers::mcp3208::{
 use crate::drivers::motor::{self, Motor};
 use crate::drivers::status::Indicator;
 use crate::faults::{FaultCode, FaultSet, Reaction};
-use crate::layout::Side;
+use crate::layout::{Side, encoder, force};
 use crate::operator::{self, ControllerStatus, Input, Operator, OperatorConfig, Request};
 use crate::position_loop::{JointGains, JointLoop};
 use crate::posture::JOINTS;
@@ -361,6 +361,7 @@ impl<'t> Controller<'t> {
             selected: self.operator.choice(),
             request,
             orders: &self.orders,
+            braked: &self.braked,
             hold_joint_at: s.chain_hold,
             restart,
             dt_s: self.cfg.dt_s,
@@ -441,9 +442,9 @@ impl<'t> Controller<'t> {
         let status = &r.status;
         let input = SupervisorInput {
             tick: self.tick,
-            joints: [0, 1, 2, 3].map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
+            joints: encoder::OF_JOINTS.map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
             joint_reference_rad: r.angle_rad,
-            ankles: [4, 5].map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
+            ankles: encoder::OF_ANKLES.map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
             forces: s.forces,
             motors,
             e_stop_pressed: s.e_stop_pressed,
@@ -460,7 +461,7 @@ impl<'t> Controller<'t> {
         let mut verdict = self.supervisor.check(&input);
         let estop_hold = self.stop_for_estop(&mut verdict, status);
         self.orders = Orders::from_verdict(&verdict, estop_hold, &s.sensed);
-        self.seq_status = status.obeying(&self.orders, &self.cfg.sequencer);
+        self.seq_status = status.obeying(&self.orders, &verdict.braked_joints, &self.cfg.sequencer);
         if verdict.reaction == Reaction::DisableMotors {
             self.loops.iter_mut().for_each(JointLoop::reset);
         }
@@ -585,8 +586,8 @@ impl<'t> Controller<'t> {
         if step.ended {
             self.crutch.end_step();
         }
-        self.crutch
-            .sample(s.forces_n[2], s.forces_n[3], self.cfg.dt_s);
+        let crutches = force::CRUTCHES.map(|i| s.forces_n.get(i).copied().unwrap_or(f32::NAN));
+        self.crutch.sample(crutches[0], crutches[1], self.cfg.dt_s);
         if self.seq_status.at_rest()
             && self.crutch.current().is_some()
             && reaction >= Reaction::SafeHold

@@ -27,6 +27,16 @@ pub mod joint {
     pub const RIGHT_KNEE: usize = 3;
 }
 
+/// Index of each encoder.
+pub mod encoder {
+    use super::{ANKLES, JOINTS};
+
+    /// The joints' encoders, in joint order.
+    pub const OF_JOINTS: [usize; JOINTS] = [0, 1, 2, 3];
+    /// The ankles' encoders, left and right.
+    pub const OF_ANKLES: [usize; ANKLES] = [JOINTS, JOINTS + 1];
+}
+
 /// Index of each force sensor.
 pub mod force {
     /// Left foot.
@@ -37,6 +47,10 @@ pub mod force {
     pub const LEFT_CRUTCH: usize = 2;
     /// Right crutch.
     pub const RIGHT_CRUTCH: usize = 3;
+    /// The feet's sensors, left and right.
+    pub const FEET: [usize; 2] = [LEFT_FOOT, RIGHT_FOOT];
+    /// The crutches' sensors, left and right.
+    pub const CRUTCHES: [usize; 2] = [LEFT_CRUTCH, RIGHT_CRUTCH];
 }
 
 /// A leg (also: which leg carries the body during a step).

@@ -38,7 +38,8 @@ pub use config::SequencerConfig;
 use gait_core::tables::GaitTable;
 use hold::SetDown;
 pub use input::{
-    Order, Orders, RefuseReason, Sensed, SeqEvent, SeqEvents, SeqInput, SeqRequest, SeqStatus,
+    Measured, Order, Orders, RefuseReason, Sensed, SeqEvent, SeqEvents, SeqInput, SeqRequest,
+    SeqStatus,
 };
 use swing::SwingState;
 pub use tables::{GaitTables, Selection, gait_of_kind};
@@ -241,7 +242,7 @@ impl<'t> Sequencer<'t> {
     /// status and the events of the tick.
     pub fn update<S: Selection>(&mut self, input: &SeqInput<'_, S>) -> Reference {
         let mut events = SeqEvents::default();
-        self.obey(input.orders);
+        self.obey(input.orders, input.braked);
         if let Some((joint, angle)) = input.hold_joint_at {
             self.hold_joint_at(joint, angle);
         }
@@ -256,17 +257,27 @@ impl<'t> Sequencer<'t> {
             Some(SeqRequest::ResetAfterFaults) => self.reset_after_faults(),
             None => {}
         }
-        self.advance(input.sensed, input.selected, input.dt_s, &mut events)
+        let (next_reference, swing, other_share) =
+            self.advance(input.sensed, input.dt_s, &mut events);
+        self.reference_of(
+            next_reference,
+            swing,
+            other_share,
+            input.selected,
+            input.dt_s,
+            events,
+        )
     }
 
-    /// The phase's tick, and the reference's rates and ankle plan.
+    /// The phase's tick: the reference angles, the table's posture while a
+    /// swing plays it, and the other foot's share.
+    #[inline(always)]
     fn advance(
         &mut self,
         sensed: &Sensed,
-        selected: impl Selection,
         dt_s: f32,
         events: &mut SeqEvents,
-    ) -> Reference {
+    ) -> ([f32; JOINTS], Option<swing::Playing>, Option<f32>) {
         // The table's Φ at the swing's time while it plays (stance, t, Φ).
         let mut swing = None;
         let mut other_share = Some(1.0);
@@ -286,6 +297,21 @@ impl<'t> Sequencer<'t> {
                 self.hold_tick(sensed, t_s, dt_s)
             }
         };
+        (next_reference, swing, other_share)
+    }
+
+    /// The whole reference of the tick: `next_reference` with its rates,
+    /// the table's motion while a swing plays it, the ankle plan.
+    #[inline(always)]
+    fn reference_of(
+        &mut self,
+        next_reference: [f32; JOINTS],
+        swing: Option<swing::Playing>,
+        other_share: Option<f32>,
+        selected: impl Selection,
+        dt_s: f32,
+        events: SeqEvents,
+    ) -> Reference {
         let mut rate = [0.0; JOINTS];
         if dt_s > 0.0 {
             for ((r, &n), &o) in rate.iter_mut().zip(&next_reference).zip(&self.reference) {
@@ -329,7 +355,7 @@ impl<'t> Sequencer<'t> {
                 other_share
             },
             status: self.status(),
-            events: *events,
+            events,
         }
     }
 

@@ -14,8 +14,8 @@ use gait_control::faults::InSwing;
 use gait_control::operator::Gait;
 use gait_control::posture::{JOINTS, Side, joints_from_phi};
 use gait_control::sequencer::{
-    GaitTables, Order, Orders, Phase, Reference, RefuseReason, Sensed, SeqEvent, SeqInput,
-    SeqRequest, Sequencer, SequencerConfig,
+    GaitTables, Measured, Order, Orders, Phase, Reference, RefuseReason, Sensed, SeqEvent,
+    SeqInput, SeqRequest, Sequencer, SequencerConfig,
 };
 use gait_core::gait::GaitError;
 use gait_core::ik::IkOptions;
@@ -101,6 +101,7 @@ impl<'t> Rig<'t> {
             selected: Gait::Walk,
             request: self.request.take(),
             orders: &orders,
+            braked: &[false; JOINTS],
             hold_joint_at: None,
             restart: false,
             dt_s: DT,
@@ -128,9 +129,9 @@ impl<'t> Rig<'t> {
     /// the next tick.
     fn order(&mut self, order: Order, measured: [f32; JOINTS]) {
         self.orders.order = order;
-        self.orders.sensed = Sensed {
+        self.orders.measured = Measured {
             joints_rad: measured,
-            ..Sensed::UNKNOWN
+            ..Measured::UNKNOWN
         };
     }
 
@@ -143,7 +144,7 @@ impl<'t> Rig<'t> {
     /// next tick.
     fn rehold(&mut self, i: usize, measured: f32) {
         self.orders.rehold[i] = true;
-        self.orders.sensed.joints_rad[i] = measured;
+        self.orders.measured.joints_rad[i] = measured;
     }
 
     fn start_pose(&self, stance: Side) -> [f32; JOINTS] {
@@ -1013,7 +1014,7 @@ fn after_a_restart_the_foot_found_unloaded_is_set_down() {
             ankles_rad: [0.05, 0.05],
         };
         rig.orders.order = Order::HoldWhereFound;
-        rig.orders.sensed = s;
+        rig.orders.measured = Measured::of(&s);
         rig.step(&s);
         assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
         assert_eq!(rig.seq.status().swing_leg, lifted, "{feet:?}");

@@ -7,7 +7,7 @@
 
 use gait_core::foot::StanceFoot;
 
-use crate::layout::Side;
+use crate::layout::{Side, encoder};
 use crate::posture::{JOINTS, ON_STOP_TOLERANCE_RAD, joint_through_closed_chain};
 
 use super::{BLIND_AFTER_FRAMES, Controller};
@@ -127,7 +127,7 @@ impl Controller<'_> {
         };
         let flat_below =
             StanceFoot::for_model(&self.cfg.model).heel_off_rad - ON_STOP_TOLERANCE_RAD;
-        let ankles = [JOINTS, JOINTS + 1].map(|i| {
+        let ankles = encoder::OF_ANKLES.map(|i| {
             if blind(i) {
                 f32::NAN
             } else {

@@ -7,6 +7,7 @@ use embedded_hal::digital::InputPin;
 use embedded_hal::spi::SpiDevice;
 
 use crate::drivers::buttons::Sample;
+use crate::layout::{encoder, force};
 use crate::posture::JOINTS;
 use crate::sequencer::Sensed;
 use crate::supervisor::{DriveCurrentSense, EncoderSense, EncoderStatus, ForceSense, ForceStatus};
@@ -78,15 +79,13 @@ impl Controller<'_> {
         let joints = self.joint_angles();
         let sensed = Sensed {
             joints_rad: joints,
-            feet_n: [forces_n[0], forces_n[1]],
-            crutches_n: [forces_n[2], forces_n[3]],
+            feet_n: force::FEET.map(|i| forces_n.get(i).copied().unwrap_or(f32::NAN)),
+            crutches_n: force::CRUTCHES.map(|i| forces_n.get(i).copied().unwrap_or(f32::NAN)),
             // This tick's readings (NaN unless the frame was taken): a held
             // last-good value must not count as "ready".
-            ankles_rad: [JOINTS, JOINTS + 1].map(|i| {
-                match (self.last_angle.get(i), taken.get(i)) {
-                    (Some(&a), Some(true)) => a,
-                    _ => f32::NAN,
-                }
+            ankles_rad: encoder::OF_ANKLES.map(|i| match (self.last_angle.get(i), taken.get(i)) {
+                (Some(&a), Some(true)) => a,
+                _ => f32::NAN,
             }),
         };
         Senses {
@@ -238,6 +237,6 @@ impl Controller<'_> {
 
     /// Last good joint angles (joint order).
     fn joint_angles(&self) -> [f32; JOINTS] {
-        [0, 1, 2, 3].map(|i| self.last_angle.get(i).copied().unwrap_or(f32::NAN))
+        encoder::OF_JOINTS.map(|i| self.last_angle.get(i).copied().unwrap_or(f32::NAN))
     }
 }

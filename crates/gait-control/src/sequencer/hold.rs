@@ -8,7 +8,7 @@ use crate::faults::InSwing;
 use crate::posture::{Side, joints_from_phi};
 
 use super::swing::SEARCH_MIN_KNEE_FLEXION_RAD;
-use super::{JOINTS, Order, Orders, Phase, Sensed, Sequencer, pick_finite, smoothstep};
+use super::{JOINTS, Measured, Order, Orders, Phase, Sensed, Sequencer, pick_finite, smoothstep};
 
 /// A swing foot being set down in a safe hold: from where its ankle was
 /// when the hold struck, straight down, a point fixed in the world that
@@ -49,8 +49,8 @@ impl SetDown {
 impl Sequencer<'_> {
     /// The last verdict's orders, in the order the guard gave them: the
     /// e-stop's hold, the joints to hold where they are, the reaction.
-    pub(super) fn obey(&mut self, orders: &Orders) {
-        let measured = &orders.sensed.joints_rad;
+    pub(super) fn obey(&mut self, orders: &Orders, braked: &[bool; JOINTS]) {
+        let measured = &orders.measured.joints_rad;
         if orders.estop_hold {
             self.enter_safe_hold(measured, InSwing::HoldNow);
         }
@@ -62,9 +62,9 @@ impl Sequencer<'_> {
         match orders.order {
             Order::Carry => {}
             Order::FinishStepThenHold => self.block_new_steps(),
-            Order::HoldWhereFound => self.enter_safe_hold_after_restart(measured, &orders.sensed),
+            Order::HoldWhereFound => self.enter_safe_hold_after_restart(measured, &orders.measured),
             Order::SafeHold(asked) => {
-                let in_swing = self.status().in_swing_now(asked, &orders.braked);
+                let in_swing = self.status().in_swing_now(asked, braked);
                 self.enter_safe_hold(measured, in_swing);
             }
             Order::FollowMeasured => self.follow_measured(measured),
@@ -130,7 +130,7 @@ impl Sequencer<'_> {
     /// stance leg (the feed-forward's model, too) and the other is set down
     /// as after a fault in a swing, the stance shank from its ankle's
     /// reading; otherwise a hold of `measured` as [`Sequencer::enter_safe_hold`].
-    fn enter_safe_hold_after_restart(&mut self, measured: &[f32; JOINTS], sensed: &Sensed) {
+    fn enter_safe_hold_after_restart(&mut self, measured: &[f32; JOINTS], sensed: &Measured) {
         if matches!(self.phase, Phase::SafeHold { .. }) {
             return;
         }

@@ -28,16 +28,6 @@ pub struct Sensed {
     pub ankles_rad: [f32; 2],
 }
 
-impl Sensed {
-    /// Nothing known (every reading NaN).
-    pub const UNKNOWN: Self = Self {
-        joints_rad: [f32::NAN; JOINTS],
-        feet_n: [f32::NAN; 2],
-        crutches_n: [f32::NAN; 2],
-        ankles_rad: [f32::NAN; 2],
-    };
-}
-
 /// The operator's word this tick (the clinician's reset once granted).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SeqRequest<S> {
@@ -62,6 +52,8 @@ pub struct SeqInput<'a, S> {
     pub request: Option<SeqRequest<S>>,
     /// The last verdict's orders.
     pub orders: &'a Orders,
+    /// The joints braked (by the last verdict, [`Verdict::braked_joints`]).
+    pub braked: &'a [bool; JOINTS],
     /// A lost hip's or knee's angle the closed chain has just settled on
     /// (joint, rad): a hold keeps that joint there from now on instead of
     /// where it found it (a joint braked while nothing told its angle has
@@ -103,10 +95,39 @@ pub struct Orders {
     pub rehold: [bool; JOINTS],
     /// The reaction.
     pub order: Order,
-    /// Joints braked ([`Verdict::braked_joints`]).
-    pub braked: [bool; JOINTS],
-    /// The readings of the verdict's tick.
-    pub sensed: Sensed,
+    /// What the verdict's tick measured.
+    pub measured: Measured,
+}
+
+/// What a hold needs of the readings of the verdict's tick (the crutches
+/// left out: the controller's state stays under 4 KiB).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measured {
+    /// Joint angles, joint order, rad: the posture a hold holds.
+    pub joints_rad: [f32; JOINTS],
+    /// Foot forces (0 left, 1 right), N.
+    pub feet_n: [f32; 2],
+    /// Ankle dorsiflexion (0 left, 1 right), rad.
+    pub ankles_rad: [f32; 2],
+}
+
+impl Measured {
+    /// Nothing known (every reading NaN).
+    pub const UNKNOWN: Self = Self {
+        joints_rad: [f32::NAN; JOINTS],
+        feet_n: [f32::NAN; 2],
+        ankles_rad: [f32::NAN; 2],
+    };
+
+    /// What a hold needs of `sensed`.
+    #[must_use]
+    pub const fn of(sensed: &Sensed) -> Self {
+        Self {
+            joints_rad: sensed.joints_rad,
+            feet_n: sensed.feet_n,
+            ankles_rad: sensed.ankles_rad,
+        }
+    }
 }
 
 impl Orders {
@@ -115,8 +136,7 @@ impl Orders {
         estop_hold: false,
         rehold: [false; JOINTS],
         order: Order::Carry,
-        braked: [false; JOINTS],
-        sensed: Sensed::UNKNOWN,
+        measured: Measured::UNKNOWN,
     };
 
     /// The orders of `verdict`, given with `sensed` (`estop_hold`: the
@@ -136,8 +156,7 @@ impl Orders {
             estop_hold,
             rehold: verdict.rehold_joints,
             order,
-            braked: verdict.braked_joints,
-            sensed: *sensed,
+            measured: Measured::of(sensed),
         }
     }
 }
@@ -200,7 +219,7 @@ impl SeqStatus {
     /// its next update): what the tick whose verdict gave them reports,
     /// and what the operator and the closed chain see until that update.
     #[must_use]
-    pub fn obeying(&self, orders: &Orders, cfg: &SequencerConfig) -> Self {
+    pub fn obeying(&self, orders: &Orders, braked: &[bool; JOINTS], cfg: &SequencerConfig) -> Self {
         let held = |swing_leg: Option<Side>| Self {
             phase: Phase::SafeHold { t_s: 0.0 },
             swing_leg,
@@ -223,13 +242,13 @@ impl SeqStatus {
             {
                 now
             }
-            Order::SafeHold(asked) => match self.in_swing_now(asked, &orders.braked) {
+            Order::SafeHold(asked) => match self.in_swing_now(asked, braked) {
                 InSwing::LandFirst if self.swinging() => now,
                 InSwing::HoldNow => held(swing_leg),
                 _ => held(None),
             },
             Order::HoldWhereFound => {
-                held(restart_stance(&orders.sensed, cfg.landing_contact_n).map(Side::other))
+                held(restart_stance(&orders.measured, cfg.landing_contact_n).map(Side::other))
             }
             Order::FollowMeasured => Self {
                 phase: Phase::SafeHold {
@@ -281,7 +300,7 @@ impl SeqStatus {
 /// the loaded foot's when the other reads less than a contact (`None`
 /// when both or neither carry, or a sensor cannot tell), and its stance
 /// shank's lean read at its ankle.
-pub(super) fn restart_stance(sensed: &Sensed, contact_n: f32) -> Option<Side> {
+pub(super) fn restart_stance(sensed: &Measured, contact_n: f32) -> Option<Side> {
     let [left, right] = sensed.feet_n;
     let carries = |f: f32| f >= contact_n;
     let lifted = |f: f32| f.is_finite() && f < contact_n;
