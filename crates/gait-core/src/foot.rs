@@ -25,7 +25,7 @@
 //! a(φ1), so (virtual work; M total mass, c the fixed-base centre of mass,
 //! c = Σ_k w_k u(φ_k), u = (sin, cos)):
 //! T'_j = T_j + M w_j u'(φ_j)·ä + [j = 1] M a'(φ1)·(ä + c̈ + g ŷ),
-//! ä = a' φ̈1 + a'' φ̇1². Checked in `tests/toe_rocker.rs` against the
+//! ä = a' φ̈1 + a'' φ̇1². Checked in `tests/integration/toe_rocker.rs` against the
 //! Lagrangian of an explicitly built kinetic energy, by energy conservation
 //! across heel-off, and by the impact maps' conserved momenta.
 
