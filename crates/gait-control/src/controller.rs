@@ -356,28 +356,18 @@ impl<'t> Controller<'t> {
                 .complete_reset(status.safe_posture)
                 .then_some(SeqRequest::ResetAfterFaults),
         };
-        let reference = self.seq.update(&SeqInput {
-            sensed: &s.sensed,
-            selected: self.operator.choice(),
-            request,
-            orders: &self.orders,
-            braked: &self.braked,
-            hold_joint_at: s.chain_hold,
-            restart,
-            dt_s: self.cfg.dt_s,
-        });
-        let mut step = StepEdges::default();
-        for ev in reference.events.iter() {
-            match ev {
-                SeqEvent::SwingStarted(..) => step.began = true,
-                SeqEvent::Stopped => step.ended = true,
-                _ => {}
-            }
-        }
         Planned {
-            reference,
+            reference: self.seq.update(&SeqInput {
+                sensed: &s.sensed,
+                selected: self.operator.choice(),
+                request,
+                orders: &self.orders,
+                braked: &self.braked,
+                hold_joint_at: s.chain_hold,
+                restart,
+                dt_s: self.cfg.dt_s,
+            }),
             operator,
-            step,
         }
     }
 
@@ -491,7 +481,7 @@ impl<'t> Controller<'t> {
         let _ = hw.gait_led.update(fb.gait_led, op.tick);
         let _ = hw.fault_led.update(fb.fault_led, op.tick);
         let _ = hw.buzzer.update(fb.buzzer, op.tick);
-        self.log_crutch_load(s, plan.step, verdict.reaction);
+        self.log_crutch_load(s, plan, verdict.reaction);
         TickReport {
             tick: self.tick,
             joints_rad: s.joints,
@@ -579,12 +569,17 @@ impl<'t> Controller<'t> {
     /// The crutch-load metric: a step's log opens with its swing and closes
     /// when the gait stops or a fatal reaction ends it.
     #[inline(always)]
-    fn log_crutch_load(&mut self, s: &Senses, step: StepEdges, reaction: Reaction) {
-        if step.began {
-            self.crutch.begin_step();
-        }
-        if step.ended {
-            self.crutch.end_step();
+    fn log_crutch_load(&mut self, s: &Senses, plan: &Planned, reaction: Reaction) {
+        for ev in plan.reference.events.iter() {
+            match ev {
+                SeqEvent::SwingStarted(..) => {
+                    self.crutch.begin_step();
+                }
+                SeqEvent::Stopped => {
+                    self.crutch.end_step();
+                }
+                _ => {}
+            }
         }
         let crutches = force::CRUTCHES.map(|i| s.forces_n.get(i).copied().unwrap_or(f32::NAN));
         self.crutch.sample(crutches[0], crutches[1], self.cfg.dt_s);
@@ -621,15 +616,6 @@ struct Planned {
     reference: Reference,
     /// The operator scheme's output (indicators, the selection).
     operator: operator::Output,
-    /// Whether a step's swing began or the gait stopped (for the metric).
-    step: StepEdges,
-}
-
-/// A step's edges this tick, for the crutch-load metric.
-#[derive(Clone, Copy, Debug, Default)]
-struct StepEdges {
-    began: bool,
-    ended: bool,
 }
 
 /// A clinician reset waiting for the supervisor to see the motor drivers'

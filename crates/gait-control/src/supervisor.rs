@@ -5,7 +5,7 @@
 //! never waits: no allocation, no panics, a fixed amount of work per call
 //! (loops only over the fixed-size joint, ankle, sensor and fault arrays).
 //! The fault table, the detection bounds, the reactions and the reset rules
-//! are in `docs/safety.md`; the tests in `tests/supervisor.rs` check one
+//! are in `docs/safety.md`; the tests in `tests/integration/supervisor/` check one
 //! row each.
 //!
 //! # Time
