@@ -35,7 +35,7 @@ use crate::drivers::mcp3208::{
 use crate::drivers::motor::{self, Motor};
 use crate::drivers::status::Indicator;
 use crate::faults::{FaultCode, FaultSet, Reaction};
-use crate::layout::{Side, encoder, force};
+use crate::layout::{Side, force};
 use crate::operator::{self, ControllerStatus, Input, Operator, OperatorConfig, Request};
 use crate::position_loop::{JointGains, JointLoop};
 use crate::posture::JOINTS;
@@ -47,7 +47,7 @@ use crate::sequencer::{
 use crate::supervisor::{MotorSense, Supervisor, SupervisorInput, Verdict};
 
 use act::Actuation;
-use sense::{BAD_ENCODER, Senses};
+use sense::Senses;
 
 pub use crate::layout::{ENCODERS, FORCES};
 /// Points of each force sensor's calibration table.
@@ -430,11 +430,13 @@ impl<'t> Controller<'t> {
             m.limit_nm = g.torque_limit_nm;
         }
         let status = &r.status;
+        // Joints, then ankles (`layout::encoder`).
+        let [j0, j1, j2, j3, left_ankle, right_ankle] = s.encoders;
         let input = SupervisorInput {
             tick: self.tick,
-            joints: encoder::OF_JOINTS.map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
+            joints: [j0, j1, j2, j3],
             joint_reference_rad: r.angle_rad,
-            ankles: encoder::OF_ANKLES.map(|i| s.encoders.get(i).copied().unwrap_or(BAD_ENCODER)),
+            ankles: [left_ankle, right_ankle],
             forces: s.forces,
             motors,
             e_stop_pressed: s.e_stop_pressed,

@@ -190,7 +190,7 @@ impl<T: Real> IkSolver<T> {
     /// A solver for this model with the default tolerance (1e-9 in f64,
     /// 1e-5 in f32, chosen by the scalar's precision).
     pub fn new(model: &BodyModel<T>) -> Self {
-        let tolerance = T::default_epsilon().sqrt() * T::lit(1e-1);
+        let tolerance = T::sqrt_epsilon() * T::lit(1e-1);
         Self {
             l: model.lengths(),
             tolerance,

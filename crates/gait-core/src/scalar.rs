@@ -29,6 +29,11 @@ pub trait Real: RealField + Copy + core::fmt::Debug + PartialOrd {
     /// the target's, and the firmware's commands must equal the host's bit
     /// for bit (`cargo xtask qemu`).
     fn atan2_portable(self, x: Self) -> Self;
+
+    /// √ε of the type, as a constant: the same value as
+    /// `default_epsilon().sqrt()`, which on the M4F is libm's software
+    /// `sqrtf` (some 60 instructions) every time a solver is made.
+    fn sqrt_epsilon() -> Self;
 }
 
 impl Real for f64 {
@@ -52,6 +57,11 @@ impl Real for f64 {
     fn atan2_portable(self, x: Self) -> Self {
         libm::atan2(self, x)
     }
+    #[inline]
+    fn sqrt_epsilon() -> Self {
+        // ε = 2⁻⁵², √ε = 2⁻²⁶ exactly.
+        1.490_116_119_384_765_6e-8
+    }
 }
 
 impl Real for f32 {
@@ -74,6 +84,11 @@ impl Real for f32 {
     #[inline]
     fn atan2_portable(self, x: Self) -> Self {
         libm::atan2f(self, x)
+    }
+    #[inline]
+    fn sqrt_epsilon() -> Self {
+        // ε = 2⁻²³, √ε = 2⁻¹¹·⁵ rounded to f32 (checked against sqrtf).
+        3.452_669_8e-4
     }
 }
 
@@ -151,6 +166,18 @@ pub fn clamp_f32(x: f32, lo: f32, hi: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sqrt_epsilon_is_the_rounded_square_root_of_epsilon() {
+        assert_eq!(f32::sqrt_epsilon(), libm::sqrtf(f32::EPSILON));
+        assert_eq!(f32::sqrt_epsilon(), f32::EPSILON.sqrt());
+        assert_eq!(f64::sqrt_epsilon(), f64::EPSILON.sqrt());
+        fn generic<T: Real>() -> T {
+            T::default_epsilon().sqrt()
+        }
+        assert_eq!(f32::sqrt_epsilon(), generic::<f32>());
+        assert_eq!(f64::sqrt_epsilon(), generic::<f64>());
+    }
 
     #[test]
     fn f32_sin_cos_matches_f64_over_joint_range() {

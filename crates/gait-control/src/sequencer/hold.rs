@@ -50,6 +50,9 @@ impl Sequencer<'_> {
     /// The last verdict's orders, in the order the guard gave them: the
     /// e-stop's hold, the joints to hold where they are, the reaction.
     pub(super) fn obey(&mut self, orders: &Orders, braked: &[bool; JOINTS]) {
+        if orders.order == Order::Carry && !orders.estop_hold && orders.rehold == [false; JOINTS] {
+            return;
+        }
         let measured = &orders.measured.joints_rad;
         if orders.estop_hold {
             self.enter_safe_hold(measured, InSwing::HoldNow);

@@ -131,7 +131,7 @@ impl Sequencer<'_> {
                 let table = self.table.as_ref().copied();
                 self.blend_to =
                     table.map_or(reference, |tb| joints_from_phi(&tb.first(), new_stance));
-                self.transfer = phi_t.and_then(|p| self.plan_transfer(&p, new_stance));
+                self.transfer = phi_t.and_then(|p| self.plan_transfer(&p));
                 self.phase = Phase::Transfer {
                     stance: new_stance,
                     t_s: 0.0,

@@ -19,20 +19,21 @@ use super::{Phase, SeqEvent, SeqEvents, Sequencer, smoothstep};
 /// next step's start posture, and the IK keeps the trailing foot planted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct TransferPlan {
-    /// (x5, y5, φ1, φ3, r2) at the landing and at the next start.
-    from: [f32; 5],
-    to: [f32; 5],
+    /// The landing posture seen from the new stance foot (the links swap
+    /// roles).
+    landing_phi: Phi<f32>,
+    /// (x5, y5, φ1, φ3, r2) at the landing (the end's are the slot's
+    /// [`transfer_targets`]): worked out in the transfer's first tick, not
+    /// in the landing's, which already plays the swing.
+    from: Option<[f32; 5]>,
     /// Joint-angle offset at the landing between the reference and the IK's
     /// reconstruction of it (it decays to zero over the transfer, so the
     /// reference is continuous even where the landing posture lies outside
-    /// the IK's human range). Solved in the transfer's first tick, not in
-    /// the landing's, which already plays the swing: each tick then holds
-    /// at most one IK solve (the tick's budget, `docs/safety.md`).
+    /// the IK's human range). Solved in the transfer's second tick: each
+    /// tick holds at most one IK solve (the tick's budget,
+    /// `docs/safety.md`). The first two ticks hold the landing reference
+    /// (the smoothstep has moved it by some 1e-6 of the way by then).
     offset: Option<[f32; JOINTS]>,
-    /// The landing reference in the new stance's joints (what the first
-    /// tick holds while it solves the offset; the smoothstep has moved it
-    /// by some 1e-6 of the way by then).
-    landing: [f32; JOINTS],
 }
 
 /// (x5, y5, φ1, φ3, r2) of posture `phi`: the swing ankle, the stance shank
@@ -107,24 +108,17 @@ impl Sequencer<'_> {
     }
 
     /// The double-support plan from the reference Φ at landing (old stance
-    /// frame) to the next table's first posture (new stance frame, its
-    /// parameters computed with the tables: [`transfer_targets`]).
-    pub(super) fn plan_transfer(
-        &self,
-        landing_phi: &Phi<f32>,
-        new_stance: Side,
-    ) -> Option<TransferPlan> {
-        let model = self.model.as_ref()?;
-        let ik = self.transfer_ik(model)?;
-        let to = self.transfer_targets.get(self.slot).copied().flatten()?;
-        // The same posture seen from the new stance foot (links swap roles).
-        let mirrored = swap_legs(landing_phi);
-        let from = transfer_params(model, &ik, &mirrored)?;
+    /// frame) to the next table's first posture (its parameters computed
+    /// with the tables: [`transfer_targets`]); `None` without a model, a
+    /// table or the slot's target (the transfer then blends joint angles).
+    pub(super) fn plan_transfer(&self, landing_phi: &Phi<f32>) -> Option<TransferPlan> {
+        self.model.as_ref()?;
+        self.table.as_ref()?;
+        self.transfer_targets.get(self.slot).copied().flatten()?;
         Some(TransferPlan {
-            from,
-            to,
+            landing_phi: swap_legs(landing_phi),
+            from: None,
             offset: None,
-            landing: joints_from_phi(&mirrored, new_stance),
         })
     }
 
@@ -160,33 +154,53 @@ impl Sequencer<'_> {
         let planned = self.transfer.and_then(|plan| {
             let model = self.model.as_ref()?;
             let ik = self.transfer_ik(model)?;
+            let landing = joints_from_phi(&plan.landing_phi, stance);
+            let Some(from) = plan.from else {
+                let from = transfer_params(model, &ik, &plan.landing_phi)?;
+                return Some((landing, Solved::From(from)));
+            };
             let Some(offset) = plan.offset else {
-                let at_landing = self.transfer_joints(&ik, &plan.from, stance)?;
+                let at_landing = self.transfer_joints(&ik, &from, stance)?;
                 let mut offset = [0.0; JOINTS];
-                for ((o, r), a) in offset.iter_mut().zip(&plan.landing).zip(&at_landing) {
+                for ((o, r), a) in offset.iter_mut().zip(&landing).zip(&at_landing) {
                     *o = r - a;
                 }
-                return Some((plan.landing, Some(offset)));
+                return Some((landing, Solved::Offset(offset)));
             };
+            let to = self.transfer_targets.get(self.slot).copied().flatten()?;
             let s = smoothstep(fraction);
-            let mut p = plan.from;
-            for (v, &b) in p.iter_mut().zip(&plan.to) {
+            let mut p = from;
+            for (v, &b) in p.iter_mut().zip(&to) {
                 *v += s * (b - *v);
             }
             let mut joints = self.transfer_joints(&ik, &p, stance)?;
             for (j, &o) in joints.iter_mut().zip(&offset) {
                 *j += (1.0 - s) * o;
             }
-            Some((joints, None))
+            Some((joints, Solved::Nothing))
         });
         match planned {
             Some((joints, solved)) => {
-                if let (Some(offset), Some(plan)) = (solved, self.transfer.as_mut()) {
-                    plan.offset = Some(offset);
+                if let Some(plan) = self.transfer.as_mut() {
+                    match solved {
+                        Solved::From(from) => plan.from = Some(from),
+                        Solved::Offset(offset) => plan.offset = Some(offset),
+                        Solved::Nothing => {}
+                    }
                 }
                 joints
             }
             None => self.blended(fraction),
         }
     }
+}
+
+/// What a transfer tick worked out for the ticks after it.
+enum Solved {
+    /// The landing's parameters (the first tick).
+    From([f32; 5]),
+    /// The landing's offset (the second).
+    Offset([f32; JOINTS]),
+    /// Nothing more: the plan is complete.
+    Nothing,
 }
