@@ -1,7 +1,6 @@
 //! gait-control's integration tests, in one binary (one link, one lint
 //! header): the drivers on mock buses, the clinician buttons, the ring log,
-//! the safety supervisor and its fault table. The sequencer's are in
-//! `tests/sequencer.rs`.
+//! the gait sequencer, the safety supervisor and its fault table.
 // Clippy's allow-*-in-tests covers `#[test]` fns, not the helpers here.
 #![allow(
     clippy::unwrap_used,
@@ -19,4 +18,5 @@ mod mcp3208;
 mod motor;
 mod operator;
 mod ring_log;
+mod sequencer;
 mod supervisor;
