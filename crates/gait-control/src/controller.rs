@@ -452,8 +452,16 @@ impl<'t> Controller<'t> {
         };
         let mut verdict = self.supervisor.check(&input);
         let estop_hold = self.stop_for_estop(&mut verdict, status);
-        self.orders = Orders::from_verdict(&verdict, estop_hold, &s.sensed);
-        self.seq_status = status.obeying(&self.orders, &verdict.braked_joints, &self.cfg.sequencer);
+        if verdict.reaction == Reaction::None && !estop_hold {
+            // Nothing to order (most ticks): no fault latched re-holds a
+            // joint either.
+            self.orders = Orders::NONE;
+            self.seq_status = *status;
+        } else {
+            self.orders = Orders::from_verdict(&verdict, estop_hold, &s.sensed);
+            self.seq_status =
+                status.obeying(&self.orders, &verdict.braked_joints, &self.cfg.sequencer);
+        }
         if verdict.reaction == Reaction::DisableMotors {
             self.loops.iter_mut().for_each(JointLoop::reset);
         }

@@ -216,7 +216,11 @@ impl<'t> Sequencer<'t> {
             gait: self.gait,
             swing_leg: self.swing_leg(),
             airborne_leg: self.airborne_leg(),
-            lands_first_from_s: self.lands_first_from_s(),
+            lands_first_from_s: if matches!(self.phase, Phase::Swing { .. }) {
+                self.swing.lands_first_from_s
+            } else {
+                f32::INFINITY
+            },
         }
     }
 

@@ -67,7 +67,8 @@ impl Sequencer<'_> {
             let start_m = self
                 .planned_swing_toe(start.map(|p| Posture::new(&p)).as_ref())
                 .unwrap_or([0.0; 2]);
-            self.swing.begin(start_m);
+            let lands_first_from_s = self.lands_first_from_s();
+            self.swing.begin(start_m, lands_first_from_s);
             events.push(SeqEvent::SwingStarted(self.gait, stance));
             start.map_or(self.reference, |p| joints_from_phi(&p, stance))
         } else {

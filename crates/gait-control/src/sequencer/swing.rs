@@ -36,6 +36,9 @@ pub(super) struct SwingState {
     /// The table's stance-shank angle φ1 at the last tick of a swing, rad
     /// (a hold's set-down starts from it).
     pub(super) phi1: f32,
+    /// From when in this swing a hold lands the step first, s
+    /// ([`Sequencer::lands_first_from_s`], fixed for the swing).
+    pub(super) lands_first_from_s: f32,
 }
 
 impl SwingState {
@@ -46,12 +49,14 @@ impl SwingState {
         contact_s: 0.0,
         in_landing_window: false,
         phi1: f32::NAN,
+        lands_first_from_s: f32::INFINITY,
     };
 
     /// A swing begins with its swing toe at `start_m` (φ1 stays the last
     /// swing's until the table is first read).
-    pub(super) fn begin(&mut self, start_m: [f32; 2]) {
+    pub(super) fn begin(&mut self, start_m: [f32; 2], lands_first_from_s: f32) {
         self.start_m = start_m;
+        self.lands_first_from_s = lands_first_from_s;
         self.lifted_at_s = None;
         self.in_landing_window = false;
         self.contact_s = 0.0;
@@ -154,9 +159,6 @@ impl Sequencer<'_> {
     /// ([`SeqStatus::in_swing_now`](super::SeqStatus::in_swing_now));
     /// infinite outside a swing or without a table.
     pub(super) fn lands_first_from_s(&self) -> f32 {
-        if !matches!(self.phase, Phase::Swing { .. }) {
-            return f32::INFINITY;
-        }
         let duration = self.table.as_ref().map_or(0.0, |tb| tb.duration_s());
         let slot = transfer::kind_index(self.gait);
         let after = self.cfg.lands_after.get(slot).copied().unwrap_or(1.0);
