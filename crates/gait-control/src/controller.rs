@@ -10,7 +10,7 @@
 //!    feed-forward along the reference (gait-core, f32);
 //! 4. **guard** — the supervisor checks every fact and decides a reaction
 //!    before anything is written;
-//! 5. **write** — motor commands (only after the guard), indicators, the
+//! 5. **write** ([`write`]) — motor commands (only after the guard), indicators, the
 //!    crutch-load metric.
 //!
 //! Bounded: fixed numbers of reads, one table interpolation (three lookups
@@ -20,6 +20,7 @@ mod act;
 mod chain;
 mod estop;
 mod sense;
+mod write;
 
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;
@@ -32,17 +33,16 @@ use crate::drivers::buttons::Button;
 use crate::drivers::mcp3208::{
     Channel, DriveCurrentCalibration, ForceCalibration, ForceChannels, Mcp3208,
 };
-use crate::drivers::motor::{self, Motor};
+use crate::drivers::motor::Motor;
 use crate::drivers::status::Indicator;
 use crate::faults::{FaultCode, FaultSet, Reaction};
-use crate::layout::{Side, force};
+use crate::layout::Side;
 use crate::operator::{self, ControllerStatus, Input, Operator, OperatorConfig, Request};
 use crate::position_loop::{JointGains, JointLoop};
 use crate::posture::JOINTS;
 use crate::reference::Reference;
 use crate::sequencer::{
-    GaitTables, Orders, Phase, SeqEvent, SeqInput, SeqRequest, SeqStatus, Sequencer,
-    SequencerConfig,
+    GaitTables, Orders, Phase, SeqInput, SeqRequest, SeqStatus, Sequencer, SequencerConfig,
 };
 use crate::supervisor::{MotorSense, Supervisor, SupervisorInput, Verdict};
 
@@ -466,139 +466,6 @@ impl<'t> Controller<'t> {
             self.loops.iter_mut().for_each(JointLoop::reset);
         }
         verdict
-    }
-
-    /// Stage 5: motors (enabled only as the verdict allows), indicators,
-    /// the crutch-load metric; the tick's report.
-    #[inline(always)]
-    fn write<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
-        &mut self,
-        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
-        s: &Senses,
-        plan: &Planned,
-        a: &Actuation,
-        verdict: &Verdict,
-    ) -> TickReport
-    where
-        PWM: SetDutyCycle<Error = PwmE>,
-        DIR: OutputPin<Error = PinE>,
-        EN: OutputPin<Error = PinE>,
-        OUT: OutputPin,
-    {
-        let written = self.write_motors(hw, &a.command_nm, verdict);
-        let op = &plan.operator;
-        let fb = op.feedback;
-        let _ = hw.gait_led.update(fb.gait_led, op.tick);
-        let _ = hw.fault_led.update(fb.fault_led, op.tick);
-        let _ = hw.buzzer.update(fb.buzzer, op.tick);
-        self.log_crutch_load(s, plan, verdict.reaction);
-        TickReport {
-            tick: self.tick,
-            joints_rad: s.joints,
-            reference_rad: plan.reference.angle_rad,
-            feedforward_nm: a.feedforward_nm,
-            command_nm: written,
-            forces_n: s.forces_n,
-            phase: self.seq_status.phase,
-            reaction: verdict.reaction,
-            faults: verdict.latched,
-            motors_enabled: self.motors_enabled,
-        }
-    }
-
-    /// Enables or disables the motors as the verdict allows (every one
-    /// for its reaction, one by one for the braked joints) and writes the
-    /// commands; returns what the drivers applied (0 when disabled).
-    #[inline(always)]
-    fn write_motors<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
-        &mut self,
-        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
-        command: &[f32; JOINTS],
-        verdict: &Verdict,
-    ) -> [f32; JOINTS]
-    where
-        PWM: SetDutyCycle<Error = PwmE>,
-        DIR: OutputPin<Error = PinE>,
-        EN: OutputPin<Error = PinE>,
-    {
-        let enable = verdict.reaction < Reaction::DisableMotors;
-        if enable && !self.motors_enabled {
-            let mut all_ok = true;
-            for (m, &braked) in hw.motors.iter_mut().zip(&verdict.braked_joints) {
-                if !braked {
-                    all_ok &= m.enable().is_ok();
-                }
-            }
-            self.motors_enabled = all_ok;
-            self.loops.iter_mut().for_each(JointLoop::reset);
-        } else if !enable && self.motors_enabled {
-            for m in hw.motors.iter_mut() {
-                let _ = m.disable();
-            }
-            self.motors_enabled = false;
-        }
-        let mut written = [0.0f32; JOINTS];
-        for (i, m) in hw.motors.iter_mut().enumerate() {
-            let braked = verdict.braked_joints.get(i).copied().unwrap_or(false);
-            if let Some(was) = self.braked.get_mut(i) {
-                if braked && !*was {
-                    let _ = m.disable();
-                } else if !braked && *was && self.motors_enabled {
-                    // Released by a reset: back on, from a fresh loop.
-                    let _ = m.enable();
-                    if let Some(lp) = self.loops.get_mut(i) {
-                        lp.reset();
-                    }
-                }
-                *was = braked;
-            }
-            let on = self.motors_enabled && !braked;
-            let cmd = if on {
-                command.get(i).copied().unwrap_or(0.0)
-            } else {
-                0.0
-            };
-            let sense = self.motor_sense.get_mut(i);
-            let result = m.update(cmd);
-            if let Some(s) = sense {
-                s.enabled = on && m.at_full_authority();
-                s.thermal_fault = matches!(result, Err(motor::Error::Thermal));
-                s.output_fault = matches!(
-                    result,
-                    Err(motor::Error::OutputFault | motor::Error::Pwm(_) | motor::Error::Pin(_))
-                );
-                s.applied_nm = result.as_ref().map_or(0.0, |r| r.applied_nm);
-                if let Some(w) = written.get_mut(i) {
-                    *w = s.applied_nm;
-                }
-            }
-        }
-        written
-    }
-
-    /// The crutch-load metric: a step's log opens with its swing and closes
-    /// when the gait stops or a fatal reaction ends it.
-    #[inline(always)]
-    fn log_crutch_load(&mut self, s: &Senses, plan: &Planned, reaction: Reaction) {
-        for ev in plan.reference.events.iter() {
-            match ev {
-                SeqEvent::SwingStarted(..) => {
-                    self.crutch.begin_step();
-                }
-                SeqEvent::Stopped => {
-                    self.crutch.end_step();
-                }
-                _ => {}
-            }
-        }
-        let crutches = force::CRUTCHES.map(|i| s.forces_n.get(i).copied().unwrap_or(f32::NAN));
-        self.crutch.sample(crutches[0], crutches[1], self.cfg.dt_s);
-        if self.seq_status.at_rest()
-            && self.crutch.current().is_some()
-            && reaction >= Reaction::SafeHold
-        {
-            self.crutch.end_step();
-        }
     }
 
     /// Standing still with both crutches loaded: a reset cannot surprise.
