@@ -100,13 +100,13 @@ impl Controller<'_> {
                 adjusted = g.with_stiffness(1.0 - DOUBLE_SUPPORT_COMPLIANCE * carried);
                 (
                     &adjusted,
-                    s.joints.get(i).copied().unwrap_or(f32::NAN),
+                    s.sensed.joints_rad.get(i).copied().unwrap_or(f32::NAN),
                     self.rate.get(i).copied().unwrap_or(0.0),
                 )
             } else {
                 (
                     g,
-                    s.joints.get(i).copied().unwrap_or(f32::NAN),
+                    s.sensed.joints_rad.get(i).copied().unwrap_or(f32::NAN),
                     self.rate.get(i).copied().unwrap_or(0.0),
                 )
             };
@@ -275,7 +275,11 @@ impl Controller<'_> {
             .unwrap_or(f32::NAN);
         let other_flat = reading(other) < on_stop;
         if !blind(other) && other_flat && other_load >= self.cfg.sequencer.landing_contact_n {
-            crate::posture::stance_phi1_through_other_leg(&s.joints, reading(other), r.stance)
+            crate::posture::stance_phi1_through_other_leg(
+                &s.sensed.joints_rad,
+                reading(other),
+                r.stance,
+            )
         } else if planned.is_finite() {
             planned
         } else {

@@ -29,9 +29,6 @@ pub(super) struct Senses {
     /// read failed.
     pub e_stop_pressed: bool,
     pub e_stop_read_error: bool,
-    /// Last good joint angles (joint order), rad; a lost encoder's from
-    /// the closed chain when it gives it.
-    pub joints: [f32; JOINTS],
     /// Joints whose angle (and rate) comes from the closed chain this
     /// tick ([`Controller::close_chain`]).
     pub chain_closed: [bool; JOINTS],
@@ -41,7 +38,9 @@ pub(super) struct Senses {
     pub lost: [bool; JOINTS],
     /// Calibrated forces (NaN if faulted), N.
     pub forces_n: [f32; FORCES],
-    /// What the sequencer needs of it.
+    /// What the sequencer needs of it. Its joints are the last good
+    /// angles (joint order, rad), a lost encoder's from the closed chain
+    /// when it gives it: what control and the holds use.
     pub sensed: Sensed,
 }
 
@@ -96,7 +95,6 @@ impl Controller<'_> {
             go,
             e_stop_pressed,
             e_stop_read_error,
-            joints,
             chain_closed,
             chain_hold,
             lost,

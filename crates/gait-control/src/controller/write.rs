@@ -44,7 +44,7 @@ impl Controller<'_> {
         self.log_crutch_load(s, plan, verdict.reaction);
         TickReport {
             tick: self.tick,
-            joints_rad: s.joints,
+            joints_rad: s.sensed.joints_rad,
             reference_rad: plan.reference.angle_rad,
             feedforward_nm: a.feedforward_nm,
             command_nm: written,
