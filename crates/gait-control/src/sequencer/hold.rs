@@ -66,6 +66,8 @@ impl Sequencer<'_> {
             Order::Carry => {}
             Order::FinishStepThenHold => self.block_new_steps(),
             Order::HoldWhereFound => self.enter_safe_hold_after_restart(measured, &orders.measured),
+            // Held already (every tick of a hold): nothing to decide.
+            Order::SafeHold(_) if matches!(self.phase, Phase::SafeHold { .. }) => {}
             Order::SafeHold(asked) => {
                 let in_swing = self.status().in_swing_now(asked, braked);
                 self.enter_safe_hold(measured, in_swing);
