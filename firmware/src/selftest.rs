@@ -6,6 +6,7 @@
 //! dynamics), so a miscompiled or mislinked image fails here rather than in a
 //! pilot's step.
 
+use gait_core::dynamics::Contact::FixedAnkle;
 use gait_core::dynamics::{energy, forward_dynamics, inverse_dynamics, rk4_step};
 use gait_core::kinematics::{forward_kinematics, phi_from_theta, theta_from_phi};
 use gait_core::scalar::sin_cos_f32;
@@ -66,14 +67,14 @@ pub fn run() -> [Check; CHECKS] {
     }
 
     // 4. Inverse dynamics: f32 against f64, relative to the largest torque.
-    let t64 = inverse_dynamics(&m64, &PHI, &DPHI, &DDPHI);
-    let t32 = inverse_dynamics(&m32, &f32s(PHI), &f32s(DPHI), &f32s(DDPHI));
+    let t64 = inverse_dynamics(&m64, &FixedAnkle, &PHI, &DPHI, &DDPHI);
+    let t32 = inverse_dynamics(&m32, &FixedAnkle, &f32s(PHI), &f32s(DPHI), &f32s(DDPHI));
     let scale = t64.iter().fold(1.0_f64, |a, &t| a.max(t.abs()));
     let t32d = t32.map(f64::from);
     let id_err = max_abs_diff(&t32d, &t64) / scale;
 
     // 5. Forward dynamics inverts inverse dynamics (f64).
-    let dd = forward_dynamics(&m64, &PHI, &DPHI, &t64).unwrap_or([f64::NAN; LINKS]);
+    let dd = forward_dynamics(&m64, &FixedAnkle, &PHI, &DPHI, &t64).unwrap_or([f64::NAN; LINKS]);
     let fd_err = max_abs_diff(&dd, &DDPHI);
 
     // 6. Energy of the free chain over 0.2 s of RK4 in f32 (relative drift).
@@ -140,13 +141,13 @@ fn max_abs_diff(a: &[f64; LINKS], b: &[f64; LINKS]) -> f64 {
 /// RK4 of the unforced chain; returns |E_end − E_0| / |E_0|.
 fn free_energy_drift_f32(m: &BodyModel<f32>, mut q: [f32; LINKS], mut w: [f32; LINKS]) -> f64 {
     let zero = [0.0_f32; LINKS];
-    let e0 = f64::from(energy(m, &q, &w));
+    let e0 = f64::from(energy(m, &FixedAnkle, &q, &w));
     for _ in 0..200 {
-        match rk4_step(m, &q, &w, &zero, 0.001) {
+        match rk4_step(m, &FixedAnkle, &q, &w, &zero, 0.001) {
             Ok((q1, w1)) => (q, w) = (q1, w1),
             Err(_) => return f64::NAN,
         }
     }
-    let e1 = f64::from(energy(m, &q, &w));
+    let e1 = f64::from(energy(m, &FixedAnkle, &q, &w));
     ((e1 - e0) / e0).abs()
 }

@@ -4,9 +4,9 @@
 //! `null`).
 
 use gait_core::BodyModel;
+use gait_core::dynamics::{Contact, inverse_dynamics};
 use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::kinematics::{forward_kinematics, joint_torques};
-use gait_core::mechanics::inverse_dynamics;
 use serde::{Deserialize, Serialize};
 
 /// Five values, one per link.
@@ -72,7 +72,7 @@ fn check_finite<'a>(fields: impl IntoIterator<Item = (&'a str, &'a [f64])>) -> R
 /// Inverse dynamics T_Φ and the joint torques T_Θ = Aᵀ T_Φ.
 pub fn dynamics(model: &BodyModel<f64>, r: DynamicsRequest) -> Result<DynamicsResponse, String> {
     check_finite([("phi", &r.phi[..]), ("dphi", &r.dphi), ("ddphi", &r.ddphi)])?;
-    let t_phi = inverse_dynamics(model, None, &r.phi, &r.dphi, &r.ddphi);
+    let t_phi = inverse_dynamics(model, &Contact::FixedAnkle, &r.phi, &r.dphi, &r.ddphi);
     let t_theta = joint_torques(&t_phi);
     check_finite([("t_phi", &t_phi[..]), ("t_theta", &t_theta)])
         .map_err(|e| format!("result overflowed: {e}"))?;

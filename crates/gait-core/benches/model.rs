@@ -8,6 +8,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use gait_core::dynamics::Contact::{FixedAnkle, ToeRocker};
 use gait_core::dynamics::{inverse_dynamics, share_load};
 use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::problem::{PaperCase, PaperProblem};
@@ -31,17 +32,25 @@ fn per_sample<T: Real>(c: &mut Criterion, name: &str) {
         b.iter(|| ik.solve(black_box(&target)))
     });
     c.bench_function(&format!("inverse_dynamics_{name}"), |b| {
-        b.iter(|| inverse_dynamics(&m, black_box(&phi), black_box(&w), black_box(&a)))
+        b.iter(|| {
+            inverse_dynamics(
+                &m,
+                &FixedAnkle,
+                black_box(&phi),
+                black_box(&w),
+                black_box(&a),
+            )
+        })
     });
     // The stance heel up (stair descent): the toe rocker's dynamics.
-    let foot = gait_core::foot::StanceFoot::for_model(&m);
+    let rocker = ToeRocker(gait_core::foot::StanceFoot::for_model(&m));
     let mut on_toe = phi;
     on_toe[0] = l(0.6);
     c.bench_function(&format!("toe_rocker_inverse_dynamics_{name}"), |b| {
         b.iter(|| {
-            gait_core::foot::inverse_dynamics(
+            inverse_dynamics(
                 &m,
-                &foot,
+                &rocker,
                 black_box(&on_toe),
                 black_box(&w),
                 black_box(&a),
@@ -50,12 +59,20 @@ fn per_sample<T: Real>(c: &mut Criterion, name: &str) {
     });
     let single = [-208.0, -208.0, 5.0, 5.0, -2.0].map(l);
     c.bench_function(&format!("share_load_{name}"), |b| {
-        b.iter(|| share_load(&m, black_box(&phi), black_box(&single), l(912.0)))
+        b.iter(|| {
+            share_load(
+                &m,
+                &FixedAnkle,
+                black_box(&phi),
+                black_box(&single),
+                l(912.0),
+            )
+        })
     });
     c.bench_function(&format!("ik_plus_inverse_dynamics_{name}"), |b| {
         b.iter(|| {
             let sol = ik.solve(black_box(&target)).unwrap();
-            inverse_dynamics(&m, &sol.phi, black_box(&w), black_box(&a))
+            inverse_dynamics(&m, &FixedAnkle, &sol.phi, black_box(&w), black_box(&a))
         })
     });
 }

@@ -1,21 +1,65 @@
-//! Lagrangian dynamics of the 5-link chain in absolute angles
-//! (paper section III-A, eq. (solution)–(sol2), with the corrected `p_ij`).
+//! The chain's dynamics, one API with the stance foot's contact as an
+//! argument (as pinocchio takes contacts): [`Contact::FixedAnkle`] is the
+//! paper's foot, the stance ankle pinned to the ground; a
+//! [`Contact::ToeRocker`] is the device's, whose heel lifts past the
+//! ankle's stop so that the chain rolls on the toe (equal to the paper's
+//! while the foot is flat). The optimiser, the playback model, the
+//! controller's feed-forward and the simulator's plant call these, so none
+//! of them picks between two families of functions itself.
 //!
-//! T_Φ = D(Φ) Φ̈ + H(Φ, Φ̇) Φ̇ + G(Φ), with
-//! D_ij = p_ij cos(φ_i − φ_j), H_ij = p_ij sin(φ_i − φ_j) φ̇_j, G_i = −g_i sin φ_i.
-//!
-//! Only five sine/cosine pairs are evaluated per call; the pairwise
-//! differences use cos(a−b) = cos a cos b + sin a sin b and
-//! sin(a−b) = sin a cos b − cos a sin b.
+//! The implementations are private: `pinned` (paper section III-A) and
+//! `rocker` (`docs/model.md`, "Toe rocker"). The dispatchers below are
+//! `#[inline]`: a caller whose contact is a constant (the control tick's
+//! toe rocker) then pays no runtime match.
 
 use nalgebra::{SMatrix, SVector};
 
+use crate::foot::StanceFoot;
 use crate::kinematics::{Phi, Posture, joint_torques};
 use crate::model::{BodyModel, LINKS};
 use crate::scalar::Real;
 
+mod pinned;
+mod rocker;
+
+pub use rocker::contact_switch_velocities;
+
 /// Generalised forces conjugate to the absolute angles, N·m.
 pub type TPhi<T> = [T; LINKS];
+
+/// How the stance foot meets the ground: what the chain turns about.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Contact<T> {
+    /// The paper's: the stance ankle a fixed pivot, the foot flat.
+    FixedAnkle,
+    /// The device's: the ankle pivots until its stop, then the heel lifts
+    /// and the chain turns about the toe.
+    ToeRocker(StanceFoot<T>),
+}
+
+impl<T> Contact<T> {
+    /// The toe rocker's foot, if this is one.
+    pub fn stance_foot(&self) -> Option<&StanceFoot<T>> {
+        match self {
+            Self::FixedAnkle => None,
+            Self::ToeRocker(foot) => Some(foot),
+        }
+    }
+}
+
+/// `None` (no foot configured) is the fixed ankle.
+impl<T> From<Option<StanceFoot<T>>> for Contact<T> {
+    fn from(foot: Option<StanceFoot<T>>) -> Self {
+        foot.map_or(Self::FixedAnkle, Self::ToeRocker)
+    }
+}
+
+impl<T> From<StanceFoot<T>> for Contact<T> {
+    fn from(foot: StanceFoot<T>) -> Self {
+        Self::ToeRocker(foot)
+    }
+}
 
 /// Why forward dynamics could not produce accelerations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,117 +83,8 @@ pub struct DynamicsTerms<T: Real> {
     pub g: SVector<T, LINKS>,
 }
 
-/// Evaluates D(Φ), H(Φ, Φ̇)Φ̇ and G(Φ) (eq. (sol1)).
-pub fn terms<T: Real>(model: &BodyModel<T>, phi: &Phi<T>, dphi: &Phi<T>) -> DynamicsTerms<T> {
-    let sc = phi.map(|x| x.sin_cos_fast());
-    let p = model.p();
-    let gc = model.g();
-    let mut d = SMatrix::<T, LINKS, LINKS>::zeros();
-    let mut h = SVector::<T, LINKS>::zeros();
-    let mut g = SVector::<T, LINKS>::zeros();
-    // D is symmetric, so filling its column-major storage row by row is the
-    // same as filling it column by column.
-    let mut d_cells = d.iter_mut();
-    for ((((&(si, ci), prow), hi), gi), &g_coef) in
-        sc.iter().zip(p).zip(h.iter_mut()).zip(g.iter_mut()).zip(gc)
-    {
-        let mut acc = T::zero();
-        for ((&(sj, cj), &pij), &wj) in sc.iter().zip(prow).zip(dphi) {
-            let cos_ij = ci * cj + si * sj;
-            let sin_ij = si * cj - ci * sj;
-            if let Some(cell) = d_cells.next() {
-                *cell = pij * cos_ij;
-            }
-            acc += pij * sin_ij * wj * wj;
-        }
-        *hi = acc;
-        *gi = -g_coef * si;
-    }
-    DynamicsTerms { d, h_dphi: h, g }
-}
-
-/// Eq. (solution): inverse dynamics T_Φ = D Φ̈ + H Φ̇ + G.
-///
-/// This is the control loop's feed-forward, so it skips the matrices:
-/// T_i = Σ_j p_ij [cos(φ_i − φ_j) φ̈_j + sin(φ_i − φ_j) φ̇_j²] − g_i sin φ_i,
-/// from five sine/cosine pairs (fixed-size loops the compiler unrolls).
-/// Cross-checked against [`terms`] and against an independent Lagrangian
-/// derivation in the tests.
-pub fn inverse_dynamics<T: Real>(
-    model: &BodyModel<T>,
-    phi: &Phi<T>,
-    dphi: &Phi<T>,
-    ddphi: &Phi<T>,
-) -> TPhi<T> {
-    inverse_dynamics_at(model, &Posture::new(phi), dphi, ddphi)
-}
-
-/// [`inverse_dynamics`] at a posture whose sines are known.
-pub fn inverse_dynamics_at<T: Real>(
-    model: &BodyModel<T>,
-    posture: &Posture<T>,
-    dphi: &Phi<T>,
-    ddphi: &Phi<T>,
-) -> TPhi<T> {
-    let sc = &posture.sin_cos;
-    let w2 = dphi.map(|w| w * w);
-    // cos(φi − φj) and sin(φi − φj) once per pair: the products commute
-    // exactly in floating point, so cos_ji = cos_ij and sin_ji = −sin_ij
-    // bit for bit, and the sums below are the ones of the full 5 × 5 loop.
-    let mut cos = [[T::zero(); LINKS]; LINKS];
-    let mut sin = [[T::zero(); LINKS]; LINKS];
-    let put = |m: &mut [[T; LINKS]; LINKS], a: usize, b: usize, v: T| {
-        if let Some(cell) = m.get_mut(a).and_then(|row| row.get_mut(b)) {
-            *cell = v;
-        }
-    };
-    for (i, &(si, ci)) in sc.iter().enumerate() {
-        for (j, &(sj, cj)) in sc.iter().enumerate().skip(i) {
-            let c = ci * cj + si * sj;
-            let s = si * cj - ci * sj;
-            put(&mut cos, i, j, c);
-            put(&mut cos, j, i, c);
-            put(&mut sin, j, i, -s);
-            put(&mut sin, i, j, s);
-        }
-    }
-    let mut out = [T::zero(); LINKS];
-    let rows = out.iter_mut().zip(sc).zip(model.p()).zip(model.g());
-    for ((((o, &(si, _)), prow), &gi), (cos_i, sin_i)) in rows.zip(cos.iter().zip(&sin)) {
-        let mut acc = -gi * si;
-        for ((((&pij, &aj), &wj2), &cos_ij), &sin_ij) in
-            prow.iter().zip(ddphi).zip(&w2).zip(cos_i).zip(sin_i)
-        {
-            acc += pij * (cos_ij * aj + sin_ij * wj2);
-        }
-        *o = acc;
-    }
-    out
-}
-
-/// Eq. (solution) then eq. (hehe): joint torques T_Θ = Aᵀ T_Φ.
-pub fn inverse_dynamics_joint<T: Real>(
-    model: &BodyModel<T>,
-    phi: &Phi<T>,
-    dphi: &Phi<T>,
-    ddphi: &Phi<T>,
-) -> [T; LINKS] {
-    joint_torques(&inverse_dynamics(model, phi, dphi, ddphi))
-}
-
-/// The stance-ankle torque T_θ1 = −Σ_i T_φi, the quantity the paper minimises.
-pub fn ankle_torque<T: Real>(
-    model: &BodyModel<T>,
-    phi: &Phi<T>,
-    dphi: &Phi<T>,
-    ddphi: &Phi<T>,
-) -> T {
-    let t = inverse_dynamics(model, phi, dphi, ddphi);
-    -t.iter().fold(T::zero(), |acc, &x| acc + x)
-}
-
 /// Holding a posture with both feet on the ground: the ground force on the
-/// swing ankle and the joint torques that go with it.
+/// swing foot and the joint torques that go with it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DoubleSupportStatics<T> {
     /// Ground reaction on the swing (second) foot, (x, y), N.
@@ -166,25 +101,6 @@ pub struct DoubleSupportStatics<T> {
 /// the load in double support (a conservative value for a rubber sole).
 pub const FOOT_FRICTION: f64 = 0.5;
 
-/// Statics of a double-support posture Φ at rest: the chain is held by the
-/// stance ankle and by a ground force F on the swing ankle, so the joint
-/// torques are T_Θ(F) = Aᵀ (G_req(Φ) − Jᵀ F) with J = ∂p5/∂Φ. One posture,
-/// many F: [`share_load`] picks the least-effort one.
-///
-/// Why: with the single-stance model the whole body hangs on the stance
-/// knee; at the stair-ascent start posture (stance knee 43°) that is
-/// 208 N·m, more than the drives have, while the straight trailing leg
-/// could carry most of it.
-pub fn double_support_statics<T: Real>(
-    model: &BodyModel<T>,
-    phi: &Phi<T>,
-    max_load_n: T,
-) -> DoubleSupportStatics<T> {
-    let zero = [T::zero(); LINKS];
-    let single = joint_torques(&inverse_dynamics(model, phi, &zero, &zero));
-    share_load(model, phi, &single, max_load_n)
-}
-
 /// How much more a newton-metre at the stance ankle counts than one at a
 /// motor when the load is shared between the feet: the ankle torque is the
 /// pilot's, carried by the shoulders through the crutches, while the hip and
@@ -193,6 +109,127 @@ pub fn double_support_statics<T: Real>(
 /// the drives can take it; the drives' own limits are the table
 /// generator's business (docs/model.md, "Load sharing").
 pub const ANKLE_EFFORT_WEIGHT: f64 = 25.0;
+
+/// D(Φ), H(Φ, Φ̇)Φ̇ and G(Φ) on `contact` (eq. (sol1) for the fixed ankle).
+#[inline]
+pub fn terms<T: Real>(
+    model: &BodyModel<T>,
+    contact: &Contact<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+) -> DynamicsTerms<T> {
+    match contact {
+        Contact::FixedAnkle => pinned::terms(model, phi, dphi),
+        Contact::ToeRocker(foot) => rocker::terms(model, foot, phi, dphi),
+    }
+}
+
+/// Eq. (solution): the generalised forces T_Φ = D Φ̈ + H Φ̇ + G that
+/// produce Φ̈ at (Φ, Φ̇) on `contact`. The control loop's feed-forward, so
+/// it skips the matrices (five sine/cosine pairs); cross-checked against
+/// [`terms`] and an independent Lagrangian derivation in the tests.
+#[inline]
+pub fn inverse_dynamics<T: Real>(
+    model: &BodyModel<T>,
+    contact: &Contact<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> TPhi<T> {
+    inverse_dynamics_at(model, contact, &Posture::new(phi), dphi, ddphi)
+}
+
+/// [`inverse_dynamics`] at a posture whose sines are known (the control
+/// tick shares them with the load sharing and the swing foot's position).
+#[inline]
+pub fn inverse_dynamics_at<T: Real>(
+    model: &BodyModel<T>,
+    contact: &Contact<T>,
+    posture: &Posture<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> TPhi<T> {
+    match contact {
+        Contact::FixedAnkle => pinned::inverse_dynamics_at(model, posture, dphi, ddphi),
+        Contact::ToeRocker(foot) => rocker::inverse_dynamics_at(model, foot, posture, dphi, ddphi),
+    }
+}
+
+/// Eq. (solution) then eq. (hehe): joint torques T_Θ = Aᵀ T_Φ.
+pub fn inverse_dynamics_joint<T: Real>(
+    model: &BodyModel<T>,
+    contact: &Contact<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> [T; LINKS] {
+    joint_torques(&inverse_dynamics(model, contact, phi, dphi, ddphi))
+}
+
+/// The torque about the stance pivot T_θ1 = −Σ_i T_φi (the stance ankle's,
+/// or the toe's once the heel is up): the quantity the paper minimises.
+pub fn ankle_torque<T: Real>(
+    model: &BodyModel<T>,
+    contact: &Contact<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    ddphi: &Phi<T>,
+) -> T {
+    let t = inverse_dynamics(model, contact, phi, dphi, ddphi);
+    -t.iter().fold(T::zero(), |acc, &x| acc + x)
+}
+
+/// Φ̈ = D⁻¹ (T_Φ − H Φ̇ − G) under the generalised forces `t_phi` at
+/// (Φ, Φ̇) on `contact`, by Cholesky (D is symmetric positive definite for
+/// any valid model). NaN or infinite inputs are an error.
+#[inline]
+pub fn forward_dynamics<T: Real>(
+    model: &BodyModel<T>,
+    contact: &Contact<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+    t_phi: &TPhi<T>,
+) -> Result<Phi<T>, DynamicsError> {
+    match contact {
+        Contact::FixedAnkle => pinned::forward_dynamics(model, phi, dphi, t_phi),
+        Contact::ToeRocker(foot) => rocker::forward_dynamics(model, foot, phi, dphi, t_phi),
+    }
+}
+
+/// Kinetic plus gravitational energy on `contact` (heights from the flat
+/// foot's ankle), J. Used to check that the free dynamics conserve it.
+#[inline]
+pub fn energy<T: Real>(
+    model: &BodyModel<T>,
+    contact: &Contact<T>,
+    phi: &Phi<T>,
+    dphi: &Phi<T>,
+) -> T {
+    match contact {
+        Contact::FixedAnkle => pinned::energy(model, phi, dphi),
+        Contact::ToeRocker(foot) => rocker::energy(model, foot, phi, dphi),
+    }
+}
+
+/// Statics of a double-support posture Φ at rest: the chain is held by the
+/// stance foot and by a ground force F on the second foot, so the joint
+/// torques are T_Θ(F) = Aᵀ (G_req(Φ) − Jᵀ F). One posture, many F:
+/// [`share_load`] picks the least-effort one.
+///
+/// Why: with the single-stance model the whole body hangs on the stance
+/// knee; at the stair-ascent start posture (stance knee 43°) that is
+/// 208 N·m, more than the drives have, while the straight trailing leg
+/// could carry most of it.
+pub fn double_support_statics<T: Real>(
+    model: &BodyModel<T>,
+    contact: &Contact<T>,
+    phi: &Phi<T>,
+    max_load_n: T,
+) -> DoubleSupportStatics<T> {
+    let zero = [T::zero(); LINKS];
+    let single = joint_torques(&inverse_dynamics(model, contact, phi, &zero, &zero));
+    share_load(model, contact, phi, &single, max_load_n)
+}
 
 /// Given the joint torques `single` that a motion needs with the stance
 /// foot alone (T_Θ from [`inverse_dynamics`]), the ground force F on the
@@ -204,247 +241,90 @@ pub const ANKLE_EFFORT_WEIGHT: f64 = 25.0;
 /// F is kept physical: pushing (F_y ≥ 0), at most `max_load_n`, inside the
 /// friction cone |F_x| ≤ μ F_y. When a bound is active the other component
 /// is re-optimised on it (the box/cone minimum of a convex quadratic in two
-/// unknowns, found exactly: interior, then each active edge).
+/// unknowns, found exactly: interior, then each active edge). On the toe
+/// rocker the force also acts through the stance ankle's motion about its
+/// toe, and at the second foot's toe when that foot stands on it.
+#[inline]
 pub fn share_load<T: Real>(
     model: &BodyModel<T>,
+    contact: &Contact<T>,
     phi: &Phi<T>,
     single: &[T; LINKS],
     max_load_n: T,
 ) -> DoubleSupportStatics<T> {
-    let zero = [T::zero(); 2];
-    share_load_with_base(model, phi, single, max_load_n, zero, zero)
+    share_load_at(model, contact, &Posture::new(phi), single, max_load_n)
+}
+
+/// [`share_load`] at a posture whose sines are known.
+#[inline]
+pub fn share_load_at<T: Real>(
+    model: &BodyModel<T>,
+    contact: &Contact<T>,
+    posture: &Posture<T>,
+    single: &[T; LINKS],
+    max_load_n: T,
+) -> DoubleSupportStatics<T> {
+    match contact {
+        Contact::FixedAnkle => {
+            let zero = [T::zero(); 2];
+            pinned::share_load_with_base_at(model, posture, single, max_load_n, zero, zero)
+        }
+        Contact::ToeRocker(foot) => rocker::share_load_at(model, foot, posture, single, max_load_n),
+    }
 }
 
 /// The joint torques T_Θ that a unit ground force on the second foot takes
 /// away, for a force along x and along y: Aᵀ Jᵀ e_x and Aᵀ Jᵀ e_y, with J
-/// the Jacobian of the second foot's contact point (its ankle, moved by the
-/// stance ankle's `base_d1` = ∂ankle/∂φ1 and by `swing_d5` = ∂contact/∂φ5
-/// beyond the ankle). A force F there changes the joint torques a motion
-/// needs by −(Fx·mx + Fy·my).
+/// the Jacobian of the second foot's contact point. A force F there changes
+/// the joint torques a motion needs by −(Fx·mx + Fy·my).
+#[inline]
 pub fn second_foot_torques<T: Real>(
     model: &BodyModel<T>,
+    contact: &Contact<T>,
     phi: &Phi<T>,
-    base_d1: [T; 2],
-    swing_d5: [T; 2],
 ) -> ([T; LINKS], [T; LINKS]) {
-    second_foot_torques_at(model, &Posture::new(phi), base_d1, swing_d5)
+    second_foot_torques_at(model, contact, &Posture::new(phi))
 }
 
 /// [`second_foot_torques`] at a posture whose sines are known.
+#[inline]
 pub fn second_foot_torques_at<T: Real>(
     model: &BodyModel<T>,
+    contact: &Contact<T>,
     posture: &Posture<T>,
-    base_d1: [T; 2],
-    swing_d5: [T; 2],
 ) -> ([T; LINKS], [T; LINKS]) {
-    let l = model.lengths();
-    // Jᵀ e_x and Jᵀ e_y: ∂p5/∂φ_i = l_i (cos φ_i, −sin φ_i) for the links
-    // between the stance ankle and the swing ankle (not the torso).
-    let mut jx = [T::zero(); LINKS];
-    let mut jy = [T::zero(); LINKS];
-    for (i, ((x, y), (&li, &(s, c)))) in jx
-        .iter_mut()
-        .zip(jy.iter_mut())
-        .zip(l.iter().zip(&posture.sin_cos))
-        .enumerate()
-    {
-        if i != 2 {
-            *x = li * c;
-            *y = -li * s;
+    match contact {
+        Contact::FixedAnkle => {
+            let zero = [T::zero(); 2];
+            pinned::second_foot_torques_at(model, posture, zero, zero)
         }
-        if i == 0 {
-            *x += base_d1[0];
-            *y += base_d1[1];
-        }
-        if i == LINKS - 1 {
-            *x += swing_d5[0];
-            *y += swing_d5[1];
-        }
-    }
-    (joint_torques(&jx), joint_torques(&jy))
-}
-
-/// [`share_load`] with the toe rocker ([`crate::foot::share_load`]): the
-/// stance ankle moves with φ1 at `base_d1` = ∂(ankle)/∂φ1, and the second
-/// foot's contact point moves with φ5 beyond its ankle at `swing_d5` (its
-/// toe, turning with the shank): the force then also acts on φ1 and φ5.
-pub fn share_load_with_base<T: Real>(
-    model: &BodyModel<T>,
-    phi: &Phi<T>,
-    single: &[T; LINKS],
-    max_load_n: T,
-    base_d1: [T; 2],
-    swing_d5: [T; 2],
-) -> DoubleSupportStatics<T> {
-    share_load_with_base_at(
-        model,
-        &Posture::new(phi),
-        single,
-        max_load_n,
-        base_d1,
-        swing_d5,
-    )
-}
-
-/// [`share_load_with_base`] at a posture whose sines are known.
-pub fn share_load_with_base_at<T: Real>(
-    model: &BodyModel<T>,
-    posture: &Posture<T>,
-    single: &[T; LINKS],
-    max_load_n: T,
-    base_d1: [T; 2],
-    swing_d5: [T; 2],
-) -> DoubleSupportStatics<T> {
-    let (mx, my) = second_foot_torques_at(model, posture, base_d1, swing_d5);
-    let w = T::lit(ANKLE_EFFORT_WEIGHT);
-    let dot = |a: &[T; LINKS], b: &[T; LINKS]| {
-        a.iter()
-            .zip(b)
-            .enumerate()
-            .fold(T::zero(), |s, (i, (&u, &v))| {
-                s + if i == 0 { w * u * v } else { u * v }
-            })
-    };
-    // Effort E(F) = |c − Fx mx − Fy my|²_W: a convex quadratic.
-    let (a11, a12, a22) = (dot(&mx, &mx), dot(&mx, &my), dot(&my, &my));
-    let (b1, b2) = (dot(single, &mx), dot(single, &my));
-    let max = if max_load_n.finite() {
-        max_load_n.max(T::zero())
-    } else {
-        T::zero()
-    };
-    let mu = T::lit(FOOT_FRICTION);
-    let effort = |fx: T, fy: T| {
-        a11 * fx * fx + T::lit(2.0) * a12 * fx * fy + a22 * fy * fy
-            - T::lit(2.0) * (b1 * fx + b2 * fy)
-    };
-    let feasible = |fx: T, fy: T| {
-        fx.finite()
-            && fy.finite()
-            && fy >= T::zero()
-            && fy <= max
-            && fx.abs() <= mu * fy + T::lit(1e-9) * (T::one() + fy)
-    };
-    // Candidates: the interior minimum; the minimum along each edge of the
-    // region (fy = max with fx free; the two cone edges fx = ±μ fy), each
-    // clamped to its segment; and the corner at the origin.
-    let mut best = (T::zero(), T::zero());
-    let mut best_e = effort(T::zero(), T::zero());
-    let mut consider = |fx: T, fy: T| {
-        if feasible(fx, fy) {
-            let e = effort(fx, fy);
-            if e < best_e {
-                best_e = e;
-                best = (fx, fy);
-            }
-        }
-    };
-    let det = a11 * a22 - a12 * a12;
-    if det.abs() > T::lit(1e-12) * (a11 * a22).max(T::lit(1e-12)) {
-        consider((b1 * a22 - b2 * a12) / det, (a11 * b2 - a12 * b1) / det);
-    }
-    if a11 > T::zero() {
-        let fx = ((b1 - a12 * max) / a11).max(-mu * max).min(mu * max);
-        consider(fx, max);
-    }
-    for sign in [T::one(), -T::one()] {
-        // fx = sign μ fy: E is a parabola in fy.
-        let k = sign * mu;
-        let curv = a11 * k * k + T::lit(2.0) * a12 * k + a22;
-        if curv > T::zero() {
-            let fy = ((b1 * k + b2) / curv).max(T::zero()).min(max);
-            consider(k * fy, fy);
-        }
-    }
-    let (fx, fy) = best;
-    let mut torques = *single;
-    for ((t, &x), &y) in torques.iter_mut().zip(&mx).zip(&my) {
-        *t = *t - fx * x - fy * y;
-    }
-    DoubleSupportStatics {
-        reaction_n: [fx, fy],
-        torques,
-        per_newton: (mx, my),
+        Contact::ToeRocker(foot) => rocker::second_foot_torques_at(model, foot, posture),
     }
 }
 
-/// Forward dynamics Φ̈ = D⁻¹ (T_Φ − H Φ̇ − G), by Cholesky (D is symmetric
-/// positive definite for any valid model).
-pub fn forward_dynamics<T: Real>(
-    model: &BodyModel<T>,
-    phi: &Phi<T>,
-    dphi: &Phi<T>,
-    t_phi: &TPhi<T>,
-) -> Result<Phi<T>, DynamicsError> {
-    check_finite(phi, dphi, t_phi)?;
-    accelerations(&terms(model, phi, dphi), t_phi)
-}
-
-/// NaN or infinite inputs are an error, not a NaN result.
-pub(crate) fn check_finite<T: Real>(
-    phi: &Phi<T>,
-    dphi: &Phi<T>,
-    t_phi: &TPhi<T>,
-) -> Result<(), DynamicsError> {
-    if phi
-        .iter()
-        .chain(dphi.iter())
-        .chain(t_phi.iter())
-        .all(|x| x.finite())
-    {
-        Ok(())
-    } else {
-        Err(DynamicsError::NonFinite)
-    }
-}
-
-/// Φ̈ = D⁻¹ (T_Φ − HΦ̇ − G) from evaluated terms, by Cholesky (shared with
-/// the toe rocker's [`crate::foot::forward_dynamics`]).
-pub(crate) fn accelerations<T: Real>(
-    t: &DynamicsTerms<T>,
-    t_phi: &TPhi<T>,
-) -> Result<Phi<T>, DynamicsError> {
-    let rhs = SVector::<T, LINKS>::from(*t_phi) - t.h_dphi - t.g;
-    let chol = t.d.cholesky().ok_or(DynamicsError::SingularMassMatrix)?;
-    let acc = chol.solve(&rhs);
-    if acc.iter().all(|x| x.finite()) {
-        Ok(acc.into())
-    } else {
-        Err(DynamicsError::NonFinite)
-    }
-}
-
-/// Total mechanical energy K + P (P = Σ g_i cos φ_i, zero at the ankle's
-/// height), J. Used to check that the free dynamics conserve it.
-pub fn energy<T: Real>(model: &BodyModel<T>, phi: &Phi<T>, dphi: &Phi<T>) -> T {
-    let t = terms(model, phi, dphi);
-    let w = SVector::<T, LINKS>::from(*dphi);
-    let k = w.dot(&(t.d * w)) * T::lit(0.5);
-    let p = phi
-        .iter()
-        .zip(model.g())
-        .fold(T::zero(), |acc, (&x, &gi)| acc + gi * x.sin_cos_fast().1);
-    k + p
-}
-
-/// One classical Runge–Kutta (RK4) step of the chain (flat stance foot)
-/// under constant generalised forces `t_phi` over `h` seconds; returns the
-/// new (Φ, Φ̇). Used by the energy-conservation checks; the simulator's
-/// plant steps with [`rk4_integrate`] itself, its forces changing with the
-/// state.
+/// One classical Runge–Kutta (RK4) step of the chain on `contact` under
+/// constant generalised forces `t_phi` over `h` seconds; returns the new
+/// (Φ, Φ̇). On the toe rocker a step that crosses heel-off applies
+/// [`contact_switch_velocities`] at its end. Used by the energy checks; the
+/// simulator's plant steps with [`rk4_integrate`] itself, its forces
+/// changing with the state.
 pub fn rk4_step<T: Real>(
     model: &BodyModel<T>,
+    contact: &Contact<T>,
     phi: &Phi<T>,
     dphi: &Phi<T>,
     t_phi: &TPhi<T>,
     h: T,
 ) -> Result<(Phi<T>, Phi<T>), DynamicsError> {
-    rk4_with(phi, dphi, h, |q, w| forward_dynamics(model, q, w, t_phi))
+    match contact {
+        Contact::FixedAnkle => pinned::rk4_step(model, phi, dphi, t_phi, h),
+        Contact::ToeRocker(foot) => rocker::rk4_step(model, foot, phi, dphi, t_phi, h),
+    }
 }
 
-/// One RK4 step of Φ̈ = `accel`(Φ, Φ̇) over `h` seconds (shared with the toe
-/// rocker's [`crate::foot::rk4_step`]).
-pub(crate) fn rk4_with<T: Real>(
+/// One RK4 step of Φ̈ = `accel`(Φ, Φ̇) over `h` seconds (the contacts'
+/// [`rk4_step`]s).
+fn rk4_with<T: Real>(
     phi: &Phi<T>,
     dphi: &Phi<T>,
     h: T,
@@ -497,56 +377,4 @@ fn axpy<T: Real>(a: &Phi<T>, b: &Phi<T>, s: T) -> Phi<T> {
         *oi += s * bi;
     }
     o
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    proptest::proptest! {
-        /// The pairs taken once give the plain 5 × 5 sum bit for bit (the
-        /// firmware's commands must not move with it).
-        #[test]
-        fn pairs_taken_once_equal_the_full_sum_bit_for_bit(
-            phi in proptest::array::uniform5(-4.0f32..4.0),
-            w in proptest::array::uniform5(-12.0f32..12.0),
-            a in proptest::array::uniform5(-80.0f32..80.0),
-        ) {
-            let m = BodyModel::<f64>::paper_table_iii().cast::<f32>();
-            let posture = Posture::new(&phi);
-            let mut plain = [0.0f32; LINKS];
-            for i in 0..LINKS {
-                let (si, ci) = posture.sin_cos[i];
-                let mut acc = -m.g()[i] * si;
-                for j in 0..LINKS {
-                    let (sj, cj) = posture.sin_cos[j];
-                    let cos_ij = ci * cj + si * sj;
-                    let sin_ij = si * cj - ci * sj;
-                    acc += m.p()[i][j] * (cos_ij * a[j] + sin_ij * (w[j] * w[j]));
-                }
-                plain[i] = acc;
-            }
-            let fast = inverse_dynamics_at(&m, &posture, &w, &a);
-            proptest::prop_assert_eq!(plain.map(f32::to_bits), fast.map(f32::to_bits));
-        }
-    }
-
-    #[test]
-    fn fast_path_equals_matrix_form() {
-        let m = BodyModel::<f64>::paper_table_iii();
-        let phi = [0.21, -0.18, 0.07, 2.71, 3.52];
-        let w = [0.4, -0.9, 0.2, -2.1, 3.3];
-        let a = [1.5, -2.0, 0.7, 6.0, -9.0];
-        let t = terms(&m, &phi, &w);
-        let full = t.d * SVector::<f64, LINKS>::from(a) + t.h_dphi + t.g;
-        let fast = inverse_dynamics(&m, &phi, &w, &a);
-        for i in 0..LINKS {
-            assert!(
-                (full[i] - fast[i]).abs() < 1e-10,
-                "{i}: {} vs {}",
-                full[i],
-                fast[i]
-            );
-        }
-    }
 }

@@ -12,6 +12,7 @@
 //! step on the board (no heap) and inside the optimiser's inner loop.
 
 use crate::bezier::Bezier;
+use crate::dynamics::Contact;
 use crate::foot::StanceFoot;
 use crate::ik::{IkError, IkOptions, IkSolution, IkSolver, IkTarget};
 use crate::kinematics::{Phi, joint_torques};
@@ -530,7 +531,8 @@ fn dynamic_sample<T: Real>(
     dphi: Phi<T>,
     ddphi: Phi<T>,
 ) -> DynamicSample<T> {
-    let t_phi = crate::mechanics::inverse_dynamics(model, foot, &phi, &dphi, &ddphi);
+    let contact = Contact::from(foot.copied());
+    let t_phi = crate::dynamics::inverse_dynamics(model, &contact, &phi, &dphi, &ddphi);
     let torque = joint_torques(&t_phi);
     DynamicSample {
         gait,

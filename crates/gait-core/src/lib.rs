@@ -25,7 +25,6 @@ pub mod foot;
 pub mod gait;
 pub mod ik;
 pub mod kinematics;
-pub mod mechanics;
 pub mod model;
 pub mod playback;
 pub mod problem;

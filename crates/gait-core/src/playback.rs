@@ -13,7 +13,7 @@
 //!   support before the lift-off.
 //! - **Sharing.** The inverse dynamics of the table's motion on the stance
 //!   foot, then the least-effort ground force on the other foot within its
-//!   cap ([`crate::foot::share_load`], ankle weighted as the pilot's).
+//!   cap ([`crate::dynamics::share_load`], ankle weighted as the pilot's).
 //! - **The pilot.** What remains at the stance ankle, less the passive
 //!   ankle spring's torque, is the pilot's: pushed through the crutches.
 //!
@@ -21,7 +21,8 @@
 //! feed-forward uses the same), zero at the first and last sample (tables
 //! start and end at rest).
 
-use crate::foot::{self, StanceFoot};
+use crate::dynamics::{self, Contact};
+use crate::foot::StanceFoot;
 use crate::kinematics::{Phi, Posture, joint_torques};
 use crate::model::{BodyModel, GRAVITY_M_S2, LINKS};
 use crate::scalar::Real;
@@ -178,14 +179,11 @@ where
         };
         let p5 = swing_ankle(model, foot, &phi);
         let share = other_foot_share(swing_toe(model, foot, &phi), start);
-        let single = joint_torques(&crate::mechanics::inverse_dynamics(
-            model,
-            Some(foot),
-            &phi,
-            &dphi,
-            &ddphi,
+        let contact = Contact::ToeRocker(*foot);
+        let single = joint_torques(&dynamics::inverse_dynamics(
+            model, &contact, &phi, &dphi, &ddphi,
         ));
-        let shared = foot::share_load(model, foot, &phi, &single, share * weight);
+        let shared = dynamics::share_load(model, &contact, &phi, &single, share * weight);
         let pilot = pilot_torque(foot, phi[0], &shared.torques, spring_nm_per_rad);
         visit(&PlaybackSample {
             k,

@@ -10,8 +10,8 @@
 //! `CostAccumulator`, which `PaperProblem::cost` feeds too. Cross-checked
 //! against `PaperProblem::cost` on optimised steps (tests).
 
+use gait_core::dynamics::{Contact, inverse_dynamics};
 use gait_core::kinematics::{Phi, forward_kinematics, joint_torques};
-use gait_core::mechanics::inverse_dynamics;
 use gait_core::problem::{Cost, CostAccumulator, CostSample, MAX_SAMPLES, PaperProblem};
 
 /// Why a Φ sequence cannot be evaluated.
@@ -96,7 +96,7 @@ pub fn phi_samples(problem: &PaperProblem<f64>, phi: &[Phi<f64>]) -> Vec<PhiSamp
                 accels = Some(ddphi);
                 torque = Some(joint_torques(&inverse_dynamics(
                     &problem.model,
-                    foot.as_ref(),
+                    &Contact::from(foot),
                     p,
                     &dphi,
                     &ddphi,

@@ -35,13 +35,12 @@
 //!   load; while the swing foot touches the ground it takes a share by the
 //!   lever rule on the centre of mass's x between the two ankles.
 
-use gait_core::dynamics::{self, DynamicsError};
+use gait_core::dynamics::{self, Contact, DynamicsError};
 use gait_core::foot::{self, StanceFoot};
 use gait_core::kinematics::{
     Phi, anatomical_angles, forward_kinematics, joint_torques, link_com, link_com_accelerations,
     theta_from_phi,
 };
-use gait_core::mechanics;
 use gait_core::model::{BodyModel, GRAVITY_M_S2, LINKS};
 
 use crate::pilot::{PilotConfig, PilotTarget};
@@ -280,12 +279,17 @@ impl Plant {
         self.dphi = w;
         self.time_s = t0 + h;
         // The heel lifted or landed in this substep: a plastic contact
-        // switch ([`foot::contact_switch_velocities`]), applied at its end.
+        // switch ([`dynamics::contact_switch_velocities`]), applied at its end.
         if let Some(f) = &self.cfg.foot {
             let (was, is) = (f.on_toe(q0[0]), f.on_toe(self.phi[0]));
             if was != is {
-                self.dphi =
-                    foot::contact_switch_velocities(&self.cfg.model, f, &self.phi, &self.dphi, is)?;
+                self.dphi = dynamics::contact_switch_velocities(
+                    &self.cfg.model,
+                    f,
+                    &self.phi,
+                    &self.dphi,
+                    is,
+                )?;
             }
         }
         Ok(())
@@ -309,6 +313,12 @@ impl Plant {
         Ok(())
     }
 
+    /// The stance foot's contact: the configured toe rocker, or the fixed
+    /// ankle without one.
+    fn contact(&self) -> Contact<f64> {
+        Contact::from(self.cfg.foot)
+    }
+
     /// Forward dynamics on the configured foot.
     fn forward(
         &self,
@@ -316,9 +326,9 @@ impl Plant {
         dphi: &Phi<f64>,
         t_phi: &[f64; LINKS],
     ) -> Result<Phi<f64>, SimError> {
-        Ok(mechanics::forward_dynamics(
+        Ok(dynamics::forward_dynamics(
             &self.cfg.model,
-            self.cfg.foot.as_ref(),
+            &self.contact(),
             phi,
             dphi,
             t_phi,

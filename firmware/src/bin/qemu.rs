@@ -37,6 +37,7 @@ use firmware::text::Line;
 use firmware::{board_config, qemu_rig, selftest, tick_replay};
 use gait_control::faults::{FaultSet, Reaction};
 use gait_core::BodyModel;
+use gait_core::dynamics::Contact::{FixedAnkle, ToeRocker};
 use gait_core::dynamics::{inverse_dynamics, share_load};
 use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::scalar::sin_cos_f32;
@@ -241,7 +242,7 @@ fn bench(out: &mut Out, ctr: &mut InstrCounter) {
         let phi = [0.2 + a, -0.1, 0.05, 2.7 - a, 3.5];
         let w = [0.4, -0.9, 0.2, -2.1, 3.3];
         let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
-        black_box(inverse_dynamics(&m, &phi, &w, &dd));
+        black_box(inverse_dynamics(&m, &FixedAnkle, &phi, &w, &dd));
     });
     let ik = IkSolver::new(&m);
     let ik_only = ctr.per_call(1000, |i| {
@@ -267,23 +268,23 @@ fn bench(out: &mut Out, ctr: &mut InstrCounter) {
         if let Ok(sol) = ik.solve(&t) {
             let w = [0.4, -0.9, 0.2, -2.1, 3.3];
             let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
-            black_box(inverse_dynamics(&m, &sol.phi, &w, &dd));
+            black_box(inverse_dynamics(&m, &FixedAnkle, &sol.phi, &w, &dd));
         }
     });
     let share = ctr.per_call(1000, |i| {
         let a = i as f32 * 1e-4;
         let phi = [0.0 + a, -0.74, 0.0, 2.98, 3.30];
         let single = [-208.0, -208.0, 5.0, 5.0, -2.0];
-        black_box(share_load(&m, &phi, &single, 912.0));
+        black_box(share_load(&m, &FixedAnkle, &phi, &single, 912.0));
     });
     // The stance heel up (stair descent): the toe rocker's extra terms.
-    let foot = gait_core::foot::StanceFoot::for_model(&m);
+    let rocker = ToeRocker(gait_core::foot::StanceFoot::for_model(&m));
     let toe_id = ctr.per_call(1000, |i| {
         let a = i as f32 * 1e-3;
         let phi = [0.6 + a, -0.3, 0.05, 2.7 - a, 3.5];
         let w = [0.4, -0.9, 0.2, -2.1, 3.3];
         let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
-        black_box(gait_core::foot::inverse_dynamics(&m, &foot, &phi, &w, &dd));
+        black_box(inverse_dynamics(&m, &rocker, &phi, &w, &dd));
     });
     out.put(line("bench: loop_overhead instr=").u32(base));
     for (name, instr) in [

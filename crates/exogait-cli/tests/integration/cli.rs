@@ -7,7 +7,7 @@ use std::process::Command;
 
 use gait_core::BodyModel;
 use gait_core::anthropometry::{ExoSegments, Pilot, body_model_for};
-use gait_core::dynamics::inverse_dynamics;
+use gait_core::dynamics::{Contact, inverse_dynamics};
 use gait_core::kinematics::{forward_kinematics, joint_torques};
 use serde_json::Value;
 
@@ -111,7 +111,7 @@ fn dynamics_equals_library_call() {
     let r = exogait(&["dynamics"], &format!("{line}\n"));
     assert_eq!(r.status, 0, "{}", r.stderr);
     let model = BodyModel::<f64>::paper_table_iii();
-    let t_phi = inverse_dynamics(&model, &phi, &dphi, &ddphi);
+    let t_phi = inverse_dynamics(&model, &Contact::FixedAnkle, &phi, &dphi, &ddphi);
     let t_theta = joint_torques(&t_phi);
     assert_eq!(floats(&r.stdout[0]["t_phi"]), t_phi.to_vec());
     assert_eq!(floats(&r.stdout[0]["t_theta"]), t_theta.to_vec());

@@ -2,9 +2,9 @@
 //! along the reference (gait-core, f32), with the other foot's load closed
 //! on its sensor in double support.
 
-use gait_core::foot::{self, StanceFoot};
+use gait_core::dynamics::{self, Contact};
+use gait_core::foot::StanceFoot;
 use gait_core::kinematics::{Posture, joint_torques};
-use gait_core::mechanics;
 use gait_core::model::GRAVITY_M_S2;
 
 use crate::position_loop::Setpoint;
@@ -179,7 +179,7 @@ impl Controller<'_> {
     /// The model's joint torques along the reference: while a table plays,
     /// from its Φ, Φ̇ and Φ̈; otherwise static torques of the reference
     /// posture. In both, the other foot takes up to the load it may carry
-    /// where that lowers the effort (`foot::share_load`): the share the
+    /// where that lowers the effort (`dynamics::share_load`): the share the
     /// plan gives it (the whole body between steps; along a swing what the
     /// table plans for its swing foot, so a table can shift the weight in
     /// double support before it lifts the foot). Not from the foot's sensor
@@ -216,16 +216,13 @@ impl Controller<'_> {
             }
         };
         // The stance heel lifts past the ankle's stop (stair descent): the
-        // chain then turns about the toe (gait_core::foot).
-        let foot = StanceFoot::for_model(model);
-        let single = joint_torques(&mechanics::inverse_dynamics_at(
-            model,
-            Some(&foot),
-            &posture,
-            &dphi,
-            &ddphi,
+        // chain then turns about the toe (gait_core::foot). A constant
+        // contact: the inlined dispatch folds away.
+        let contact = Contact::ToeRocker(StanceFoot::for_model(model));
+        let single = joint_torques(&dynamics::inverse_dynamics_at(
+            model, &contact, &posture, &dphi, &ddphi,
         ));
-        let shared = foot::share_load_at(model, &foot, &posture, &single, other_load_n);
+        let shared = dynamics::share_load_at(model, &contact, &posture, &single, other_load_n);
         let ff = joint_torques_from_theta_torques(&shared.torques, r.stance);
         let (_, per_newton_up) = shared.per_newton;
         let per_newton = joint_torques_from_theta_torques(&per_newton_up.map(|v| -v), r.stance);

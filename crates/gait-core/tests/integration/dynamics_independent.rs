@@ -4,6 +4,7 @@
 //! differentiation, energy conservation of the free chain, and Aᵀ by virtual
 //! work.
 
+use gait_core::dynamics::Contact::FixedAnkle;
 use gait_core::dynamics::{energy, forward_dynamics, inverse_dynamics, rk4_step, terms};
 use gait_core::kinematics::{joint_torques, phi_from_theta};
 use gait_core::model::GRAVITY_M_S2;
@@ -30,7 +31,7 @@ fn printed_coupling_index_is_wrong_and_corrected_one_is_right() {
     let c = (phi[0] - phi[1]).cos();
     let printed = 0.441 * 10.5 * 0.228 + 0.441 * 0.395 * (10.5 + 57.7 + 11.5 + 6.05);
     assert!((d_energy[0][1] - printed * c).abs() > 1.0);
-    let d_model = terms(&m, &phi, &[0.0; LINKS]).d;
+    let d_model = terms(&m, &FixedAnkle, &phi, &[0.0; LINKS]).d;
     assert!((d_energy[0][1] - d_model[(0, 1)]).abs() < 1e-12);
 }
 
@@ -40,7 +41,7 @@ proptest! {
     #[test]
     fn mass_matrix_matches_kinetic_energy((q, _w, _a) in state()) {
         let m = BodyModel::<f64>::paper_table_iii();
-        let d_model = terms(&m, &q, &[0.0; LINKS]).d;
+        let d_model = terms(&m, &FixedAnkle, &q, &[0.0; LINKS]).d;
         let d_energy = mass_matrix(&m, &fixed, &q);
         for i in 0..LINKS {
             for j in 0..LINKS {
@@ -53,7 +54,7 @@ proptest! {
     #[test]
     fn inverse_dynamics_matches_lagrangian((q, w, a) in state()) {
         let m = BodyModel::<f64>::paper_table_iii();
-        let t = inverse_dynamics(&m, &q, &w, &a);
+        let t = inverse_dynamics(&m, &FixedAnkle, &q, &w, &a);
         let r = lagrange_torques(&m, &fixed, &q, &w, &a);
         let scale = r.iter().fold(1.0f64, |s, x| s.max(x.abs()));
         for i in 0..LINKS {
@@ -64,8 +65,8 @@ proptest! {
     #[test]
     fn forward_dynamics_inverts_inverse_dynamics((q, w, a) in state()) {
         let m = BodyModel::<f64>::paper_table_iii();
-        let t = inverse_dynamics(&m, &q, &w, &a);
-        let back = forward_dynamics(&m, &q, &w, &t).unwrap();
+        let t = inverse_dynamics(&m, &FixedAnkle, &q, &w, &a);
+        let back = forward_dynamics(&m, &FixedAnkle, &q, &w, &t).unwrap();
         for i in 0..LINKS {
             prop_assert!((back[i] - a[i]).abs() < 1e-8 * (1.0 + a[i].abs()));
         }
@@ -75,7 +76,7 @@ proptest! {
     fn joint_torques_by_virtual_work((q, w, a) in state(), dtheta in prop::array::uniform5(-1.0f64..1.0)) {
         // δW = T_Θ·δΘ must equal T_Φ·δΦ with δΦ = A δΘ.
         let m = BodyModel::<f64>::paper_table_iii();
-        let t_phi = inverse_dynamics(&m, &q, &w, &a);
+        let t_phi = inverse_dynamics(&m, &FixedAnkle, &q, &w, &a);
         let t_theta = joint_torques(&t_phi);
         let zero = phi_from_theta(&[0.0; LINKS]);
         let moved = phi_from_theta(&dtheta);
@@ -89,9 +90,9 @@ proptest! {
     fn f32_inverse_dynamics_agrees_with_f64((q, w, a) in state()) {
         let m64 = BodyModel::<f64>::paper_table_iii();
         let m32: BodyModel<f32> = m64.cast();
-        let t64 = inverse_dynamics(&m64, &q, &w, &a);
+        let t64 = inverse_dynamics(&m64, &FixedAnkle, &q, &w, &a);
         let f = |x: [f64; LINKS]| x.map(|v| v as f32);
-        let t32 = inverse_dynamics(&m32, &f(q), &f(w), &f(a));
+        let t32 = inverse_dynamics(&m32, &FixedAnkle, &f(q), &f(w), &f(a));
         let scale = t64.iter().fold(1.0f64, |s, x| s.max(x.abs()));
         for i in 0..LINKS {
             // f32 carries ~7 digits; angles up to 3.5 rad lose a little more.
@@ -105,18 +106,18 @@ fn free_chain_conserves_energy_under_rk4() {
     let m = BodyModel::<f64>::paper_table_iii();
     let mut q = [0.15, -0.25, 0.1, 2.8, 3.4];
     let mut w = [0.5, -0.8, 0.3, -1.5, 2.0];
-    let e0 = energy(&m, &q, &w);
+    let e0 = energy(&m, &FixedAnkle, &q, &w);
     let zero = [0.0; LINKS];
     let mut max_drift = 0.0f64;
     let mut moved = 0.0f64;
     // RK4's error is O(h⁴): at h = 0.25 ms the integrator, not the model,
     // would have to be wrong for the drift to exceed 1e-6.
     for _ in 0..4000 {
-        let (q1, w1) = rk4_step(&m, &q, &w, &zero, 2.5e-4).unwrap();
+        let (q1, w1) = rk4_step(&m, &FixedAnkle, &q, &w, &zero, 2.5e-4).unwrap();
         moved = moved.max((q1[0] - 0.15).abs());
         q = q1;
         w = w1;
-        max_drift = max_drift.max(((energy(&m, &q, &w) - e0) / e0).abs());
+        max_drift = max_drift.max(((energy(&m, &FixedAnkle, &q, &w) - e0) / e0).abs());
     }
     // The chain really moved (a conserved energy of a frozen state is no test).
     assert!(moved > 0.1, "stance shank moved only {moved} rad");
@@ -139,7 +140,7 @@ fn energy_matches_independent_kinetic_and_potential() {
         }
     }
     let e = k + potential(&m, &fixed, &q);
-    assert!((energy(&m, &q, &w) - e).abs() < 1e-9 * e.abs());
+    assert!((energy(&m, &FixedAnkle, &q, &w) - e).abs() < 1e-9 * e.abs());
 }
 
 /// Double-support statics by virtual work, independently of the Jacobian
@@ -169,7 +170,7 @@ fn double_support_statics_satisfy_virtual_work() {
             r2,
         };
         let phi = ik.solve(&target).unwrap().phi;
-        let s = double_support_statics(&m, &phi, weight);
+        let s = double_support_statics(&m, &FixedAnkle, &phi, weight);
         let [fx, fy] = s.reaction_n;
         assert!(fy > 0.0 && fy <= weight && fx.abs() <= FOOT_FRICTION * fy + 1e-9);
         let h = 1e-6;
@@ -187,7 +188,7 @@ fn double_support_statics_satisfy_virtual_work() {
             let (tp, tm) = (theta_from_phi(&plus), theta_from_phi(&minus));
             let work: f64 = (0..LINKS).map(|i| s.torques[i] * (tp[i] - tm[i])).sum();
             let zero = [0.0; LINKS];
-            let dv = energy(&m, &plus, &zero) - energy(&m, &minus, &zero);
+            let dv = energy(&m, &FixedAnkle, &plus, &zero) - energy(&m, &FixedAnkle, &minus, &zero);
             assert!(
                 (work - dv).abs() < 1e-6 * (1.0 + dv.abs()) + 1e-9,
                 "direction {dir}: work {work} vs ΔV {dv}"
@@ -195,7 +196,13 @@ fn double_support_statics_satisfy_virtual_work() {
         }
         // And the reaction enters through the true Jacobian of the swing
         // ankle (finite differences of the forward kinematics).
-        let single_t = joint_torques(&inverse_dynamics(&m, &phi, &[0.0; LINKS], &[0.0; LINKS]));
+        let single_t = joint_torques(&inverse_dynamics(
+            &m,
+            &FixedAnkle,
+            &phi,
+            &[0.0; LINKS],
+            &[0.0; LINKS],
+        ));
         let mut jt_f = [0.0; LINKS];
         for (i, out) in jt_f.iter_mut().enumerate() {
             let mut a = phi;
@@ -216,8 +223,14 @@ fn double_support_statics_satisfy_virtual_work() {
             );
         }
         // Without a load on the second foot: the single-stance statics.
-        let single = double_support_statics(&m, &phi, 0.0);
-        let expect = joint_torques(&inverse_dynamics(&m, &phi, &[0.0; LINKS], &[0.0; LINKS]));
+        let single = double_support_statics(&m, &FixedAnkle, &phi, 0.0);
+        let expect = joint_torques(&inverse_dynamics(
+            &m,
+            &FixedAnkle,
+            &phi,
+            &[0.0; LINKS],
+            &[0.0; LINKS],
+        ));
         assert_eq!(single.reaction_n, [0.0, 0.0]);
         for (a, b) in single.torques.iter().zip(&expect) {
             assert!((a - b).abs() < 1e-9);
@@ -249,7 +262,13 @@ fn shared_load_is_the_constrained_optimum() {
         .phi;
     // A motion, not only statics: some accelerations.
     let ddphi = [0.5, -2.0, 3.0, 4.0, -5.0];
-    let single = joint_torques(&inverse_dynamics(&m, &phi, &[0.0; LINKS], &ddphi));
+    let single = joint_torques(&inverse_dynamics(
+        &m,
+        &FixedAnkle,
+        &phi,
+        &[0.0; LINKS],
+        &ddphi,
+    ));
     // The pilot's ankle counts ANKLE_EFFORT_WEIGHT times a motor.
     let effort = |t: &[f64; LINKS]| {
         ANKLE_EFFORT_WEIGHT * t[0] * t[0] + t[1..].iter().map(|v| v * v).sum::<f64>()
@@ -259,7 +278,7 @@ fn shared_load_is_the_constrained_optimum() {
         share_probe(&m, &phi, 0.0, 1.0),
     );
     for cap in [0.0, 50.0, 300.0, 2000.0] {
-        let s = share_load(&m, &phi, &single, cap);
+        let s = share_load(&m, &FixedAnkle, &phi, &single, cap);
         let [fx, fy] = s.reaction_n;
         assert!(fy >= 0.0 && fy <= cap + 1e-9 && fx.abs() <= FOOT_FRICTION * fy + 1e-6);
         let best = effort(&s.torques);

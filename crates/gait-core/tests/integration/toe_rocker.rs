@@ -1,12 +1,12 @@
-//! The toe rocker (`gait_core::foot`) checked against derivations that
+//! The toe rocker (`Contact::ToeRocker`, `gait_core::foot`) checked against derivations that
 //! share no code with it: the ankle's circle written as an angle about the
 //! toe, centre-of-mass Jacobians built on that base (`chain.rs`), the
 //! Lagrangian of that kinetic energy by numerical differentiation, angular
 //! momenta summed link by link, and energy conservation of the free chain
 //! on its toe.
 
-use gait_core::dynamics;
-use gait_core::foot::{self, StanceFoot};
+use gait_core::dynamics::{self, Contact::FixedAnkle, Contact::ToeRocker};
+use gait_core::foot::StanceFoot;
 use gait_core::kinematics::forward_kinematics;
 use gait_core::model::GRAVITY_M_S2;
 use gait_core::{BodyModel, LINKS};
@@ -153,12 +153,12 @@ fn flat_foot_is_the_papers_model_exactly() {
     let w = [0.4, -0.9, 0.2, -2.1, 3.3];
     let a = [1.5, -2.0, 0.7, 6.0, -9.0];
     assert_eq!(
-        foot::inverse_dynamics(&m, &f, &phi, &w, &a),
-        dynamics::inverse_dynamics(&m, &phi, &w, &a)
+        dynamics::inverse_dynamics(&m, &ToeRocker(f), &phi, &w, &a),
+        dynamics::inverse_dynamics(&m, &FixedAnkle, &phi, &w, &a)
     );
     assert_eq!(
-        foot::energy(&m, &f, &phi, &w),
-        dynamics::energy(&m, &phi, &w)
+        dynamics::energy(&m, &ToeRocker(f), &phi, &w),
+        dynamics::energy(&m, &FixedAnkle, &phi, &w)
     );
 }
 
@@ -168,7 +168,7 @@ proptest! {
     #[test]
     fn mass_matrix_on_the_toe_matches_kinetic_energy((q, _w, _a) in toe_state()) {
         let (m, f) = model();
-        let d = foot::terms(&m, &f, &q, &[0.0; LINKS]).d;
+        let d = dynamics::terms(&m, &ToeRocker(f), &q, &[0.0; LINKS]).d;
         let e = mass_matrix(&m, &rocker(&f, true), &q);
         for i in 0..LINKS {
             for j in 0..LINKS {
@@ -180,19 +180,19 @@ proptest! {
     #[test]
     fn inverse_dynamics_on_the_toe_matches_lagrangian((q, w, a) in toe_state()) {
         let (m, f) = model();
-        let t = foot::inverse_dynamics(&m, &f, &q, &w, &a);
+        let t = dynamics::inverse_dynamics(&m, &ToeRocker(f), &q, &w, &a);
         let l = lagrange_torques(&m, &rocker(&f, true), &q, &w, &a);
         for i in 0..LINKS {
             prop_assert!((t[i] - l[i]).abs() < 1e-4 * (1.0 + l[i].abs()), "{i}: {} vs {}", t[i], l[i]);
         }
         // The matrix form agrees with the fast form.
-        let tm = foot::terms(&m, &f, &q, &w);
+        let tm = dynamics::terms(&m, &ToeRocker(f), &q, &w);
         let full = tm.d * nalgebra::SVector::<f64, LINKS>::from(a) + tm.h_dphi + tm.g;
         for i in 0..LINKS {
             prop_assert!((full[i] - t[i]).abs() < 1e-9 * (1.0 + t[i].abs()));
         }
         // And forward dynamics inverts it.
-        let back = foot::forward_dynamics(&m, &f, &q, &w, &t).unwrap();
+        let back = dynamics::forward_dynamics(&m, &ToeRocker(f), &q, &w, &t).unwrap();
         for i in 0..LINKS {
             prop_assert!((back[i] - a[i]).abs() < 1e-8 * (1.0 + a[i].abs()));
         }
@@ -203,7 +203,7 @@ proptest! {
     #[test]
     fn pivot_torque_is_momentum_rate_about_the_toe((q, w, a) in toe_state()) {
         let (m, f) = model();
-        let t = foot::inverse_dynamics(&m, &f, &q, &w, &a);
+        let t = dynamics::inverse_dynamics(&m, &ToeRocker(f), &q, &w, &a);
         let pivot_torque = -t.iter().sum::<f64>();
         let toe = f.toe();
         let all = [0, 1, 2, 3, 4];
@@ -235,7 +235,7 @@ proptest! {
         let toe = f.toe();
         let all = [0, 1, 2, 3, 4];
         // Heel-off: about the toe.
-        let up = foot::contact_switch_velocities(&m, &f, &phi, &w, true).unwrap();
+        let up = dynamics::contact_switch_velocities(&m, &f, &phi, &w, true).unwrap();
         let before = angular_momentum(&m, &f, &phi, &w, false, &all, toe);
         let after = angular_momentum(&m, &f, &phi, &up, true, &all, toe);
         prop_assert!((before - after).abs() < 1e-6 * (1.0 + before.abs()), "{before} vs {after}");
@@ -249,7 +249,7 @@ proptest! {
         let ka = kinetic(&mass_matrix(&m, &rocker(&f, true), &phi), &up);
         prop_assert!(ka <= kb * (1.0 + 1e-9) + 1e-12, "{kb} -> {ka}");
         // Heel strike: about the ankle.
-        let down = foot::contact_switch_velocities(&m, &f, &phi, &w, false).unwrap();
+        let down = dynamics::contact_switch_velocities(&m, &f, &phi, &w, false).unwrap();
         let before = angular_momentum(&m, &f, &phi, &w, true, &all, [0.0; 2]);
         let after = angular_momentum(&m, &f, &phi, &down, false, &all, [0.0; 2]);
         prop_assert!((before - after).abs() < 1e-6 * (1.0 + before.abs()), "{before} vs {after}");
@@ -272,15 +272,15 @@ fn free_chain_on_the_toe_conserves_energy() {
     // Leaning past the stop, falling forward: stays on the toe.
     let mut q = [0.5, 0.1, -0.1, 3.0, 3.4];
     let mut w = [0.5, -0.3, 0.2, 1.0, -0.5];
-    let e0 = foot::energy(&m, &f, &q, &w);
+    let e0 = dynamics::energy(&m, &ToeRocker(f), &q, &w);
     for _ in 0..2000 {
         assert!(f.on_toe(q[0]));
-        (q, w) = foot::rk4_step(&m, &f, &q, &w, &[0.0; LINKS], 1e-4).unwrap();
+        (q, w) = dynamics::rk4_step(&m, &ToeRocker(f), &q, &w, &[0.0; LINKS], 1e-4).unwrap();
         if q[0] > 1.2 {
             break;
         }
     }
-    let e1 = foot::energy(&m, &f, &q, &w);
+    let e1 = dynamics::energy(&m, &ToeRocker(f), &q, &w);
     assert!((e1 - e0).abs() < 1e-6 * e0.abs().max(1.0), "{e0} -> {e1}");
     // Energy also matches the explicit kinetic + potential energy.
     let explicit =
@@ -291,12 +291,12 @@ fn free_chain_on_the_toe_conserves_energy() {
     // strike, never rises.
     let mut q = [0.4, 0.0, 0.1, 3.1, 3.2];
     let mut w = [-1.5, 0.0, 0.0, 0.0, 0.0];
-    let mut e = foot::energy(&m, &f, &q, &w);
+    let mut e = dynamics::energy(&m, &ToeRocker(f), &q, &w);
     let mut struck = false;
     for _ in 0..2000 {
         let was = f.on_toe(q[0]);
-        (q, w) = foot::rk4_step(&m, &f, &q, &w, &[0.0; LINKS], 1e-4).unwrap();
-        let now = foot::energy(&m, &f, &q, &w);
+        (q, w) = dynamics::rk4_step(&m, &ToeRocker(f), &q, &w, &[0.0; LINKS], 1e-4).unwrap();
+        let now = dynamics::energy(&m, &ToeRocker(f), &q, &w);
         if was != f.on_toe(q[0]) {
             struck = true;
             assert!(now < e, "heel strike added energy: {e} -> {now}");
@@ -334,8 +334,14 @@ fn load_sharing_acts_at_the_rolled_feet() {
     };
     // What holding the posture on the stance foot alone asks.
     let zero = [0.0; LINKS];
-    let single = joint_torques(&foot::inverse_dynamics(&m, &f, &phi, &zero, &zero));
-    let s = foot::share_load(&m, &f, &phi, &single, 900.0);
+    let single = joint_torques(&dynamics::inverse_dynamics(
+        &m,
+        &ToeRocker(f),
+        &phi,
+        &zero,
+        &zero,
+    ));
+    let s = dynamics::share_load(&m, &ToeRocker(f), &phi, &single, 900.0);
     assert!(s.reaction_n[1] > 1.0, "no load shared: {:?}", s.reaction_n);
     let h = 1e-7;
     let mut generalised = [0.0; LINKS];
@@ -367,8 +373,8 @@ fn contact_switch_in_f32_agrees_with_f64() {
     let f32foot = StanceFoot::<f32>::table_i();
     let phi = [f.heel_off_rad, -0.1, 0.05, 3.0, 3.3];
     let w = [0.8, -0.5, 0.2, 1.0, -1.0];
-    let v64 = foot::contact_switch_velocities(&m, &f, &phi, &w, true).unwrap();
-    let v32 = foot::contact_switch_velocities(
+    let v64 = dynamics::contact_switch_velocities(&m, &f, &phi, &w, true).unwrap();
+    let v32 = dynamics::contact_switch_velocities(
         &m32,
         &f32foot,
         &phi.map(|x| x as f32),

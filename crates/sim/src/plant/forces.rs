@@ -220,13 +220,8 @@ impl Plant {
         // ground under the other foot takes (its generalised forces Jᵀ F).
         let static_nm = if self.cfg.pilot.gravity_compensation != 0.0 {
             let zero = [0.0; LINKS];
-            let mut required = mechanics::inverse_dynamics(
-                &self.cfg.model,
-                self.cfg.foot.as_ref(),
-                phi,
-                &zero,
-                &zero,
-            );
+            let mut required =
+                dynamics::inverse_dynamics(&self.cfg.model, &self.contact(), phi, &zero, &zero);
             let l = self.cfg.model.lengths();
             for i in [0, 1, 3, 4] {
                 required[i] -= l[i] * (phi[i].cos() * contact_n[0] - phi[i].sin() * contact_n[1]);

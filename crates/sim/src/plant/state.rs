@@ -125,7 +125,7 @@ impl Plant {
         let spring_pe = 0.5
             * self.cfg.ankle_stiffness_nm_per_rad
             * (spring_angle - self.cfg.ankle_rest_rad).powi(2);
-        let chain = mechanics::energy(model, self.cfg.foot.as_ref(), &self.phi, &self.dphi);
+        let chain = dynamics::energy(model, &self.contact(), &self.phi, &self.dphi);
         let energy_j = chain + total_m * GRAVITY_M_S2 * self.stance_foot_m[1] + spring_pe;
         TrueState {
             time_s: self.time_s,
