@@ -6,8 +6,9 @@
 //! (`cargo xtask qemu --bundle`).
 
 use exogait_device::DeviceConfig;
-use exogait_device::boot::{self, Gaits};
-use gait_control::controller::TickReport;
+use exogait_device::boot::{self, Gaits, TableSlots};
+use exogait_device::calibration::{Record, Refusal};
+use gait_control::controller::{Controller, TickReport};
 use gait_control::faults::{FaultCode, Reaction};
 use gait_control::sequencer::Phase;
 use gait_core::bundle::MAX_GAITS;
@@ -51,14 +52,7 @@ pub enum CheckError {
 /// standing rig, presses GO and runs it.
 pub fn refused_board(device: &DeviceConfig, gaits: &Gaits<'_>) -> Result<HoldCheck, CheckError> {
     let mut slots = [None; MAX_GAITS];
-    let (cfg, mut controller) = boot::build(
-        device,
-        gaits,
-        &boot::calibration_in(device, flash_sectors::calibration()),
-        board_config::flash_tables(),
-        &mut slots,
-    )
-    .map_err(|_| CheckError::Config)?;
+    let (cfg, mut controller) = build(device, gaits, &flashed_calibration(device), &mut slots)?;
     let mut check = HoldCheck {
         ticks: 0,
         stepped: false,
@@ -92,14 +86,7 @@ pub fn play_step(
         return Ok(None);
     }
     let mut slots = [None; MAX_GAITS];
-    let (cfg, controller) = boot::build(
-        device,
-        gaits,
-        &boot::calibration_in(device, flash_sectors::calibration()),
-        board_config::flash_tables(),
-        &mut slots,
-    )
-    .map_err(|_| CheckError::Config)?;
+    let (cfg, controller) = build(device, gaits, &flashed_calibration(device), &mut slots)?;
     // The recording holds one run: the controller the board built.
     let mut once = Some(controller);
     tick_replay::replay_with(
@@ -125,19 +112,9 @@ pub struct OffCheck {
 
 /// Boots the board's controller without a calibration (`refusal`) on the
 /// standing rig, presses GO, and runs it for 2 s.
-pub fn uncalibrated_board(
-    device: &DeviceConfig,
-    refusal: exogait_device::calibration::Refusal,
-) -> Result<OffCheck, CheckError> {
+pub fn uncalibrated_board(device: &DeviceConfig, refusal: Refusal) -> Result<OffCheck, CheckError> {
     let mut slots = [None; MAX_GAITS];
-    let (cfg, mut controller) = boot::build(
-        device,
-        &Gaits::BuiltIn,
-        &Err(refusal),
-        board_config::flash_tables(),
-        &mut slots,
-    )
-    .map_err(|_| CheckError::Config)?;
+    let (cfg, mut controller) = build(device, &Gaits::BuiltIn, &Err(refusal), &mut slots)?;
     let mut check = OffCheck {
         ticks: 0,
         any_enabled: false,
@@ -165,12 +142,35 @@ pub fn record_on_jig(
     Record::parse(&rec.encode(), device)
 }
 
+/// The device and controller the board builds (`boot::build`) for `gaits`
+/// with `calibration`, over its flash tables.
+fn build<'a>(
+    device: &DeviceConfig,
+    gaits: &Gaits<'a>,
+    calibration: &Result<Record, Refusal>,
+    slots: &'a mut TableSlots<'a>,
+) -> Result<(DeviceConfig, Controller<'a>), CheckError> {
+    boot::build(
+        device,
+        gaits,
+        calibration,
+        board_config::flash_tables(),
+        slots,
+    )
+    .map_err(|_| CheckError::Config)
+}
+
+/// The calibration record in the board's calibration sector, for `device`.
+fn flashed_calibration(device: &DeviceConfig) -> Result<Record, Refusal> {
+    boot::calibration_in(device, flash_sectors::calibration())
+}
+
 /// Runs `controller` on the standing rig for [`HOLD_TICKS`], GO pressed
 /// from [`GO_FROM`] for [`GO_TICKS`]; `each` sees every tick's report and
 /// whether any motor driver was enabled after it.
 fn press_go_standing(
     cfg: &DeviceConfig,
-    controller: &mut gait_control::controller::Controller<'_>,
+    controller: &mut Controller<'_>,
     mut each: impl FnMut(&TickReport, bool),
 ) -> Result<(), CheckError> {
     let mut hw =

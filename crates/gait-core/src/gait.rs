@@ -476,27 +476,16 @@ pub fn evaluate_step<T: Real, E: From<GaitError>>(
         let sol = s.solve(&ik)?;
         visit(StepEvent::Sample(s))?;
         window = [window[1], window[2], Some((*s, sol.phi))];
-        match differences {
+        // The sample the window gives derivatives of, with them.
+        let derived = match differences {
             Differences::Backward => {
                 let (Some((_, p1)), Some((g2, p2))) = (window[1], window[2]) else {
                     return Ok(());
                 };
                 let dphi = zip_map(&p2, &p1, |a, b| (a - b) * inv_dt);
-                let result = if let Some(prev) = prev_dphi {
-                    let ddphi = zip_map(&dphi, &prev, |a, b| (a - b) * inv_dt);
-                    visit(StepEvent::Dynamics(&dynamic_sample(
-                        model,
-                        step.foot.as_ref(),
-                        g2,
-                        p2,
-                        dphi,
-                        ddphi,
-                    )))
-                } else {
-                    Ok(())
-                };
+                let ddphi = prev_dphi.map(|prev| zip_map(&dphi, &prev, |a, b| (a - b) * inv_dt));
                 prev_dphi = Some(dphi);
-                result
+                ddphi.map(|ddphi| (g2, p2, dphi, ddphi))
             }
             Differences::Central => {
                 let (Some((_, p0)), Some((g1, p1)), Some((_, p2))) =
@@ -510,16 +499,20 @@ pub fn evaluate_step<T: Real, E: From<GaitError>>(
                 for (((o, &a), &b), &c) in ddphi.iter_mut().zip(&p2).zip(&p1).zip(&p0) {
                     *o = (a - b - b + c) * inv_dt * inv_dt;
                 }
-                visit(StepEvent::Dynamics(&dynamic_sample(
-                    model,
-                    step.foot.as_ref(),
-                    g1,
-                    p1,
-                    dphi,
-                    ddphi,
-                )))
+                Some((g1, p1, dphi, ddphi))
             }
-        }
+        };
+        let Some((g, phi, dphi, ddphi)) = derived else {
+            return Ok(());
+        };
+        visit(StepEvent::Dynamics(&dynamic_sample(
+            model,
+            step.foot.as_ref(),
+            g,
+            phi,
+            dphi,
+            ddphi,
+        )))
     })
 }
 

@@ -15,7 +15,7 @@ use gait_control::operator::Gait;
 
 use crate::closed_loop::RigError;
 use crate::inject::Injection;
-use crate::scenario::{flash_tables, run_tables_with, strong_pilot};
+use crate::scenario::{run_gait_on, run_tables_with, strong_pilot};
 
 /// One recorded run.
 #[derive(Clone, Debug)]
@@ -46,20 +46,12 @@ pub fn record_gaits(device: &DeviceConfig) -> Result<Vec<Recording>, RigError> {
     RUNS.iter()
         .map(|&(gait, steps, max_s, fault)| {
             let injection: Option<Injection> = fault.and_then(|f| f.parse().ok());
-            let run = run_tables_with(
-                device,
-                flash_tables(),
-                gait,
-                strong_pilot(),
-                max_s,
-                steps,
-                |rig| {
-                    rig.record_ticks();
-                    if let Some(f) = injection {
-                        rig.schedule(f);
-                    }
-                },
-            )?;
+            let run = run_gait_on(device, gait, max_s, steps, |rig| {
+                rig.record_ticks();
+                if let Some(f) = injection {
+                    rig.schedule(f);
+                }
+            })?;
             Ok(Recording {
                 gait,
                 ticks: run.rig.recorded.unwrap_or_default(),

@@ -6,9 +6,11 @@ use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
 use gait_control::sequencer::{GaitTables, Phase};
 use gait_core::BodyModel;
+use gait_core::bundle::{BundleError, GaitInfo, GaitName, GaitSource, Patient, bundle_len, encode};
 use gait_core::clinical::riser_behind_stance_x;
+use gait_core::flash_tables::{STAIR_DOWN, WALK};
 use gait_core::foot::StanceFoot;
-use gait_core::tables::GaitTable;
+use gait_core::tables::{GaitKind, GaitTable};
 
 use crate::closed_loop::{PilotBehaviour, Rig, RigError, RigSetup};
 use crate::pilot::PilotConfig;
@@ -23,6 +25,37 @@ pub fn flash_tables() -> GaitTables<'static> {
         gait_core::flash_tables::stair_up().ok(),
         gait_core::flash_tables::stair_down().ok(),
     )
+}
+
+/// A bundle for `patient` on `device` of the flash tables' stair descent
+/// (`down`), then walk (`walk`): a clinician's list in an order of its own,
+/// not the built-in one, to boot and play from. The gaits' descriptions
+/// carry the same placeholder figures (nothing plays them).
+pub fn descent_then_walk_bundle(
+    device: &DeviceConfig,
+    patient: &Patient,
+) -> Result<Vec<u8>, BundleError> {
+    let source = |entry: u8, name: &str, kind: GaitKind, table: &'static [u8]| {
+        let name = GaitName::new(name).ok_or(BundleError::BadEntry(entry))?;
+        let info = GaitInfo {
+            name,
+            kind,
+            step_length_m: 0.3,
+            rise_m: 0.0,
+            tread_m: 0.0,
+            step_time_s: 2.24,
+            pace_m_s: 0.1,
+            clearance_m: 0.05,
+        };
+        Ok::<_, BundleError>(GaitSource { info, table })
+    };
+    let gaits = [
+        source(0, "down", GaitKind::StairDown, &STAIR_DOWN)?,
+        source(1, "walk", GaitKind::Walk, &WALK)?,
+    ];
+    let mut img = vec![0u8; bundle_len(&gaits)];
+    encode(device.fingerprint(), 1, patient, &gaits, &mut img)?;
+    Ok(img)
 }
 
 /// A pilot strong enough for the paper's walk (300 N·m through the
@@ -251,8 +284,20 @@ pub fn run_gait_with(
     prepare: impl FnOnce(&mut Rig<'static>),
 ) -> Result<StepRun<'static>, RigError> {
     let device = DeviceConfig::exogait().map_err(RigError::Device)?;
+    run_gait_on(&device, gait, max_s, steps, prepare)
+}
+
+/// [`run_gait_with`] on `device`: `gait` from its [`flash_tables`] with the
+/// [`strong_pilot`] (see [`run_tables_with`]).
+pub fn run_gait_on(
+    device: &DeviceConfig,
+    gait: Gait,
+    max_s: f64,
+    steps: usize,
+    prepare: impl FnOnce(&mut Rig<'static>),
+) -> Result<StepRun<'static>, RigError> {
     run_tables_with(
-        &device,
+        device,
         flash_tables(),
         gait,
         strong_pilot(),

@@ -240,35 +240,21 @@ fn bench(out: &mut Out, ctr: &mut InstrCounter) {
     let id = ctr.per_call(1000, |i| {
         let a = i as f32 * 1e-3;
         let phi = [0.2 + a, -0.1, 0.05, 2.7 - a, 3.5];
-        let w = [0.4, -0.9, 0.2, -2.1, 3.3];
-        let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
-        black_box(inverse_dynamics(&m, &FixedAnkle, &phi, &w, &dd));
+        black_box(inverse_dynamics(&m, &FixedAnkle, &phi, &BENCH_W, &BENCH_DD));
     });
     let ik = IkSolver::new(&m);
     let ik_only = ctr.per_call(1000, |i| {
-        let a = i as f32 * 1e-4;
-        let t = IkTarget {
-            x5: -0.2 + a,
-            y5: 0.1,
-            phi1: 0.1,
-            phi3: 0.05,
-            r2: 0.7,
-        };
-        black_box(ik.solve(&t).ok());
+        black_box(ik.solve(&bench_ik_target(i)).ok());
     });
     let ik_id = ctr.per_call(1000, |i| {
-        let a = i as f32 * 1e-4;
-        let t = IkTarget {
-            x5: -0.2 + a,
-            y5: 0.1,
-            phi1: 0.1,
-            phi3: 0.05,
-            r2: 0.7,
-        };
-        if let Ok(sol) = ik.solve(&t) {
-            let w = [0.4, -0.9, 0.2, -2.1, 3.3];
-            let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
-            black_box(inverse_dynamics(&m, &FixedAnkle, &sol.phi, &w, &dd));
+        if let Ok(sol) = ik.solve(&bench_ik_target(i)) {
+            black_box(inverse_dynamics(
+                &m,
+                &FixedAnkle,
+                &sol.phi,
+                &BENCH_W,
+                &BENCH_DD,
+            ));
         }
     });
     let share = ctr.per_call(1000, |i| {
@@ -282,9 +268,7 @@ fn bench(out: &mut Out, ctr: &mut InstrCounter) {
     let toe_id = ctr.per_call(1000, |i| {
         let a = i as f32 * 1e-3;
         let phi = [0.6 + a, -0.3, 0.05, 2.7 - a, 3.5];
-        let w = [0.4, -0.9, 0.2, -2.1, 3.3];
-        let dd = [1.5, -2.0, 0.7, 6.0, -9.0];
-        black_box(inverse_dynamics(&m, &rocker, &phi, &w, &dd));
+        black_box(inverse_dynamics(&m, &rocker, &phi, &BENCH_W, &BENCH_DD));
     });
     out.put(line("bench: loop_overhead instr=").u32(base));
     for (name, instr) in [
@@ -302,6 +286,23 @@ fn bench(out: &mut Out, ctr: &mut InstrCounter) {
                 .str(" instr=")
                 .u32(instr.saturating_sub(base)),
         );
+    }
+}
+
+/// The inverse-dynamics benchmarks' joint rates (rad/s) and accelerations
+/// (rad/s²).
+const BENCH_W: [f32; 5] = [0.4, -0.9, 0.2, -2.1, 3.3];
+const BENCH_DD: [f32; 5] = [1.5, -2.0, 0.7, 6.0, -9.0];
+
+/// The IK benchmarks' target at call `i`: the swing ankle moving forward.
+#[inline(always)]
+fn bench_ik_target(i: u32) -> IkTarget<f32> {
+    IkTarget {
+        x5: -0.2 + i as f32 * 1e-4,
+        y5: 0.1,
+        phi1: 0.1,
+        phi3: 0.05,
+        r2: 0.7,
     }
 }
 

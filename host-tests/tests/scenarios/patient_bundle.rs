@@ -8,26 +8,9 @@ use exogait_device::boot::{self, TableSlots};
 use gait_control::operator::Gait;
 use gait_control::sequencer::Phase;
 use gait_core::anthropometry::SegmentLengths;
-use gait_core::bundle::{
-    Bundle, GaitInfo, GaitName, GaitSource, MAX_GAITS, Patient, bundle_len, encode,
-};
-use gait_core::flash_tables::{STAIR_DOWN, WALK};
-use gait_core::tables::GaitKind;
+use gait_core::bundle::{Bundle, MAX_GAITS, Patient};
 use sim::closed_loop::Rig;
-use sim::scenario::{GO_TICKS, patient_rig, run_steps, strong_pilot};
-
-fn info(name: &str, kind: GaitKind) -> GaitInfo {
-    GaitInfo {
-        name: GaitName::new(name).unwrap(),
-        kind,
-        step_length_m: 0.3,
-        rise_m: 0.0,
-        tread_m: 0.0,
-        step_time_s: 2.24,
-        pace_m_s: 0.1,
-        clearance_m: 0.05,
-    }
-}
+use sim::scenario::{GO_TICKS, descent_then_walk_bundle, patient_rig, run_steps, strong_pilot};
 
 /// A bundle for the device's own body: stair descent first, then walking.
 fn bundle(device: &DeviceConfig) -> Vec<u8> {
@@ -38,19 +21,7 @@ fn bundle(device: &DeviceConfig) -> Vec<u8> {
         segments_m: [l.thigh_m, l.shank_m, l.foot_m],
         model: device.body,
     };
-    let gaits = [
-        GaitSource {
-            info: info("down", GaitKind::StairDown),
-            table: &STAIR_DOWN,
-        },
-        GaitSource {
-            info: info("walk", GaitKind::Walk),
-            table: &WALK,
-        },
-    ];
-    let mut img = vec![0u8; bundle_len(&gaits)];
-    encode(device.fingerprint(), 1, &patient, &gaits, &mut img).unwrap();
-    img
+    descent_then_walk_bundle(device, &patient).unwrap()
 }
 
 /// Runs `f` on a rig of the device's body standing for the walk, over the

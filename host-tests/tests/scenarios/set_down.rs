@@ -9,13 +9,12 @@ use gait_control::operator::Gait;
 use gait_control::sequencer::Phase;
 use sim::inject::{Injection, Kind, Target};
 use sim::outcome::{Outcome, outcome};
-use sim::scenario::{flash_tables, run_tables_with, strong_pilot};
+use sim::scenario::{flash_tables, run_gait_on};
 
 /// When the first swing of `gait` reaches `fraction` of its table, s.
 fn in_the_first_swing(device: &DeviceConfig, gait: Gait, fraction: f32) -> f64 {
     let duration = flash_tables().get(gait).unwrap().duration_s();
-    let run =
-        run_tables_with(device, flash_tables(), gait, strong_pilot(), 8.0, 1, |_| {}).unwrap();
+    let run = run_gait_on(device, gait, 8.0, 1, |_| {}).unwrap();
     run.rig
         .trace
         .iter()
@@ -34,17 +33,9 @@ fn hold_in_a_swing(device: &DeviceConfig, gait: Gait, fraction: f32) -> (Outcome
         target: Some(Target::Joint(0)),
         at_s,
     };
-    let run = run_tables_with(
-        device,
-        flash_tables(),
-        gait,
-        strong_pilot(),
-        at_s + 3.0,
-        1,
-        |rig| {
-            rig.schedule(fault);
-        },
-    )
+    let run = run_gait_on(device, gait, at_s + 3.0, 1, |rig| {
+        rig.schedule(fault);
+    })
     .unwrap();
     let o = outcome(&run.rig, run.ended_by.as_ref());
     let trace = &run.rig.trace;

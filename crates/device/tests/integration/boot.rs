@@ -9,27 +9,11 @@ use exogait_device::fitting::{Measures, fit};
 use gait_control::faults::FaultCode;
 use gait_control::operator::Gait;
 use gait_control::sequencer::GaitTables;
-use gait_core::bundle::{
-    BundleError, GaitInfo, GaitName, GaitSource, MAX_GAITS, bundle_len, encode,
-};
-use gait_core::flash_tables::{STAIR_DOWN, WALK};
+use gait_core::bundle::{BundleError, MAX_GAITS};
 use gait_core::tables::GaitKind;
 
 fn device() -> DeviceConfig {
     DeviceConfig::exogait().unwrap()
-}
-
-fn info(name: &str, kind: GaitKind) -> GaitInfo {
-    GaitInfo {
-        name: GaitName::new(name).unwrap(),
-        kind,
-        step_length_m: 0.3,
-        rise_m: 0.0,
-        tread_m: 0.0,
-        step_time_s: 2.24,
-        pace_m_s: 0.1,
-        clearance_m: 0.05,
-    }
 }
 
 /// A 1.60 m patient's bundle: stair descent first, then walking.
@@ -45,19 +29,7 @@ fn bundle_image(device: &DeviceConfig) -> Vec<u8> {
         },
     )
     .unwrap();
-    let gaits = [
-        GaitSource {
-            info: info("down", GaitKind::StairDown),
-            table: &STAIR_DOWN,
-        },
-        GaitSource {
-            info: info("walk", GaitKind::Walk),
-            table: &WALK,
-        },
-    ];
-    let mut img = vec![0u8; bundle_len(&gaits)];
-    encode(device.fingerprint(), 1, &patient, &gaits, &mut img).unwrap();
-    img
+    sim::scenario::descent_then_walk_bundle(device, &patient).unwrap()
 }
 
 fn sector(image: &[u8]) -> Vec<u8> {

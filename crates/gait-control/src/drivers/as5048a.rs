@@ -231,30 +231,17 @@ pub struct Reading {
     pub angle_rad: f32,
 }
 
-/// The outcome of one read, without the bus's own error type: the kind of
-/// a driver error, which the supervisor counts as it is
-/// ([`crate::supervisor::EncoderStatus`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ReadStatus {
-    /// A frame with good parity and no error flag.
-    #[default]
-    Ok,
-    /// The SPI transaction failed.
-    BusError,
-    /// The reply failed its parity check.
-    Parity,
-    /// The chip raised its error flag.
-    ErrorFlag,
-}
-
-impl ReadStatus {
-    /// The status of a read's result.
-    pub fn of<T, E>(result: &Result<T, Error<E>>) -> Self {
-        match result {
-            Ok(_) => Self::Ok,
-            Err(e) => e.kind(),
-        }
+super::read_status! {
+    /// The outcome of one read, without the bus's own error type: the kind
+    /// of a driver error, which the supervisor counts as it is
+    /// ([`crate::supervisor::EncoderStatus`]).
+    ReadStatus {
+        /// A frame with good parity and no error flag.
+        Ok,
+        /// The reply failed its parity check.
+        Parity,
+        /// The chip raised its error flag.
+        ErrorFlag,
     }
 }
 

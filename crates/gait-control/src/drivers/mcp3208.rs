@@ -233,32 +233,19 @@ impl DriveCurrentCalibration {
     }
 }
 
-/// The outcome of one force conversion, without the bus's own error type:
-/// the kind of a driver error, which the supervisor counts as it is
-/// ([`crate::supervisor::ForceStatus`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ReadStatus {
-    /// A reading within the rated range.
-    #[default]
-    Ok,
-    /// The SPI transaction failed.
-    BusError,
-    /// Counts below the open-circuit threshold.
-    Open,
-    /// Counts above the short-circuit threshold.
-    Shorted,
-    /// The calibrated force is outside the rated range.
-    OutOfRange,
-}
-
-impl ReadStatus {
-    /// The status of a conversion's result.
-    pub fn of<T, E>(result: &Result<T, Error<E>>) -> Self {
-        match result {
-            Ok(_) => Self::Ok,
-            Err(e) => e.kind(),
-        }
+super::read_status! {
+    /// The outcome of one force conversion, without the bus's own error
+    /// type: the kind of a driver error, which the supervisor counts as it
+    /// is ([`crate::supervisor::ForceStatus`]).
+    ReadStatus {
+        /// A reading within the rated range.
+        Ok,
+        /// Counts below the open-circuit threshold.
+        Open,
+        /// Counts above the short-circuit threshold.
+        Shorted,
+        /// The calibrated force is outside the rated range.
+        OutOfRange,
     }
 }
 

@@ -5,7 +5,7 @@ use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
 
 use crate::outcome::Outcome;
-use crate::scenario::{flash_tables, run_tables_with, strong_pilot};
+use crate::scenario::run_gait_on;
 
 use super::parallel::on_every_core;
 use super::play::judged;
@@ -58,15 +58,9 @@ impl HealthyResult {
 /// Plays one healthy run: [`HEALTHY_STEPS`] steps and 1.5 s standing.
 pub fn play_healthy(run: &HealthyRun, device: &DeviceConfig) -> HealthyResult {
     let seed = run.noise_seed;
-    let played = run_tables_with(
-        device,
-        flash_tables(),
-        run.gait,
-        strong_pilot(),
-        25.0,
-        HEALTHY_STEPS,
-        |rig| rig.set_sensor_noise(3, 10, seed),
-    );
+    let played = run_gait_on(device, run.gait, 25.0, HEALTHY_STEPS, |rig| {
+        rig.set_sensor_noise(3, 10, seed)
+    });
     let (outcome, _, error) = judged(played.as_ref());
     HealthyResult {
         run: *run,

@@ -15,7 +15,7 @@ use exogait_device::DeviceConfig;
 use gait_control::operator::Gait;
 use sim::inject::Injection;
 use sim::outcome::outcome;
-use sim::scenario::{StepRun, flash_tables, run_tables_with, strong_pilot};
+use sim::scenario::{StepRun, run_gait_on};
 
 use crate::common::campaign_run;
 
@@ -35,7 +35,7 @@ fn run(
 /// `gait` on `device` with its flash tables and the campaign's pilot, the
 /// `faults` (in `sim::inject`'s syntax) scheduled and, given a seed, the
 /// sensors' noise on: GO, then steps until `steps` landings and 1.5 s more
-/// (`sim::scenario::run_tables_with`).
+/// (`sim::scenario::run_gait_on`).
 fn run_faulted(
     device: &DeviceConfig,
     gait: Gait,
@@ -45,22 +45,14 @@ fn run_faulted(
     faults: &[&str],
 ) -> StepRun<'static> {
     let injections: Vec<Injection> = faults.iter().map(|f| f.parse().unwrap()).collect();
-    run_tables_with(
-        device,
-        flash_tables(),
-        gait,
-        strong_pilot(),
-        max_s,
-        steps,
-        |rig| {
-            if let Some(seed) = noise_seed {
-                rig.set_sensor_noise(3, 10, seed);
-            }
-            for f in injections {
-                rig.schedule(f);
-            }
-        },
-    )
+    run_gait_on(device, gait, max_s, steps, |rig| {
+        if let Some(seed) = noise_seed {
+            rig.set_sensor_noise(3, 10, seed);
+        }
+        for f in injections {
+            rig.schedule(f);
+        }
+    })
     .unwrap()
 }
 
