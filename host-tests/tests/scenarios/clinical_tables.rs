@@ -35,8 +35,9 @@ fn twenty_steps(kind: GaitKind, at_peak_s: f64) {
         };
         assert_eq!(l.side, expected, "{kind:?}: landing {n}");
     }
-    // Each step is the table's length, within 1.5 cm (the small drift per
-    // step adds up over twenty: docs/optimiser.md).
+    // Each step is the table's length, within 1.5 cm: each landing drifts
+    // by millimetres from the table's foothold, and over twenty steps the
+    // drift adds up.
     let step = sim::scenario::table_geometry(&table, &device.body).landing_m[0];
     for (n, l) in landings.iter().take(STEPS).enumerate() {
         assert!(

@@ -114,9 +114,8 @@ fn stair_ascent_lightens_the_arms_by_three_quarters() {
     let (v, code) = compare("stair-up");
     check_shape(&v, "stair_up");
     assert_eq!(code, 0, "both gaits land every step without a fault");
-    // Target 75 % (the paper's 74.7 %); measured 79.1 % with the table
-    // refined in the closed loop (docs/optimiser.md, "Where the targets
-    // stand").
+    // Target 75 % (the paper's 74.7 %); the table refined in the closed
+    // loop gives 78.3 % (docs/optimiser.md, "Where the targets stand").
     check_reductions(&v, 75.0);
 }
 
