@@ -1,17 +1,19 @@
 //! The 1 kHz control tick, in five stages, each a method of its own:
 //!
-//! 1. **sense** ([`sense`]) — read every encoder, force sensor, button and
-//!    the e-stop; decode, calibrate, check (a failed read becomes a status,
-//!    never a panic, and the last good angle is kept for control);
+//! 1. **sense** (`controller/sense.rs`) — read every encoder, force
+//!    sensor, button and the e-stop; decode, calibrate, check (a failed
+//!    read becomes a status, never a panic, and the last good angle is kept
+//!    for control);
 //! 2. **plan** — the operator scheme turns button events into requests; the
-//!    sequencer advances the gait and hands over the whole
-//!    [`Reference`] (one table interpolation);
-//! 3. **act** ([`act`]) — per joint, PID plus the model's inverse-dynamics
-//!    feed-forward along the reference (gait-core, f32);
+//!    sequencer's one update obeys them and the last verdict's orders and
+//!    hands over the whole [`Reference`] (one table interpolation);
+//! 3. **act** (`controller/act.rs`) — per joint, PID plus the model's
+//!    inverse-dynamics feed-forward along the reference (gait-core, f32);
 //! 4. **guard** — the supervisor checks every fact and decides a reaction
-//!    before anything is written;
-//! 5. **write** ([`write`]) — motor commands (only after the guard), indicators, the
-//!    crutch-load metric.
+//!    before anything is written; the reaction becomes the orders of the
+//!    next update;
+//! 5. **write** (`controller/write.rs`) — motor commands (only after the
+//!    guard), indicators, the crutch-load metric.
 //!
 //! Bounded: fixed numbers of reads, one table interpolation (three lookups
 //! for the rates), one inverse-dynamics evaluation, no allocation, no wait.

@@ -78,7 +78,7 @@ pub enum Phase {
 }
 
 /// Gait execution state. The phases' own state lives in their modules
-/// ([`start`], [`swing`], [`transfer`], [`hold`]); one call a tick,
+/// (`start`, `swing`, `transfer`, `hold`); one call a tick,
 /// [`Sequencer::update`], drives them all.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sequencer<'t> {
