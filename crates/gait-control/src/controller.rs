@@ -43,6 +43,7 @@ use crate::operator::{self, ControllerStatus, Input, Operator, OperatorConfig, R
 use crate::position_loop::{JointGains, JointLoop};
 use crate::posture::JOINTS;
 use crate::reference::Reference;
+use crate::replan::{ReplanConfig, ReplanSlot};
 use crate::sequencer::{
     GaitTables, Orders, Phase, SeqInput, SeqRequest, SeqStatus, Sequencer, SequencerConfig,
 };
@@ -236,6 +237,14 @@ impl<'t> Controller<'t> {
             orders: Orders::NONE,
             tick: 0,
         })
+    }
+
+    /// Adapts each step to where the pilot's stance ankle is, through the
+    /// idle-time re-planner that shares `slot` ([`crate::replan`]).
+    #[must_use]
+    pub fn with_replanner(mut self, slot: &'t ReplanSlot, cfg: ReplanConfig) -> Self {
+        self.seq = self.seq.with_replanner(slot, cfg);
+        self
     }
 
     /// The configuration it was built with.

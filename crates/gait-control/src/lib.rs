@@ -17,6 +17,7 @@ pub mod operator;
 pub mod position_loop;
 pub mod posture;
 pub mod reference;
+pub mod replan;
 pub mod ring_log;
 pub mod sequencer;
 pub mod supervisor;

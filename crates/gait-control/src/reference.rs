@@ -11,7 +11,7 @@ use gait_core::kinematics::{Phi, Posture};
 use gait_core::tables::GaitTable;
 
 use crate::posture::{JOINTS, Side};
-use crate::sequencer::{SeqEvents, SeqStatus};
+use crate::sequencer::{SeqEvents, SeqStatus, StepTable};
 
 /// What the joints, the feed-forward and the supervisor follow this tick.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,7 +64,7 @@ pub struct TableMotion {
 /// rate as a stop within one period (φ1 still moving at 0.14 rad/s at the
 /// landing became a 1,200 N·m ankle and 600 N·m knee demand). `None` once
 /// the table has ended: the reference then holds its last posture.
-pub fn table_motion(table: &GaitTable<'_>, t_s: f32, posture: Posture<f32>) -> Option<TableMotion> {
+pub fn table_motion(table: &StepTable<'_>, t_s: f32, posture: Posture<f32>) -> Option<TableMotion> {
     let phi = posture.phi;
     if t_s > table.duration_s() {
         return None;

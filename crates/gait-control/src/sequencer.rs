@@ -24,6 +24,7 @@ mod config;
 mod hold;
 mod input;
 mod start;
+mod step;
 mod swing;
 mod tables;
 mod transfer;
@@ -34,6 +35,7 @@ use crate::operator::{Gait, MAX_GAITS};
 use crate::posture::{JOINTS, Side};
 pub use crate::reference::Reference;
 use crate::reference::{ankles_in_start_posture, ankles_in_swing, table_motion};
+use crate::replan::{ReplanConfig, ReplanSlot};
 pub use config::SequencerConfig;
 use gait_core::tables::GaitTable;
 use hold::SetDown;
@@ -41,6 +43,7 @@ pub use input::{
     Measured, Order, Orders, RefuseReason, Sensed, SeqEvent, SeqEvents, SeqInput, SeqRequest,
     SeqStatus,
 };
+pub use step::StepTable;
 use swing::SwingState;
 pub use tables::{GaitTables, Selection, gait_of_kind};
 use transfer::TransferPlan;
@@ -105,9 +108,17 @@ pub struct Sequencer<'t> {
     ankle_plan: [f32; 2],
     /// A safe hold's set-down of the swing foot, when it struck in a swing.
     set_down: Option<SetDown>,
-    /// The table being played (kept at hand: the tick reads it several
+    /// The selected table (kept at hand: the tick reads it several
     /// times).
     table: Option<GaitTable<'t>>,
+    /// The step a swing plays: that table's, or its re-planned version.
+    step: Option<StepTable<'t>>,
+    /// The idle-time re-planner's slot and settings, where one runs.
+    replanner: Option<(&'t ReplanSlot, ReplanConfig)>,
+    /// Ticks since the re-plan of the step about to start was asked for,
+    /// and the stance ankle it was asked for, rad.
+    replan_wait: Option<u16>,
+    replan_from: f32,
     /// The tables, and each slot's transfer end
     /// ([`transfer::transfer_targets`]): last, being large and read at
     /// most once a tick.
@@ -126,6 +137,10 @@ impl<'t> Sequencer<'t> {
             gait: Gait::Walk,
             slot: 0,
             table: None,
+            step: None,
+            replanner: None,
+            replan_wait: None,
+            replan_from: f32::NAN,
             stance: Side::Left,
             stop_requested: false,
             new_steps_blocked: false,
@@ -153,6 +168,8 @@ impl<'t> Sequencer<'t> {
         self.gait = Gait::Walk;
         self.slot = 0;
         self.table = None;
+        self.step = None;
+        self.withdraw_replan();
         self.stance = Side::Left;
         self.stop_requested = false;
         self.new_steps_blocked = false;
@@ -183,6 +200,16 @@ impl<'t> Sequencer<'t> {
     pub fn with_model(mut self, model: BodyModel<f32>) -> Self {
         self.transfer_targets = transfer::transfer_targets(&model, &self.tables);
         self.model = Some(model);
+        self
+    }
+
+    /// Adapts each step to where the pilot's stance ankle is, through the
+    /// re-planner that `slot` is shared with ([`crate::replan`]): before a
+    /// swing it asks for the step from the measured ankle and plays the
+    /// answer, or the table when there is none in time.
+    #[must_use]
+    pub fn with_replanner(mut self, slot: &'t ReplanSlot, cfg: ReplanConfig) -> Self {
+        self.replanner = Some((slot, cfg));
         self
     }
 
@@ -323,14 +350,14 @@ impl<'t> Sequencer<'t> {
             }
         }
         self.reference = next_reference;
-        let table = self.table.as_ref();
-        let motion = swing.and_then(|(_, t, phi)| table_motion(table?, t, phi?));
+        let step = self.step.as_ref();
+        let motion = swing.and_then(|(_, t, phi)| table_motion(step?, t, phi?));
         self.ankle_plan = match self.phase {
             Phase::SafeHold { .. } => self.ankle_plan,
             // The first tick of a swing plans nothing yet (as before the
             // table is read).
             Phase::Swing { .. } => swing.map_or([f32::NAN; 2], |(s, t, phi)| {
-                let phi1 = match (table, phi) {
+                let phi1 = match (step, phi) {
                     (Some(tb), Some(p)) if t <= tb.duration_s() => p.phi[0],
                     (Some(tb), _) => tb.at_time(tb.duration_s())[0],
                     (None, _) => f32::NAN,
@@ -344,7 +371,7 @@ impl<'t> Sequencer<'t> {
                 self.stance,
             ),
             Phase::WaitingReady { .. } | Phase::Transfer { .. } => {
-                ankles_in_start_posture(table, self.stance)
+                ankles_in_start_posture(self.table.as_ref(), self.stance)
             }
         };
         Reference {

@@ -300,23 +300,36 @@ impl<'a> GaitTable<'a> {
     /// Φ at time `t_s` after the step start, linearly interpolated between
     /// samples and held at the ends. Constant time: no search.
     pub fn at_time(&self, t_s: f32) -> [f32; LINKS] {
-        let period = self.period_s();
-        let x = if t_s.is_finite() && t_s > 0.0 {
-            t_s / period
-        } else {
-            0.0
-        };
-        let last = self.count.saturating_sub(1);
-        let k = (x as usize).min(last);
-        let w = if k >= last { 0.0 } else { x - k as f32 };
-        let a = self.sample(k).unwrap_or([0.0; LINKS]);
-        let b = self.sample((k + 1).min(last)).unwrap_or(a);
-        let mut out = a;
-        for ((o, &ai), &bi) in out.iter_mut().zip(&a).zip(&b) {
-            *o = ai + w * (bi - ai);
-        }
-        out
+        interpolate(self.count, self.period_s(), t_s, |k| self.sample(k))
     }
+}
+
+/// Φ at `t_s` of the samples `sample(0 … count − 1)` taken every
+/// `period_s`, linearly interpolated and held at the ends: a table's
+/// [`GaitTable::at_time`], and the same rule for samples kept elsewhere (a
+/// step re-planned on the board). Constant time: no search.
+#[inline]
+pub fn interpolate(
+    count: usize,
+    period_s: f32,
+    t_s: f32,
+    sample: impl Fn(usize) -> Option<[f32; LINKS]>,
+) -> [f32; LINKS] {
+    let x = if t_s.is_finite() && t_s > 0.0 {
+        t_s / period_s
+    } else {
+        0.0
+    };
+    let last = count.saturating_sub(1);
+    let k = (x as usize).min(last);
+    let w = if k >= last { 0.0 } else { x - k as f32 };
+    let a = sample(k).unwrap_or([0.0; LINKS]);
+    let b = sample((k + 1).min(last)).unwrap_or(a);
+    let mut out = a;
+    for ((o, &ai), &bi) in out.iter_mut().zip(&a).zip(&b) {
+        *o = ai + w * (bi - ai);
+    }
+    out
 }
 
 /// Writes a table image into `out`; returns its length. `ik`: the IK

@@ -11,6 +11,7 @@
 use crate::faults::{FaultCode, InSwing, Reaction};
 use crate::operator::Gait;
 use crate::posture::{JOINTS, Side};
+use crate::replan::ReplanResult;
 use crate::supervisor::Verdict;
 
 use super::{Phase, SequencerConfig};
@@ -323,6 +324,9 @@ pub enum SeqEvent {
     StartAccepted(Gait, Side),
     /// A start was refused.
     StartRefused(RefuseReason),
+    /// What came of the re-plan of the step about to start (with a
+    /// re-planner).
+    Replan(ReplanResult),
     /// The swing of a step began.
     SwingStarted(Gait, Side),
     /// The swing foot landed.

@@ -8,11 +8,14 @@ use gait_core::kinematics::Posture;
 
 use crate::posture::{Side, joints_from_phi};
 
+use crate::replan::{ReplanOutcome, ReplanRequest, ReplanResult, SlotView};
+
 use super::{
-    JOINTS, Phase, RefuseReason, Selection, Sensed, SeqEvent, SeqEvents, Sequencer, gait_of_kind,
+    JOINTS, Phase, RefuseReason, Selection, Sensed, SeqEvent, SeqEvents, Sequencer, StepTable,
+    gait_of_kind,
 };
 
-impl Sequencer<'_> {
+impl<'t> Sequencer<'t> {
     /// A start of the `selected` gait: accepted only when standing, with a
     /// verified table, from that table's start posture (either leg may be
     /// the stance leg: the one whose mapping matches is chosen).
@@ -58,35 +61,102 @@ impl Sequencer<'_> {
         events: &mut SeqEvents,
     ) -> [f32; JOINTS] {
         if self.stop_requested {
+            self.withdraw_replan();
             self.phase = Phase::Standing;
             events.push(SeqEvent::Stopped);
-            self.blend_to
-        } else if self.ready(sensed, stance) {
-            self.phase = Phase::Swing { stance, t_s: 0.0 };
-            let start = self.table.as_ref().map(|tb| tb.at_time(0.0));
-            let start_m = self
-                .planned_swing_toe(start.map(|p| Posture::new(&p)).as_ref())
-                .unwrap_or([0.0; 2]);
-            let lands_first_from_s = self.lands_first_from_s();
-            self.swing.begin(start_m, lands_first_from_s);
-            events.push(SeqEvent::SwingStarted(self.gait, stance));
-            start.map_or(self.reference, |p| joints_from_phi(&p, stance))
-        } else {
-            self.blend_to
+            return self.blend_to;
         }
+        let Some(step) = self.step_to_start(sensed, stance, events) else {
+            return self.blend_to;
+        };
+        self.step = Some(step);
+        self.phase = Phase::Swing { stance, t_s: 0.0 };
+        let start = step.at_time(0.0);
+        let start_m = self
+            .planned_swing_toe(Some(&Posture::new(&start)))
+            .unwrap_or([0.0; 2]);
+        let lands_first_from_s = self.lands_first_from_s();
+        self.swing.begin(start_m, lands_first_from_s);
+        events.push(SeqEvent::SwingStarted(self.gait, stance));
+        joints_from_phi(&start, stance)
     }
 
-    fn ready(&self, sensed: &Sensed, stance: Side) -> bool {
+    /// The step to start now, if the pilot is ready: both crutches loaded,
+    /// the feet carrying the body, and the stance ankle at the table's
+    /// planned lean (within `start_ankle_tolerance_rad`). With a
+    /// re-planner, the ankle may be further off (up to its
+    /// `ankle_tolerance_rad`): the step is re-planned from where it is,
+    /// and starts once the answer is due.
+    fn step_to_start(
+        &mut self,
+        sensed: &Sensed,
+        stance: Side,
+        events: &mut SeqEvents,
+    ) -> Option<StepTable<'t>> {
         let c = self.cfg;
+        let table = self.table?;
         let crutches = sensed.crutches_n.iter().all(|&f| f >= c.crutch_ready_n);
         // A NaN (faulted sensor) makes the sum NaN: never ready.
         let [left, right] = sensed.feet_n;
-        let foot = left + right >= c.feet_ready_n;
-        let planned = self.table.as_ref().map(|t| t.first()[0]);
-        let ankle = match (planned, sensed.ankles_rad.get(stance.ankle())) {
-            (Some(p), Some(&a)) => (a - p).abs() <= c.start_ankle_tolerance_rad,
-            _ => false,
+        let loaded = crutches && left + right >= c.feet_ready_n;
+        let ankle = sensed
+            .ankles_rad
+            .get(stance.ankle())
+            .copied()
+            .unwrap_or(f32::NAN);
+        let off = (ankle - table.first()[0]).abs();
+        let planned =
+            (loaded && off <= c.start_ankle_tolerance_rad).then_some(StepTable::Planned(table));
+        let Some((slot, rc)) = self.replanner else {
+            return planned;
         };
-        crutches && foot && ankle
+        if !loaded {
+            self.withdraw_replan();
+            return None;
+        }
+        match self.replan_wait {
+            None => {
+                // NaN off: no request.
+                if off <= rc.ankle_tolerance_rad {
+                    slot.request(&ReplanRequest {
+                        slot: u8::try_from(self.slot).unwrap_or(u8::MAX),
+                        stance,
+                        phi1_rad: ankle,
+                    });
+                    self.replan_from = ankle;
+                    self.replan_wait = Some(0);
+                }
+                None
+            }
+            Some(n) if n.saturating_add(1) < rc.latency_ticks => {
+                self.replan_wait = Some(n + 1);
+                None
+            }
+            Some(_) => {
+                self.replan_wait = None;
+                let result = match slot.view() {
+                    SlotView::Done(outcome) => ReplanResult::Answered(outcome),
+                    SlotView::Pending => ReplanResult::Late,
+                };
+                events.push(SeqEvent::Replan(result));
+                let still = (ankle - self.replan_from).abs() <= rc.ankle_drift_rad;
+                if result == ReplanResult::Answered(ReplanOutcome::Replanned) && still {
+                    if let Some(len) = slot.take() {
+                        return Some(StepTable::Replanned { slot, len, table });
+                    }
+                }
+                slot.release();
+                // The table, where the ankle allows it; else asked again
+                // from where the ankle is then.
+                planned
+            }
+        }
+    }
+
+    /// Withdraws a re-plan asked for and not yet started.
+    pub(super) fn withdraw_replan(&mut self) {
+        if let (Some(_), Some((slot, _))) = (self.replan_wait.take(), self.replanner) {
+            slot.release();
+        }
     }
 }

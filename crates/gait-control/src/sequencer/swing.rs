@@ -76,7 +76,8 @@ impl Sequencer<'_> {
     ) -> ([f32; JOINTS], Option<Playing>, f32) {
         let cfg = self.cfg;
         let t = t_s + dt_s;
-        let duration = self.table.as_ref().map_or(0.0, |tb| tb.duration_s());
+        let step = self.step;
+        let duration = step.map_or(0.0, |tb| tb.duration_s());
         let swing_foot = sensed
             .feet_n
             .get(stance.other().foot())
@@ -84,10 +85,7 @@ impl Sequencer<'_> {
             .unwrap_or(f32::NAN);
         // Past the table's end without a landing, the foot goes on down
         // looking for the ground.
-        let phi_t = self
-            .tables
-            .get(self.gait)
-            .map(|tb| self.searching_for_ground(&tb.at_time(t), t - duration));
+        let phi_t = step.map(|tb| self.searching_for_ground(&tb.at_time(t), t - duration));
         let posture_t = phi_t.map(|p| Posture::new(&p));
         self.swing.phi1 = phi_t.map_or(f32::NAN, |p| p[0]);
         let share = self.swing_share(posture_t.as_ref());
@@ -159,7 +157,7 @@ impl Sequencer<'_> {
     /// ([`SeqStatus::in_swing_now`](super::SeqStatus::in_swing_now));
     /// infinite outside a swing or without a table.
     pub(super) fn lands_first_from_s(&self) -> f32 {
-        let duration = self.table.as_ref().map_or(0.0, |tb| tb.duration_s());
+        let duration = self.step.as_ref().map_or(0.0, |tb| tb.duration_s());
         let slot = transfer::kind_index(self.gait);
         let after = self.cfg.lands_after.get(slot).copied().unwrap_or(1.0);
         if duration > 0.0 {

@@ -8,6 +8,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod hold;
+mod replan;
 mod start;
 mod swing;
 mod transfer;

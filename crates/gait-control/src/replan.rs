@@ -1,0 +1,292 @@
+//! The hand-off between the tick and the step re-planner that runs in the
+//! tick's idle time (issue: the pilot's ankle is not where the table's
+//! step was planned from).
+//!
+//! The tick never waits for the re-planner and never shares a lock with
+//! it. A [`ReplanSlot`] is memory both sides reach through a shared
+//! reference, each word an atomic, and its `state` says who owns the
+//! samples:
+//!
+//! ```text
+//!   tick: request ──► Requested ──► idle: take ──► Working ──► idle: publish
+//!                                                                  │
+//!   tick: take at the fixed latency ◄── Replanned / Declined / Refused
+//!          │
+//!          └─► Playing (the tick reads the samples; the idle side writes
+//!              only in Working, which only a new request leads to)
+//! ```
+//!
+//! The tick takes the result exactly [`crate::sequencer::SequencerConfig`]'s
+//! `replan_latency_ticks` after its request, never earlier: the step then
+//! starts at the same tick whether the re-planner needed a tenth or all of
+//! that time, so the host's simulation and the board play the same step.
+//! A result not there by then is late: the table is played (the fault
+//! table's notice rows).
+
+use core::sync::atomic::{AtomicU8, AtomicU32, Ordering};
+
+use gait_core::LINKS;
+
+use crate::posture::Side;
+
+/// Most samples a re-planned step holds (5.1 s at the tables' 10 ms).
+pub const REPLAN_CAPACITY: usize = 512;
+
+/// What the tick asks the re-planner: the step of table `slot` with
+/// `stance` as stance leg, from where the pilot's stance ankle will be.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ReplanRequest {
+    /// The table's slot ([`crate::sequencer::GaitTables`]).
+    pub slot: u8,
+    /// The stance leg.
+    pub stance: Side,
+    /// The stance shank's angle φ1 the step will start from (measured at
+    /// the request), rad.
+    pub phi1_rad: f32,
+}
+
+/// How the sequencer uses the re-planner.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ReplanConfig {
+    /// A step is re-planned for a stance ankle up to this far from the
+    /// table's start (φ1(0)), rad; further, the pilot is asked to lean
+    /// (the step waits), as without re-planning.
+    pub ankle_tolerance_rad: f32,
+    /// The answer is taken this many ticks after the request, never
+    /// earlier (what the re-planner has by then; see the module docs).
+    pub latency_ticks: u16,
+    /// A re-planned step is played only if the stance ankle is still within
+    /// this of where it was asked for, rad; else it is asked again.
+    pub ankle_drift_rad: f32,
+}
+
+impl ReplanConfig {
+    /// Up to 0.12 rad (6.9°) from the table's start, the answer taken
+    /// 80 ms after the request, played if the ankle has moved by less
+    /// than 0.02 rad meanwhile.
+    pub const DEFAULT: Self = Self {
+        ankle_tolerance_rad: 0.12,
+        latency_ticks: 80,
+        ankle_drift_rad: 0.02,
+    };
+}
+
+/// What came of the re-plan of a step, as the sequencer reports it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ReplanResult {
+    /// The re-planner's answer at the latency.
+    Answered(ReplanOutcome),
+    /// No answer at the latency: the table is played.
+    Late,
+}
+
+/// What the re-planner made of a request.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ReplanOutcome {
+    /// A better step than the table from there, admitted by the device's
+    /// check: its samples are in the slot.
+    Replanned,
+    /// Nothing better than the table found (or the ankle needs none).
+    Declined,
+    /// A step was found, but the device's admission check refused it.
+    Refused,
+}
+
+/// The slot's states (one byte, so each side reads it in one load).
+mod state {
+    pub const IDLE: u8 = 0;
+    pub const REQUESTED: u8 = 1;
+    pub const WORKING: u8 = 2;
+    pub const REPLANNED: u8 = 3;
+    pub const DECLINED: u8 = 4;
+    pub const REFUSED: u8 = 5;
+    pub const PLAYING: u8 = 6;
+}
+
+/// Where a request stands, as the tick sees it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SlotView {
+    /// No request, or the re-planner is still at it.
+    Pending,
+    /// The re-planner's answer.
+    Done(ReplanOutcome),
+}
+
+/// Shared memory between the tick (the sequencer) and the idle-time
+/// re-planner: a request, then the re-planned samples. Lives as long as
+/// both (a `static` on the board, the simulation's run on the host).
+pub struct ReplanSlot {
+    state: AtomicU8,
+    /// Request: slot and stance (bit 8: right), φ1 (f32 bits).
+    request: [AtomicU32; 2],
+    /// Samples published, and each sample's Φ (f32 bits).
+    len: AtomicU32,
+    samples: [[AtomicU32; LINKS]; REPLAN_CAPACITY],
+}
+
+impl core::fmt::Debug for ReplanSlot {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ReplanSlot")
+            .field("state", &self.state.load(Ordering::Relaxed))
+            .field("len", &self.len.load(Ordering::Relaxed))
+            .finish_non_exhaustive()
+    }
+}
+
+/// One slot is itself: the sequencer compares by where it points.
+impl PartialEq for ReplanSlot {
+    fn eq(&self, other: &Self) -> bool {
+        core::ptr::eq(self, other)
+    }
+}
+
+impl Default for ReplanSlot {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ReplanSlot {
+    /// An empty slot (`const`: a `static` on the board).
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            state: AtomicU8::new(state::IDLE),
+            request: [const { AtomicU32::new(0) }; 2],
+            len: AtomicU32::new(0),
+            samples: [const { [const { AtomicU32::new(0) }; LINKS] }; REPLAN_CAPACITY],
+        }
+    }
+
+    // --- The tick's side -------------------------------------------------
+
+    /// Asks for a re-plan (replacing any request or result not played).
+    pub fn request(&self, r: &ReplanRequest) {
+        let who = u32::from(r.slot) | (u32::from(matches!(r.stance, Side::Right)) << 8);
+        let [a, b] = &self.request;
+        a.store(who, Ordering::Relaxed);
+        b.store(r.phi1_rad.to_bits(), Ordering::Relaxed);
+        self.state.store(state::REQUESTED, Ordering::Release);
+    }
+
+    /// The answer to the last request, if there is one.
+    #[must_use]
+    pub fn view(&self) -> SlotView {
+        match self.state.load(Ordering::Acquire) {
+            state::REPLANNED => SlotView::Done(ReplanOutcome::Replanned),
+            state::DECLINED => SlotView::Done(ReplanOutcome::Declined),
+            state::REFUSED => SlotView::Done(ReplanOutcome::Refused),
+            _ => SlotView::Pending,
+        }
+    }
+
+    /// Takes a [`ReplanOutcome::Replanned`] result for playing: the
+    /// re-planner leaves the samples alone until [`ReplanSlot::release`]
+    /// or the next request. `None` if there is no such result.
+    #[must_use]
+    pub fn take(&self) -> Option<usize> {
+        self.state
+            .compare_exchange(
+                state::REPLANNED,
+                state::PLAYING,
+                Ordering::AcqRel,
+                Ordering::Relaxed,
+            )
+            .ok()
+            .map(|_| (self.len.load(Ordering::Relaxed) as usize).min(REPLAN_CAPACITY))
+    }
+
+    /// Withdraws the request or result (a step that was not started, or
+    /// one that has been played): a re-planner still working discards its
+    /// answer.
+    pub fn release(&self) {
+        self.state.store(state::IDLE, Ordering::Release);
+    }
+
+    /// Sample `k` of the taken step.
+    #[inline]
+    #[must_use]
+    pub fn sample(&self, k: usize) -> Option<[f32; LINKS]> {
+        let s = self.samples.get(k)?;
+        Some(core::array::from_fn(|i| {
+            s.get(i)
+                .map_or(f32::NAN, |v| f32::from_bits(v.load(Ordering::Relaxed)))
+        }))
+    }
+
+    // --- The re-planner's side -------------------------------------------
+
+    /// Takes the pending request for working on it.
+    #[must_use]
+    pub fn take_request(&self) -> Option<ReplanRequest> {
+        self.state
+            .compare_exchange(
+                state::REQUESTED,
+                state::WORKING,
+                Ordering::AcqRel,
+                Ordering::Relaxed,
+            )
+            .ok()?;
+        let [a, b] = &self.request;
+        let who = a.load(Ordering::Relaxed);
+        Some(ReplanRequest {
+            slot: (who & 0xFF) as u8,
+            stance: if who & 0x100 != 0 {
+                Side::Right
+            } else {
+                Side::Left
+            },
+            phi1_rad: f32::from_bits(b.load(Ordering::Relaxed)),
+        })
+    }
+
+    /// Whether the request being worked on still stands (the tick has not
+    /// withdrawn or replaced it): a re-planner may stop early when not.
+    #[must_use]
+    pub fn still_wanted(&self) -> bool {
+        self.state.load(Ordering::Acquire) == state::WORKING
+    }
+
+    /// Publishes the answer to the request being worked on: `samples` (at
+    /// most [`REPLAN_CAPACITY`]) with [`ReplanOutcome::Replanned`], none
+    /// otherwise. Returns `false`, publishing nothing, if the tick has
+    /// withdrawn or replaced the request meanwhile.
+    pub fn publish(&self, outcome: ReplanOutcome, samples: &[[f32; LINKS]]) -> bool {
+        if !self.still_wanted() {
+            return false;
+        }
+        // A step longer than the slot is not played cut short.
+        let outcome = if samples.len() > REPLAN_CAPACITY || samples.len() < 2 {
+            match outcome {
+                ReplanOutcome::Replanned => ReplanOutcome::Declined,
+                other => other,
+            }
+        } else {
+            outcome
+        };
+        let n = if outcome == ReplanOutcome::Replanned {
+            for (slot, s) in self.samples.iter().zip(samples) {
+                for (w, v) in slot.iter().zip(s) {
+                    w.store(v.to_bits(), Ordering::Relaxed);
+                }
+            }
+            samples.len().min(REPLAN_CAPACITY)
+        } else {
+            0
+        };
+        self.len.store(n as u32, Ordering::Relaxed);
+        let done = match outcome {
+            ReplanOutcome::Replanned => state::REPLANNED,
+            ReplanOutcome::Declined => state::DECLINED,
+            ReplanOutcome::Refused => state::REFUSED,
+        };
+        self.state
+            .compare_exchange(state::WORKING, done, Ordering::AcqRel, Ordering::Relaxed)
+            .is_ok()
+    }
+}

@@ -1,0 +1,222 @@
+//! Re-planning a step from where the stance ankle is: the sequencer asks
+//! the idle-time re-planner through the slot, takes its answer exactly at
+//! the latency, plays the re-planned samples, and the table whenever the
+//! answer is late, declined, refused or stale.
+
+use gait_control::replan::{ReplanConfig, ReplanOutcome, ReplanResult, ReplanSlot};
+
+use super::*;
+
+const RC: ReplanConfig = ReplanConfig::DEFAULT;
+
+/// A walk rig with a re-planner on `slot`, asked to start; its posture.
+fn replanning<'t>(img: &'t [u8], slot: &'t ReplanSlot) -> (Rig<'t>, [f32; JOINTS]) {
+    let mut rig = Rig::new(img);
+    rig.seq = rig.seq.with_replanner(slot, RC);
+    let (rig, pose, _) = rig.walking();
+    (rig, pose)
+}
+
+/// Ready, with the stance (left) ankle at `ankle`.
+fn ready_at(pose: [f32; JOINTS], ankle: f32) -> Sensed {
+    let mut s = sensed(pose, READY_FEET, READY_CRUTCHES);
+    s.ankles_rad[Side::Left.ankle()] = ankle;
+    s
+}
+
+/// The table's samples with φ1 moved by `d` throughout (a stand-in for the
+/// re-planner's answer: any samples the slot holds are what is played).
+fn shifted(table: &GaitTable<'_>, d: f32) -> Vec<[f32; 5]> {
+    (0..table.len())
+        .map(|k| {
+            let mut p = table.sample(k).unwrap();
+            p[0] += d;
+            p
+        })
+        .collect()
+}
+
+/// Ticks until the slot holds a request; how many ticks that took.
+fn until_requested(rig: &mut Rig<'_>, slot: &ReplanSlot, s: &Sensed) -> usize {
+    for n in 1..=10 {
+        rig.step(s);
+        if let Some(req) = slot.take_request() {
+            assert_eq!(req.stance, Side::Left);
+            assert_eq!(req.slot, 0);
+            assert_eq!(req.phi1_rad, s.ankles_rad[0]);
+            return n;
+        }
+    }
+    panic!("no request");
+}
+
+#[test]
+fn a_replanned_step_is_played_exactly_at_the_latency() {
+    let img = walk_image();
+    let slot = ReplanSlot::new();
+    let (mut rig, pose) = replanning(&img, &slot);
+    // 0.08 rad off: beyond the table's tolerance, within the re-planner's.
+    let ankle = START_ANKLE + 0.08;
+    const { assert!(0.08 > SequencerConfig::DEFAULT.start_ankle_tolerance_rad) };
+    let s = ready_at(pose, ankle);
+    until_requested(&mut rig, &slot, &s);
+    let answer = shifted(&rig.table, 0.08);
+    assert!(slot.publish(ReplanOutcome::Replanned, &answer));
+    // Answered at once, but taken only at the latency.
+    for _ in 1..RC.latency_ticks {
+        rig.step(&s);
+        assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
+    }
+    let first = rig.tick(&s);
+    assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
+    assert!(
+        rig.events
+            .contains(&SeqEvent::Replan(ReplanResult::Answered(
+                ReplanOutcome::Replanned
+            )))
+    );
+    assert_eq!(first.angle_rad, joints_from_phi(&answer[0], Side::Left));
+    // 0.3 s into the swing the reference is the answer's sample 30, not
+    // the table's.
+    let mut r = first;
+    for _ in 0..300 {
+        r = rig.tick(&s);
+    }
+    let played = joints_from_phi(&answer[30], Side::Left);
+    for (a, b) in r.angle_rad.iter().zip(&played) {
+        assert!((a - b).abs() < 1e-5, "{:?} vs {:?}", r.angle_rad, played);
+    }
+    let motion = r.motion.unwrap();
+    assert!((motion.posture.phi[0] - answer[30][0]).abs() < 1e-5);
+}
+
+#[test]
+fn late_declined_or_stale_answers_play_the_table_where_the_ankle_allows() {
+    let img = walk_image();
+    let within = START_ANKLE + 0.5 * SequencerConfig::DEFAULT.start_ankle_tolerance_rad;
+    let beyond = START_ANKLE + 0.08;
+    for (case, ankle, answer) in [
+        ("late", within, None),
+        ("declined", within, Some(ReplanOutcome::Declined)),
+        ("refused", within, Some(ReplanOutcome::Refused)),
+        ("late, beyond the table", beyond, None),
+    ] {
+        let slot = ReplanSlot::new();
+        let (mut rig, pose) = replanning(&img, &slot);
+        let s = ready_at(pose, ankle);
+        until_requested(&mut rig, &slot, &s);
+        if let Some(outcome) = answer {
+            assert!(slot.publish(outcome, &[]));
+        }
+        for _ in 0..RC.latency_ticks {
+            rig.step(&s);
+        }
+        let expected = match answer {
+            Some(o) => ReplanResult::Answered(o),
+            None => ReplanResult::Late,
+        };
+        assert!(rig.events.contains(&SeqEvent::Replan(expected)), "{case}");
+        if ankle == within {
+            assert!(matches!(rig.seq.phase(), Phase::Swing { .. }), "{case}");
+            let r = rig.tick(&s);
+            let table = joints_from_phi(&rig.table.at_time(0.001), Side::Left);
+            for (a, b) in r.angle_rad.iter().zip(&table) {
+                assert!((a - b).abs() < 1e-5, "{case}");
+            }
+        } else {
+            // Still waiting, and asking again from where the ankle is.
+            assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
+            rig.step(&s);
+            assert!(slot.take_request().is_some(), "{case}");
+        }
+    }
+    // An answer for an ankle that has since moved is not played.
+    let slot = ReplanSlot::new();
+    let (mut rig, pose) = replanning(&img, &slot);
+    until_requested(&mut rig, &slot, &ready_at(pose, beyond));
+    assert!(slot.publish(ReplanOutcome::Replanned, &shifted(&rig.table, 0.08)));
+    let moved = ready_at(pose, beyond + 1.5 * RC.ankle_drift_rad);
+    for _ in 0..RC.latency_ticks {
+        rig.step(&moved);
+    }
+    assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
+}
+
+#[test]
+fn a_request_is_withdrawn_when_the_pilot_unloads_and_never_made_beyond_reach() {
+    let img = walk_image();
+    let slot = ReplanSlot::new();
+    let (mut rig, pose) = replanning(&img, &slot);
+    // Beyond the re-planner's reach: no request, the step waits.
+    let far = ready_at(pose, START_ANKLE + 1.5 * RC.ankle_tolerance_rad);
+    for _ in 0..200 {
+        rig.step(&far);
+    }
+    assert!(slot.take_request().is_none());
+    assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
+    // Asked for, then the crutches unload: the request is withdrawn, and a
+    // re-planner still working on it cannot publish.
+    let s = ready_at(pose, START_ANKLE + 0.08);
+    rig.step(&s);
+    assert!(slot.take_request().is_some());
+    let mut unloaded = s;
+    unloaded.crutches_n = [0.0; 2];
+    rig.step(&unloaded);
+    assert!(!slot.still_wanted());
+    assert!(!slot.publish(ReplanOutcome::Replanned, &shifted(&rig.table, 0.08)));
+}
+
+#[test]
+fn the_selected_tables_samples_are_played_when_a_movement_has_several() {
+    // Two walk tables: the second one's samples shifted, selected by slot.
+    let img = walk_image();
+    let first = GaitTable::parse(&img).unwrap();
+    let other: Vec<[f32; 5]> = shifted(&first, 0.01);
+    let mut img2 = vec![0u8; image_len(other.len())];
+    encode(
+        GaitKind::Walk,
+        10_000,
+        first.ik_options(),
+        &other,
+        &mut img2,
+    )
+    .unwrap();
+    let second = GaitTable::parse(&img2).unwrap();
+    let list = [Some(first), Some(second)];
+    let tables = GaitTables::in_order(&list);
+    let start = joints_from_phi(&second.first(), Side::Left);
+    let mut seq = Sequencer::new(SequencerConfig::DEFAULT, tables, start);
+    let choice = gait_control::operator::GaitChoice {
+        kind: Gait::Walk,
+        slot: 1,
+        flashes: 2,
+    };
+    let mut s = sensed(start, READY_FEET, READY_CRUTCHES);
+    s.ankles_rad = [second.first()[0]; 2];
+    let mut request = Some(SeqRequest::Start(choice));
+    let mut last = None;
+    for _ in 0..302 {
+        let r = seq.update(&SeqInput {
+            sensed: &s,
+            selected: choice,
+            request: request.take(),
+            orders: &Orders::NONE,
+            braked: &[false; JOINTS],
+            hold_joint_at: None,
+            restart: false,
+            dt_s: DT,
+        });
+        last = Some(r);
+    }
+    assert!(matches!(seq.phase(), Phase::Swing { .. }));
+    let phi = last.unwrap().motion.unwrap().posture.phi;
+    let t = match seq.phase() {
+        Phase::Swing { t_s, .. } => t_s,
+        _ => unreachable!(),
+    };
+    let expected = second.at_time(t);
+    assert!(
+        (phi[0] - expected[0]).abs() < 1e-6,
+        "{phi:?} vs {expected:?}"
+    );
+}
