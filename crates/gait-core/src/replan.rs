@@ -16,7 +16,7 @@
 //!   of the step time well before the landing; from t_f on the table's own
 //!   samples are played, so the landing and the posture the next step
 //!   starts from are the table's, exactly. The corrections
-//!   ([`curves`]):
+//!   (`replan/curves.rs`):
 //!   - stance shank: φ1' = φ1 + δ·w(t/t_f) + ω_e·t_f·g(t/t_f), w a
 //!     degree-5 Bézier [1, 1, w2, w3, 0, 0] (starts at the measured
 //!     angle, at rest relative to the table's, ends at rest), g a fixed
@@ -31,10 +31,12 @@
 //!   trailing foot stays on its footprint while it is planted (the start
 //!   posture is the one a pilot leaning δ with both feet down actually
 //!   has, not the table's chain rotated off the floor) and the swing lands
-//!   on the planned foothold. The decision variables are the six numbers
-//!   (t_f/ts, w2, w3, u2, u3, ρ); every correction is proportional to δ,
-//!   so with the pilot on the plan every candidate is the table.
-//! - **Cost and constraints of the clinical mode** ([`cost`]): gait-core's
+//!   on the planned foothold. The price: the first sample's swing hip and
+//!   knee differ from the table's (by 3–6° for a 3° lean). The decision
+//!   variables are the six numbers (t_f/ts, w2, w3, u2, u3, ρ); every
+//!   correction is proportional to δ, so with the pilot on the plan every
+//!   candidate is the table.
+//! - **Cost and constraints of the clinical mode** (`replan/cost.rs`): gait-core's
 //!   playback of the samples ([`crate::playback::for_each_sample`]) gives
 //!   the predicted balance impulse Σ|τ_pilot|Δt/lever plus the clinical
 //!   mode's quadratic penalties (drive torque over its share, joint speed
@@ -43,7 +45,10 @@
 //!   trailing foot at the start), with the same weights; hard rejects for
 //!   a hip or knee torque above what the drive can give at its speed, an
 //!   angle outside the envelope, an IK without a posture, and a landing
-//!   more than [`LANDING_TOLERANCE_M`] off the table's.
+//!   more than [`LANDING_TOLERANCE_M`] off the table's. One term differs:
+//!   the "last centimetre straight down" counts only samples where the
+//!   foot comes down (gait-opt's also counts an ascent's rise to the upper
+//!   tread, some 0.4 m from the landing, which no candidate can change).
 //! - **Baseline** (`table_cost`): the table played from the measured start,
 //!   as the device does without re-planning: every sample rotated by δ. Its
 //!   cost is the same sum plus the landing penalty
@@ -51,7 +56,7 @@
 //!   clinical mode's clearance weight; a clinical table lands by
 //!   construction). Its balance impulse alone is reported too
 //!   ([`Outcome::Replanned`]), so the comparison can be read without it.
-//! - **Search** ([`search`]): a compass (coordinate pattern) search within
+//! - **Search** (`replan/search.rs`): a compass (coordinate pattern) search within
 //!   bounds, at most [`MAX_EVALS`] evaluations. Why not Nelder–Mead or a
 //!   gradient method: the cost is non-smooth (IK branch switches, penalty
 //!   kinks, early rejects give +∞), a simplex in six dimensions spends
@@ -78,9 +83,10 @@ use crate::BodyModel;
 use crate::foot::StanceFoot;
 use crate::scalar::Real;
 
-/// Evaluations a re-plan may use at most (each an IK pass and a playback
-/// over the table: some 0.4 M instructions on the M4F for a 225-sample
-/// table).
+/// Evaluations a re-plan may use at most (each an IK pass over the fade
+/// and a playback over the table: about 0.9 M instructions on the M4F for
+/// a 225–229-sample table, estimated from host time; 48 make some 45 M, a
+/// quarter of a second at 168 MHz).
 pub const MAX_EVALS: u16 = 48;
 /// The re-planned landing may be this far from the table's, m.
 pub const LANDING_TOLERANCE_M: f64 = 0.001;
