@@ -226,7 +226,8 @@ impl<'a, T: Real> Replanner<'a, T> {
                 self.best_x = trial;
                 self.moved = true;
             }
-            (coord, up) = self.next_direction(coord, up);
+            // After a move up, down would score the point just left.
+            (coord, up) = self.next_direction(coord, up && !better);
             if self.outcome.is_none() {
                 self.stage = Stage::Search { coord, up };
             }
