@@ -29,6 +29,7 @@ pub mod model;
 pub mod playback;
 pub mod problem;
 pub mod reach;
+pub mod replan;
 pub mod scalar;
 pub mod tables;
 

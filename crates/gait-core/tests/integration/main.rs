@@ -21,5 +21,6 @@ mod flash_table_properties;
 mod gait_sampling;
 mod ik_properties;
 mod periodic_steps;
+mod replan;
 mod table_ik_options;
 mod toe_rocker;

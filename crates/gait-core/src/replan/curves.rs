@@ -1,0 +1,158 @@
+//! The candidates: the table's samples with the fading corrections of the
+//! decision variables (the module documentation of [`super`] gives the
+//! curves), solved by the IK with the swing ankle on the table's path.
+
+use crate::bezier::Bezier;
+use crate::foot::StanceFoot;
+use crate::ik::{IkSolver, IkTarget};
+use crate::kinematics::Phi;
+use crate::model::{BodyModel, LINKS};
+use crate::playback::swing_ankle;
+use crate::scalar::Real;
+use crate::tables::GaitTable;
+
+use super::Violation;
+
+/// Decision variables: fade end over the step time, the φ1 fade's two
+/// interior values, the torso fade's two, the knee-choice bump per rad of
+/// offset.
+pub(super) const DIM: usize = 6;
+/// The start point: a quintic smoothstep fade of φ1 and torso over half
+/// the step, the table's knee choice.
+pub(super) const INITIAL: [f64; DIM] = [0.5, 1.0, 0.0, 1.0, 0.0, 0.0];
+/// Lower bounds. The fade ends no earlier than 15 % of the step (a faster
+/// return asks the pilot's ankle for a jerk) …
+pub(super) const LOWER: [f64; DIM] = [0.15, -0.5, -0.5, -1.0, -1.0, -4.0];
+/// … and no later than 80 % (the landing stays the table's).
+pub(super) const UPPER: [f64; DIM] = [0.8, 1.5, 1.5, 2.0, 2.0, 4.0];
+/// The search's first step along each variable.
+pub(super) const STEP: [f64; DIM] = [0.15, 0.5, 0.5, 0.5, 0.5, 2.0];
+
+/// A degree-5 Bézier of s ∈ [0, 1] through these control values.
+fn curve<T: Real>(values: [T; 6]) -> Bezier<T, 6> {
+    let mut points = [[T::zero(); 2]; 6];
+    for (j, (p, v)) in points.iter_mut().zip(values).enumerate() {
+        *p = [T::lit(j as f64 / 5.0), v];
+    }
+    Bezier::new(points)
+}
+
+/// The corrections of one candidate, as functions of time.
+struct Corrections<T: Real> {
+    fade_end_s: T,
+    /// δ·w(s) + ω_e·t_f·g(s).
+    phi1: Bezier<T, 6>,
+    /// δ·u(s).
+    phi3: Bezier<T, 6>,
+    /// δ·ρ·b(s).
+    r2: Bezier<T, 6>,
+}
+
+impl<T: Real> Corrections<T> {
+    fn new(x: &[T; DIM], delta: T, rate_error: T, step_time_s: T) -> Self {
+        let [fade, w2, w3, u2, u3, rho] = *x;
+        let fade_end_s = fade * step_time_s;
+        let (d, z) = (delta, T::zero());
+        // g = [0, 1/5, 0, 0, 0, 0] has slope 1 at s = 0, so ω_e·t_f·g
+        // gives the plan the rate ω_e at t = 0.
+        let g1 = rate_error * fade_end_s / T::lit(5.0);
+        let bump = d * rho;
+        Self {
+            fade_end_s,
+            phi1: curve([d, d + g1, d * w2, d * w3, z, z]),
+            phi3: curve([d, d, d * u2, d * u3, z, z]),
+            r2: curve([z, z, bump, bump, z, z]),
+        }
+    }
+
+    /// (φ1, φ3, r2) corrections at `t_s`, or `None` once the fade is over.
+    fn at(&self, t_s: T) -> Option<[T; 3]> {
+        if t_s >= self.fade_end_s || self.fade_end_s <= T::zero() {
+            return None;
+        }
+        let s = t_s / self.fade_end_s;
+        Some([
+            self.phi1.eval(s)[1],
+            self.phi3.eval(s)[1],
+            self.r2.eval(s)[1],
+        ])
+    }
+}
+
+/// One step's re-planning problem: the table, the body, the offset.
+pub(super) struct Plan<'a, T: Real> {
+    pub model: &'a BodyModel<T>,
+    pub foot: StanceFoot<T>,
+    pub ik: IkSolver<T>,
+    pub table: GaitTable<'a>,
+    pub period_s: T,
+    pub step_time_s: T,
+    /// Measured φ1 less the table's at the start, rad.
+    pub delta: T,
+    /// Measured φ1 rate less the table's at the start (limited), rad/s.
+    pub rate_error: T,
+}
+
+impl<T: Real> Plan<'_, T> {
+    /// The table's sample `k`.
+    pub fn table_phi(&self, k: usize) -> Option<Phi<T>> {
+        self.table
+            .sample(k)
+            .map(|s| s.map(|v| T::lit(f64::from(v))))
+    }
+
+    /// The table's sample `k` played from the measured start: the chain
+    /// rotated by δ.
+    pub fn rotated_phi(&self, k: usize) -> Option<Phi<T>> {
+        self.table_phi(k).map(|p| p.map(|v| v + self.delta))
+    }
+
+    /// Writes the candidate `x` into `out` (the table's length).
+    pub fn fill(&self, x: &[T; DIM], out: &mut [[T; LINKS]]) -> Result<(), Violation> {
+        let c = Corrections::new(x, self.delta, self.rate_error, self.step_time_s);
+        for (k, o) in out.iter_mut().enumerate() {
+            let at = u16::try_from(k).unwrap_or(u16::MAX);
+            let table = self.table_phi(k).ok_or(Violation::Playback(at))?;
+            let t = T::lit(k as f64) * self.period_s;
+            *o = match c.at(t) {
+                None => table,
+                Some(e) => self.corrected(&table, e).ok_or(Violation::Ik(at))?,
+            };
+        }
+        Ok(())
+    }
+
+    /// Writes the table's samples into `out`.
+    pub fn fill_table(&self, out: &mut [[T; LINKS]]) {
+        for (k, o) in out.iter_mut().enumerate() {
+            if let Some(p) = self.table_phi(k) {
+                *o = p;
+            }
+        }
+    }
+
+    /// The table's posture with the corrections (φ1, φ3, r2) applied and
+    /// the swing ankle where the table has it, in the stance foot's frame.
+    fn corrected(&self, table: &Phi<T>, [e1, e3, er]: [T; 3]) -> Option<Phi<T>> {
+        let [phi1, phi2, phi3, ..] = *table;
+        let p5 = swing_ankle(self.model, &self.foot, table);
+        let a = self.foot.ankle(phi1).position_m;
+        let (lo, hi) = self.ik.phi2_range(p5[0] - a[0], p5[1] - a[1], phi1).ok()?;
+        let span = hi - lo;
+        let r2 = if span > T::lit(1e-9) {
+            (phi2 - lo) / span
+        } else {
+            T::one()
+        };
+        let phi1 = phi1 + e1;
+        let a = self.foot.ankle(phi1).position_m;
+        let target = IkTarget {
+            x5: p5[0] - a[0],
+            y5: p5[1] - a[1],
+            phi1,
+            phi3: phi3 + e3,
+            r2: (r2 + er).max(T::zero()).min(T::one()),
+        };
+        self.ik.solve(&target).ok().map(|s| s.phi)
+    }
+}
