@@ -139,6 +139,18 @@ pub struct Demand {
 /// Checks `table` against `cfg` (see the module documentation). Bounded:
 /// one pass over the table's samples.
 pub fn check_table(cfg: &DeviceConfig, table: &GaitTable<'_>) -> Result<Demand, Refusal> {
+    check_samples(cfg, table.len(), table.period_s(), |k| table.sample(k))
+}
+
+/// [`check_table`] for the samples `sample(0 … len − 1)` taken every
+/// `period_s` wherever they are kept (a step re-planned on the board is
+/// checked by the same rule before it is played).
+pub fn check_samples(
+    cfg: &DeviceConfig,
+    len: usize,
+    period_s: f32,
+    sample: impl Fn(usize) -> Option<[f32; 5]>,
+) -> Result<Demand, Refusal> {
     let model = cfg.controller.model;
     let foot = StanceFoot::for_model(&model);
     let sv = &cfg.supervisor;
@@ -162,9 +174,9 @@ pub fn check_table(cfg: &DeviceConfig, table: &GaitTable<'_>) -> Result<Demand, 
         &model,
         &foot,
         cfg.ankle_spring_nm_per_rad as f32,
-        table.len(),
-        table.period_s(),
-        |k| table.sample(k),
+        len,
+        period_s,
+        sample,
         |s| {
             let breaks = |joint, value, limit| Refusal::Breaks {
                 sample: s.k,

@@ -25,6 +25,7 @@ pub mod calibration;
 pub mod drive;
 pub mod fitting;
 pub mod parts;
+pub mod replan;
 pub mod sensors;
 pub mod tick_record;
 

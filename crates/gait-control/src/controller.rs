@@ -241,10 +241,8 @@ impl<'t> Controller<'t> {
 
     /// Adapts each step to where the pilot's stance ankle is, through the
     /// idle-time re-planner that shares `slot` ([`crate::replan`]).
-    #[must_use]
-    pub fn with_replanner(mut self, slot: &'t ReplanSlot, cfg: ReplanConfig) -> Self {
+    pub fn set_replanner(&mut self, slot: &'t ReplanSlot, cfg: ReplanConfig) {
         self.seq = self.seq.with_replanner(slot, cfg);
-        self
     }
 
     /// The configuration it was built with.

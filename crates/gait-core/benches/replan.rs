@@ -68,6 +68,8 @@ fn measured(t: &GaitTable<'_>, deg: f32) -> Measured<f32> {
     Measured {
         phi1_rad: t.first()[0] + deg.to_radians(),
         rate_rad_s: (t.sample(1).unwrap()[0] - t.first()[0]) / t.period_s(),
+        persist: 0.0,
+        posture: None,
     }
 }
 

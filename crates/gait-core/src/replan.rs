@@ -109,6 +109,16 @@ pub struct Measured<T> {
     pub phi1_rad: T,
     /// Its rate, rad/s.
     pub rate_rad_s: T,
+    /// Share (0 … 1) of the offset from the table the pilot is expected
+    /// to keep through the step: 0, a pilot who returns to the plan's
+    /// stance shank within the fade; 1, a pilot who leans as they stand
+    /// all the way to the landing (the plan then keeps the offset and the
+    /// joints carry the swing foot to the foothold around it).
+    pub persist: T,
+    /// The posture the step starts from, Φ (rad; φ1 is taken from
+    /// `phi1_rad`): the measured joints. `None`: the table's first posture
+    /// with every link turned by the offset.
+    pub posture: Option<[T; 5]>,
 }
 
 /// The body and the step's geometry the table was made for.

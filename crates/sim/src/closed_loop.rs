@@ -174,6 +174,10 @@ pub struct Rig<'t> {
     transfer_from_phi1: Option<f64>,
     /// The pilot's reaction to a safe hold.
     hold_reaction: pilot_aim::HoldReaction,
+    /// The pilot's own lean over the plan.
+    habit: pilot_aim::Habit,
+    /// The board's idle-time re-planner, when it runs one.
+    pub(crate) replanner: Option<crate::replanning::SimReplanner<'t>>,
     pub(crate) faults: Injector,
     /// The tables the controller was built with (a reboot builds it again).
     tables: GaitTables<'t>,
@@ -324,6 +328,8 @@ impl<'t> Rig<'t> {
             pilot: setup.pilot,
             transfer_from_phi1: None,
             hold_reaction: pilot_aim::HoldReaction::default(),
+            habit: pilot_aim::Habit::default(),
+            replanner: None,
             faults: Injector::default(),
             tables,
             recorded: None,
@@ -467,7 +473,10 @@ impl<'t> Rig<'t> {
             || plant.state().phi[0],
             plant.time_s(),
         );
-        let target = leaned(target, self.faults.pilot_lean_rad);
+        let habit = self
+            .habit
+            .lean(&pilot_cfg, &report.phase, self.plant.config().dt_s);
+        let target = leaned(target, self.faults.pilot_lean_rad + habit);
         if target != self.plant.pilot() {
             self.plant.set_pilot(target);
         }
@@ -477,6 +486,9 @@ impl<'t> Rig<'t> {
         }
         self.wiring.integrate_thermal(self.plant.config().dt_s);
         self.publish();
+        if let Some(r) = &mut self.replanner {
+            r.idle(self.wiring.clock.now(), &self.device, &self.tables);
+        }
         self.wiring.clock.tick();
         self.trace.push(Sample {
             report,
@@ -543,6 +555,10 @@ impl<'t> Rig<'t> {
         let gait = self.controller.planned_gait();
         self.controller = exogait_device::build_controller(&self.device, self.tables, gait)
             .map_err(|_| SimError::Config("the rebooted board's controller was refused"))?;
+        if let Some(r) = &self.replanner {
+            self.controller
+                .set_replanner(r.slot(), exogait_device::replan::REPLAN);
+        }
         self.controller.report_restart_after_panic();
         Ok(None)
     }

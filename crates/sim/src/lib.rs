@@ -32,6 +32,7 @@ pub mod pilot;
 pub mod pins;
 pub mod plant;
 pub mod plot;
+pub mod replanning;
 pub mod replay;
 pub mod scenario;
 pub mod shared;

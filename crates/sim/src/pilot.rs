@@ -75,6 +75,15 @@ pub struct PilotConfig {
     /// Then the time the pilot takes to bring the shank from where it is
     /// to the hold's aim, s (eased in and out). 0: a step of the aim.
     pub hold_recovery_s: f64,
+    /// The pilot's own lean over the plan's stance shank, rad (positive
+    /// forward): a habit kept through every step, standing and swinging …
+    pub habit_lean_rad: f64,
+    /// … except when the device keeps the pilot waiting for a step: after
+    /// this long, s, …
+    pub patience_s: f64,
+    /// … the pilot brings the shank towards the plan at this rate, rad/s,
+    /// for that step (the habit returns with the next weight transfer).
+    pub correction_rad_s: f64,
 }
 
 impl Default for PilotConfig {
@@ -91,6 +100,9 @@ impl Default for PilotConfig {
             baseline_crutch_load_n: 100.0,
             hold_reaction_s: 0.0,
             hold_recovery_s: 0.0,
+            habit_lean_rad: 0.0,
+            patience_s: 0.5,
+            correction_rad_s: 0.05,
         }
     }
 }

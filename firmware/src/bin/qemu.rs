@@ -25,6 +25,8 @@
 mod bundle;
 #[path = "qemu/calibration.rs"]
 mod calibration;
+#[path = "qemu/replan.rs"]
+mod replan;
 
 use core::hint::black_box;
 
@@ -216,6 +218,7 @@ fn run() -> usize {
             failed += replay_bench(out, &mut ctr);
             failed += calibration::check(out);
             failed += bundle::check(out, &mut ctr);
+            failed += replan::check(out, &mut ctr);
         }
         None => {
             out.put(&mut line("bench: SysTick unavailable"));

@@ -84,9 +84,10 @@ impl<'t> Sequencer<'t> {
     /// The step to start now, if the pilot is ready: both crutches loaded,
     /// the feet carrying the body, and the stance ankle at the table's
     /// planned lean (within `start_ankle_tolerance_rad`). With a
-    /// re-planner, the ankle may be further off (up to its
-    /// `ankle_tolerance_rad`): the step is re-planned from where it is,
-    /// and starts once the answer is due.
+    /// re-planner, an ankle off the plan by more than its
+    /// `min_offset_rad` (and up to its `ankle_tolerance_rad`) has the
+    /// step re-planned from where it is, which starts once the answer is
+    /// due.
     fn step_to_start(
         &mut self,
         sensed: &Sensed,
@@ -115,6 +116,8 @@ impl<'t> Sequencer<'t> {
             return None;
         }
         match self.replan_wait {
+            // On the plan: the table, at once.
+            None if off <= rc.min_offset_rad => planned,
             None => {
                 // NaN off: no request.
                 if off <= rc.ankle_tolerance_rad {
@@ -122,6 +125,7 @@ impl<'t> Sequencer<'t> {
                         slot: u8::try_from(self.slot).unwrap_or(u8::MAX),
                         stance,
                         phi1_rad: ankle,
+                        joints_rad: sensed.joints_rad,
                     });
                     self.replan_from = ankle;
                     self.replan_wait = Some(0);

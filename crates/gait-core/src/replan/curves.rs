@@ -40,42 +40,54 @@ fn curve<T: Real>(values: [T; 6]) -> Bezier<T, 6> {
 /// The corrections of one candidate, as functions of time.
 struct Corrections<T: Real> {
     fade_end_s: T,
-    /// δ·w(s) + ω_e·t_f·g(s).
+    /// The φ1 correction kept after the fade: the share of the offset the
+    /// pilot keeps (`Measured::persist`).
+    kept: T,
+    /// δ·w(s) + ω_e·t_f·g(s), then `kept`.
     phi1: Bezier<T, 6>,
-    /// δ·u(s).
-    phi3: Bezier<T, 6>,
+    /// u(s): the share of the start's torso offset and swing-ankle and
+    /// knee-choice shift left.
+    fade: Bezier<T, 6>,
+    /// The torso's offset at the start, rad.
+    torso: T,
     /// δ·ρ·b(s).
     r2: Bezier<T, 6>,
 }
 
 impl<T: Real> Corrections<T> {
-    fn new(x: &[T; DIM], delta: T, rate_error: T, step_time_s: T) -> Self {
+    fn new(x: &[T; DIM], plan: &Plan<'_, T>) -> Self {
         let [fade, w2, w3, u2, u3, rho] = *x;
-        let fade_end_s = fade * step_time_s;
-        let (d, z) = (delta, T::zero());
+        let fade_end_s = fade * plan.step_time_s;
+        let (d, z, one) = (plan.delta, T::zero(), T::one());
         // g = [0, 1/5, 0, 0, 0, 0] has slope 1 at s = 0, so ω_e·t_f·g
         // gives the plan the rate ω_e at t = 0.
-        let g1 = rate_error * fade_end_s / T::lit(5.0);
+        let g1 = plan.rate_error * fade_end_s / T::lit(5.0);
         let bump = d * rho;
+        let kept = d * plan.persist;
         Self {
             fade_end_s,
-            phi1: curve([d, d + g1, d * w2, d * w3, z, z]),
-            phi3: curve([d, d, d * u2, d * u3, z, z]),
+            kept,
+            phi1: curve([d, d + g1, d * w2, d * w3, kept, kept]),
+            fade: curve([one, one, u2, u3, z, z]),
+            torso: plan.start_torso,
             r2: curve([z, z, bump, bump, z, z]),
         }
     }
 
-    /// (φ1, φ3, r2) corrections at `t_s`, or `None` once the fade is over.
-    fn at(&self, t_s: T) -> Option<[T; 3]> {
-        if t_s >= self.fade_end_s || self.fade_end_s <= T::zero() {
-            return None;
+    /// (φ1, φ3, r2) corrections at `t_s` and the share of the start's
+    /// shift left; `None` once the fade is over and nothing is kept (the
+    /// table's own sample).
+    fn at(&self, t_s: T) -> Option<([T; 3], T)> {
+        let z = T::zero();
+        if t_s >= self.fade_end_s || self.fade_end_s <= z {
+            return (self.kept != z).then_some(([self.kept, z, z], z));
         }
         let s = t_s / self.fade_end_s;
-        Some([
-            self.phi1.eval(s)[1],
-            self.phi3.eval(s)[1],
-            self.r2.eval(s)[1],
-        ])
+        let u = self.fade.eval(s)[1];
+        Some((
+            [self.phi1.eval(s)[1], self.torso * u, self.r2.eval(s)[1]],
+            u,
+        ))
     }
 }
 
@@ -91,6 +103,17 @@ pub(super) struct Plan<'a, T: Real> {
     pub delta: T,
     /// Measured φ1 rate less the table's at the start (limited), rad/s.
     pub rate_error: T,
+    /// Share of δ the pilot is expected to keep to the landing.
+    pub persist: T,
+    /// The posture the step starts from: the measured one, or the
+    /// table's first with every link turned by δ.
+    pub start_phi: Phi<T>,
+    /// Where it puts the swing ankle and the knee choice, less where the
+    /// table's first posture does ([`Plan::start_shift`]) …
+    pub start_shift: ([T; 2], T),
+    /// … and its torso less the table's, rad: the first sample is the
+    /// posture the body is in.
+    pub start_torso: T,
 }
 
 impl<T: Real> Plan<'_, T> {
@@ -109,14 +132,14 @@ impl<T: Real> Plan<'_, T> {
 
     /// Writes the candidate `x` into `out` (the table's length).
     pub fn fill(&self, x: &[T; DIM], out: &mut [[T; LINKS]]) -> Result<(), Violation> {
-        let c = Corrections::new(x, self.delta, self.rate_error, self.step_time_s);
+        let c = Corrections::new(x, self);
         for (k, o) in out.iter_mut().enumerate() {
             let at = u16::try_from(k).unwrap_or(u16::MAX);
             let table = self.table_phi(k).ok_or(Violation::Playback(at))?;
             let t = T::lit(k as f64) * self.period_s;
             *o = match c.at(t) {
                 None => table,
-                Some(e) => self.corrected(&table, e).ok_or(Violation::Ik(at))?,
+                Some((e, shift)) => self.corrected(&table, e, shift).ok_or(Violation::Ik(at))?,
             };
         }
         Ok(())
@@ -131,11 +154,11 @@ impl<T: Real> Plan<'_, T> {
         }
     }
 
-    /// The table's posture with the corrections (φ1, φ3, r2) applied and
-    /// the swing ankle where the table has it, in the stance foot's frame.
-    fn corrected(&self, table: &Phi<T>, [e1, e3, er]: [T; 3]) -> Option<Phi<T>> {
-        let [phi1, phi2, phi3, ..] = *table;
-        let p5 = swing_ankle(self.model, &self.foot, table);
+    /// The swing ankle (stance foot's flat frame) and the knee choice r2
+    /// of `phi`.
+    fn ankle_and_knee(&self, phi: &Phi<T>) -> Option<([T; 2], T)> {
+        let [phi1, phi2, ..] = *phi;
+        let p5 = swing_ankle(self.model, &self.foot, phi);
         let a = self.foot.ankle(phi1).position_m;
         let (lo, hi) = self.ik.phi2_range(p5[0] - a[0], p5[1] - a[1], phi1).ok()?;
         let span = hi - lo;
@@ -144,6 +167,35 @@ impl<T: Real> Plan<'_, T> {
         } else {
             T::one()
         };
+        Some((p5, r2))
+    }
+
+    /// Where the start posture ([`Plan::start_phi`]) puts the swing ankle
+    /// and the knee choice, less where the table's first does. The
+    /// candidates start there and fade back to the table's path with the
+    /// torso (u), so the first sample is the posture the body is in.
+    pub fn start_shift(&self) -> ([T; 2], T) {
+        let z = ([T::zero(); 2], T::zero());
+        let Some(table) = self.table_phi(0) else {
+            return z;
+        };
+        match (
+            self.ankle_and_knee(&table),
+            self.ankle_and_knee(&self.start_phi),
+        ) {
+            (Some((p, r)), Some((q, s))) => ([q[0] - p[0], q[1] - p[1]], s - r),
+            _ => z,
+        }
+    }
+
+    /// The table's posture with the corrections (φ1, φ3, r2) applied and
+    /// the swing ankle where the table has it, in the stance foot's frame,
+    /// shifted by `start_shift` times `shift` (1 at the start, fading).
+    fn corrected(&self, table: &Phi<T>, [e1, e3, er]: [T; 3], shift: T) -> Option<Phi<T>> {
+        let [phi1, _, phi3, ..] = *table;
+        let (p5, r2) = self.ankle_and_knee(table)?;
+        let ([dx, dy], dr) = self.start_shift;
+        let p5 = [p5[0] + shift * dx, p5[1] + shift * dy];
         let phi1 = phi1 + e1;
         let a = self.foot.ankle(phi1).position_m;
         let target = IkTarget {
@@ -151,7 +203,7 @@ impl<T: Real> Plan<'_, T> {
             y5: p5[1] - a[1],
             phi1,
             phi3: phi3 + e3,
-            r2: (r2 + er).max(T::zero()).min(T::one()),
+            r2: (r2 + shift * dr + er).max(T::zero()).min(T::one()),
         };
         self.ik.solve(&target).ok().map(|s| s.phi)
     }

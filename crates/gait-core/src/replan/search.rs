@@ -76,7 +76,10 @@ impl<'a, T: Real> Replanner<'a, T> {
         if out.len() != table.len() {
             return Err(ReplanError::BufferLength);
         }
-        if !(measured.phi1_rad.finite() && measured.rate_rad_s.finite()) {
+        if !(measured.phi1_rad.finite()
+            && measured.rate_rad_s.finite()
+            && measured.persist.finite())
+        {
             return Err(ReplanError::BadMeasurement);
         }
         if !limits.valid() {
@@ -107,7 +110,7 @@ impl<'a, T: Real> Replanner<'a, T> {
         let rate_error = (measured.rate_rad_s - table_rate)
             .max(-max_rate)
             .min(max_rate);
-        let plan = Plan {
+        let mut plan = Plan {
             model: setup.model,
             foot: setup.foot,
             ik: IkSolver::new(setup.model).with_options(table.ik_options().cast()),
@@ -116,7 +119,25 @@ impl<'a, T: Real> Replanner<'a, T> {
             step_time_s: lit(table.duration_s()),
             delta,
             rate_error,
+            persist: measured.persist.max(T::zero()).min(T::one()),
+            start_phi: [T::zero(); LINKS],
+            start_shift: ([T::zero(); 2], T::zero()),
+            start_torso: T::zero(),
         };
+        let rotated = plan.rotated_phi(0).unwrap_or(plan.start_phi);
+        plan.start_phi = match measured.posture {
+            Some(p) if p.iter().all(|v| v.finite()) => {
+                let mut p = p;
+                // φ1 is the measured angle itself.
+                if let Some(phi1) = p.first_mut() {
+                    *phi1 = measured.phi1_rad;
+                }
+                p
+            }
+            _ => rotated,
+        };
+        plan.start_shift = plan.start_shift();
+        plan.start_torso = plan.start_phi[2] - lit(first[2]);
         let planned_landing_m = swing_ankle(setup.model, &setup.foot, &plan.table_phi_last());
         let mut me = Self {
             plan,

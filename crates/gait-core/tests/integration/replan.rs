@@ -73,6 +73,8 @@ fn measured(t: &GaitTable<'_>, deg: f32) -> Measured<f32> {
     Measured {
         phi1_rad: t.first()[0] + deg.to_radians(),
         rate_rad_s: table_rate(t),
+        persist: 0.0,
+        posture: None,
     }
 }
 
@@ -295,6 +297,8 @@ fn unusable_inputs_are_refused() {
     let nan = Measured {
         phi1_rad: f32::NAN,
         rate_rad_s: 0.0,
+        persist: 0.0,
+        posture: None,
     };
     assert_eq!(
         err(Replanner::new(s, limits(), table, nan, &mut out, 8)),
@@ -349,6 +353,8 @@ fn generic_over_the_scalar() {
     let m = Measured {
         phi1_rad: f64::from(m32.phi1_rad),
         rate_rad_s: f64::from(m32.rate_rad_s),
+        persist: f64::from(m32.persist),
+        posture: None,
     };
     let mut r = Replanner::new(s, l, table, m, &mut out, MAX_EVALS).unwrap();
     let p = r.step(MAX_EVALS);

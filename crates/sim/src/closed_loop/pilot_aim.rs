@@ -69,6 +69,43 @@ pub(crate) fn pilot_target(
     }
 }
 
+/// The pilot's habit ([`PilotConfig::habit_lean_rad`]): the lean over the
+/// plan this tick, rad — the whole habit from each weight transfer (and
+/// while standing) on, corrected towards the plan once a step has kept
+/// the pilot waiting longer than their patience, and kept as it is through
+/// the swing that follows.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Habit {
+    lean_rad: Option<f64>,
+    waited_s: f64,
+}
+
+impl Habit {
+    pub(crate) fn lean(&mut self, cfg: &PilotConfig, phase: &Phase, dt_s: f64) -> f64 {
+        let habit = cfg.habit_lean_rad;
+        let lean = self.lean_rad.get_or_insert(habit);
+        match phase {
+            Phase::Standing | Phase::Transfer { .. } => {
+                *lean = habit;
+                self.waited_s = 0.0;
+            }
+            Phase::WaitingReady { .. } => {
+                self.waited_s += dt_s;
+                if self.waited_s > cfg.patience_s {
+                    let step = cfg.correction_rad_s * dt_s;
+                    *lean = if lean.abs() <= step {
+                        0.0
+                    } else {
+                        *lean - step * lean.signum()
+                    };
+                }
+            }
+            Phase::Swing { .. } | Phase::SafeHold { .. } => {}
+        }
+        *lean
+    }
+}
+
 /// The pilot's reaction to a safe hold ([`PilotConfig::hold_reaction_s`],
 /// [`PilotConfig::hold_recovery_s`]): what the pilot aimed at before the
 /// hold, kept for the reaction time, then a move from where the shank is

@@ -220,3 +220,14 @@ fn the_selected_tables_samples_are_played_when_a_movement_has_several() {
         "{phi:?} vs {expected:?}"
     );
 }
+
+#[test]
+fn a_pilot_on_the_plan_steps_at_once_without_a_request() {
+    let img = walk_image();
+    let slot = ReplanSlot::new();
+    let (mut rig, pose) = replanning(&img, &slot);
+    rig.step(&ready_at(pose, START_ANKLE + 0.5 * RC.min_offset_rad));
+    assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
+    assert!(slot.take_request().is_none());
+    assert!(!rig.events.iter().any(|e| matches!(e, SeqEvent::Replan(_))));
+}
