@@ -14,12 +14,14 @@ use std::path::PathBuf;
 
 use clap::Args;
 use exogait_device::DeviceConfig;
+use gait_control::replan::ReplanSlot;
 use gait_core::tables::{GaitKind, GaitTable};
 use gait_opt::clinical::ClinicalCase;
 use gait_opt::human::playable_human_gait_in_loop;
 use serde::Serialize;
 use sim::compare::{GaitRun, play, reduction_pct};
 
+use crate::conditions::Conditions;
 use crate::simulate::SimGait;
 
 /// Options of `exogait compare`.
@@ -42,6 +44,9 @@ pub struct CompareArgs {
     /// Write a plot of both runs (.svg or .png).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
+    /// The pilot and whether the board re-plans.
+    #[command(flatten)]
+    pub conditions: Conditions,
 }
 
 /// One gait's figures in the JSON answer.
@@ -59,6 +64,14 @@ pub struct RunJson {
     pub saturated_s: Vec<f64>,
     /// Per step: landing x less the plan's, m (null: no landing).
     pub landing_error_m: Vec<Option<f64>>,
+    /// Per step: its landing less the previous one less the planned step,
+    /// m (null: no landing).
+    pub step_error_m: Vec<Option<f64>>,
+    /// Per step: time the device waited for the pilot before its swing
+    /// (readiness, a re-plan's latency), s.
+    pub waited_s: Vec<f64>,
+    /// Steps played re-planned.
+    pub replanned_steps: usize,
     /// Landings (world x, y), m.
     pub landings: Vec<[f64; 2]>,
     /// Faults latched, code and name.
@@ -156,12 +169,21 @@ pub struct CompareJson {
     pub reduction_pct: ReductionJson,
     /// The device.
     pub device: DeviceJson,
+    /// The pilot and whether the board re-planned.
+    pub conditions: Conditions,
 }
 
-fn run_json(r: &GaitRun, clearance_min_m: Option<f64>) -> RunJson {
+fn run_json(r: &GaitRun, rig: &sim::closed_loop::Rig<'_>) -> RunJson {
     RunJson {
+        step_error_m: r.steps.iter().map(|s| s.step_error_m).collect(),
+        waited_s: r.steps.iter().map(|s| s.waited_s).collect(),
+        replanned_steps: rig
+            .replans()
+            .iter()
+            .filter(|p| p.answer.outcome == gait_control::replan::ReplanOutcome::Replanned)
+            .count(),
         progression_m_s: r.progression_m_s(),
-        clearance_min_m,
+        clearance_min_m: sim::compare::nosing_clearance_m(rig),
         f_ns: r.steps.iter().map(|s| s.impulse_ns).collect(),
         f_balance_ns: r.steps.iter().map(|s| s.balance_ns).collect(),
         peak_N: r
@@ -190,12 +212,16 @@ fn run_json(r: &GaitRun, clearance_min_m: Option<f64>) -> RunJson {
 }
 
 /// The comparison of one shipped gait (also the main job's).
-pub fn compare(kind: GaitKind, steps: usize) -> Result<(CompareJson, GaitRun, GaitRun), String> {
+pub fn compare(
+    kind: GaitKind,
+    steps: usize,
+    conditions: &Conditions,
+) -> Result<(CompareJson, GaitRun, GaitRun), String> {
     let device = DeviceConfig::exogait().map_err(|e| format!("device: {e:?}"))?;
     let shipped = gait_core::flash_tables::of(kind)
         .map_err(|e| format!("the shipped table is refused: {e}"))?;
     let name = gait_opt::clinical_report::gait_name(kind).to_string();
-    compare_table(&device, shipped, name, None, steps)
+    compare_table(&device, shipped, name, None, steps, conditions)
 }
 
 /// The comparison of `table` on `device` (fitted to a patient, or as
@@ -207,6 +233,7 @@ pub fn compare_table(
     name: String,
     patient_hash: Option<u32>,
     steps: usize,
+    conditions: &Conditions,
 ) -> Result<(CompareJson, GaitRun, GaitRun), String> {
     let kind = shipped.kind();
     let geometry = sim::scenario::table_geometry(&shipped, &device.body);
@@ -222,12 +249,17 @@ pub fn compare_table(
     let image = gait_opt::tables::table_image(kind, &case.ik, &human.phi)
         .map_err(|e| format!("human-data gait as a table: {e}"))?;
     let human_table = GaitTable::parse(&image).map_err(|e| format!("human table: {e}"))?;
-    let pilot = sim::scenario::strong_pilot();
+    let pilot = conditions.pilot(sim::scenario::strong_pilot());
     let max_s = 8.0 + (2.0 + case.step_time_s) * steps as f64;
-    let (ours, our_rig) = play(device, shipped, pilot, steps, max_s, |_| {})
-        .map_err(|e| format!("shipped table: {e}"))?;
-    let (theirs, their_rig) = play(device, human_table, pilot, steps, max_s, |_| {})
-        .map_err(|e| format!("human-data gait: {e}"))?;
+    let (our_slot, their_slot) = (ReplanSlot::new(), ReplanSlot::new());
+    let (ours, our_rig) = play(device, shipped, pilot, steps, max_s, |rig| {
+        conditions.prepare(rig, &our_slot);
+    })
+    .map_err(|e| format!("shipped table: {e}"))?;
+    let (theirs, their_rig) = play(device, human_table, pilot, steps, max_s, |rig| {
+        conditions.prepare(rig, &their_slot);
+    })
+    .map_err(|e| format!("human-data gait: {e}"))?;
     let level = kind == GaitKind::Walk;
     let answer = CompareJson {
         gait: name,
@@ -240,8 +272,9 @@ pub fn compare_table(
             step_time_s: f64::from(shipped.duration_s()),
         },
         steps,
-        shipped: run_json(&ours, sim::compare::nosing_clearance_m(&our_rig)),
-        human: run_json(&theirs, sim::compare::nosing_clearance_m(&their_rig)),
+        shipped: run_json(&ours, &our_rig),
+        human: run_json(&theirs, &their_rig),
+        conditions: *conditions,
         human_torso_lean_rad: human.torso_lean_rad,
         reduction_pct: ReductionJson {
             f: reduction_pct(ours.mean(|s| s.impulse_ns), theirs.mean(|s| s.impulse_ns)),
@@ -326,6 +359,36 @@ pub fn table_text(a: &CompareJson) -> String {
         faults(&a.shipped),
         faults(&a.human)
     );
+    let per_step = |v: &[Option<f64>], scale: f64| {
+        v.iter()
+            .map(|e| opt(e.map(|x| x * scale), 1))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let waits = |v: &[f64]| {
+        v.iter()
+            .map(|w| format!("{w:.2}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    out += &format!(
+        "step error (mm): shipped {}; human {}\nwaited before each swing (s): shipped {}; human {}\n",
+        per_step(&a.shipped.step_error_m, 1e3),
+        per_step(&a.human.step_error_m, 1e3),
+        waits(&a.shipped.waited_s),
+        waits(&a.human.waited_s),
+    );
+    let c = &a.conditions;
+    if c.replan == crate::conditions::OnOff::On || c.pilot_lean != 0.0 || c.pilot_stiffness != 1.0 {
+        out += &format!(
+            "pilot: lean {:+.1}°, stiffness ×{:.2}; re-planning {} (steps re-planned: shipped {}, human {})\n",
+            c.pilot_lean,
+            c.pilot_stiffness,
+            if c.replan == crate::conditions::OnOff::On { "on" } else { "off" },
+            a.shipped.replanned_steps,
+            a.human.replanned_steps,
+        );
+    }
     out += &format!(
         "reduction (shipped against human): F {} %, balance part {} %, highest crutch peak {} %\n",
         opt(a.reduction_pct.f, 1),
@@ -340,6 +403,7 @@ fn compare_bundle(
     path: &std::path::Path,
     name: &str,
     steps: usize,
+    conditions: &Conditions,
 ) -> Result<(CompareJson, GaitRun, GaitRun), String> {
     let file = crate::bundle_file::BundleFile::load(path)?;
     let bundle = file.bundle()?;
@@ -357,6 +421,7 @@ fn compare_bundle(
         name.to_string(),
         Some(bundle.patient_hash()),
         steps,
+        conditions,
     )
 }
 
@@ -371,10 +436,15 @@ pub fn run(args: &CompareArgs) -> u8 {
         eprintln!("exogait compare: {e}");
         return 2;
     }
+    if let Err(e) = args.conditions.check() {
+        eprintln!("exogait compare: {e}");
+        return 2;
+    }
+    let c = &args.conditions;
     let result = match &args.bundle {
-        Some(path) => compare_bundle(path, &args.gait, args.steps),
+        Some(path) => compare_bundle(path, &args.gait, args.steps, c),
         None => match <SimGait as clap::ValueEnum>::from_str(&args.gait, false) {
-            Ok(g) => compare(g.kind(), args.steps),
+            Ok(g) => compare(g.kind(), args.steps, c),
             Err(_) => {
                 eprintln!(
                     "exogait compare: --gait {:?}: without --bundle, one of walk, stair-up, stair-down",

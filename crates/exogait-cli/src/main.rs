@@ -8,6 +8,7 @@ mod bundle_cmd;
 mod bundle_file;
 mod commands;
 mod compare;
+mod conditions;
 mod cost;
 mod family;
 mod faults;

@@ -98,6 +98,9 @@ pub struct SimulateArgs {
     /// faults with detection and reaction) instead of the text.
     #[arg(long)]
     pub json: bool,
+    /// The pilot and whether the board re-plans.
+    #[command(flatten)]
+    pub conditions: crate::conditions::Conditions,
 }
 
 fn parse_injection(text: &str) -> Result<Injection, String> {
@@ -120,6 +123,22 @@ struct SimulateJson {
     fell_reason: Option<String>,
     faults: Vec<FaultJson>,
     ended_by: Option<String>,
+    /// Per step: its landing less the previous one less the planned
+    /// step, m.
+    step_error_m: Vec<f64>,
+    /// Per step: the time the device waited for the pilot before it, s.
+    waited_s: Vec<f64>,
+    /// Each re-plan: its answer and its cost on the board.
+    replans: Vec<ReplanJson>,
+    conditions: crate::conditions::Conditions,
+}
+
+#[derive(Debug, Serialize)]
+struct ReplanJson {
+    asked_s: f64,
+    used: &'static str,
+    evals: u16,
+    instructions: u64,
 }
 
 #[derive(Debug, Serialize)]
@@ -172,6 +191,10 @@ pub fn run(args: &SimulateArgs) -> u8 {
     }
     if args.steps == 0 || args.steps > 20 {
         eprintln!("exogait simulate: --steps must be in 1..=20");
+        return 2;
+    }
+    if let Err(e) = args.conditions.check() {
+        eprintln!("exogait simulate: {e}");
         return 2;
     }
 
@@ -272,14 +295,17 @@ pub fn run(args: &SimulateArgs) -> u8 {
     let noise = args.sensor_noise;
     let noise_seed = args.noise_seed;
     let injections = args.inject.clone();
+    let conditions = args.conditions;
+    let slot = gait_control::replan::ReplanSlot::new();
     let run = match sim::scenario::run_tables_with(
         &device,
         tables,
         gait,
-        sim::scenario::strong_pilot(),
+        conditions.pilot(sim::scenario::strong_pilot()),
         seconds,
         args.steps,
         |rig| {
+            conditions.prepare(rig, &slot);
             if let Some((enc, adc)) = noise {
                 rig.set_sensor_noise(enc, adc, noise_seed);
             }
@@ -340,6 +366,33 @@ pub fn run(args: &SimulateArgs) -> u8 {
                 })
                 .collect(),
             ended_by: run.ended_by.as_ref().map(ToString::to_string),
+            step_error_m: landed_x
+                .iter()
+                .enumerate()
+                .map(|(i, x)| {
+                    let from = i.checked_sub(1).and_then(|j| landed_x.get(j)).copied();
+                    x - from.unwrap_or(0.0) - step
+                })
+                .collect(),
+            waited_s: sim::summary::waited_before_swings(
+                &run.rig.trace,
+                f64::from(device.dt_s),
+            ),
+            replans: run
+                .rig
+                .replans()
+                .iter()
+                .map(|r| ReplanJson {
+                    asked_s: r.asked_at as f64 * f64::from(device.dt_s),
+                    used: match r.answer.outcome {
+                        gait_control::replan::ReplanOutcome::Replanned => "replanned",
+                        _ => "table",
+                    },
+                    evals: r.answer.evals,
+                    instructions: r.answer.instructions(),
+                })
+                .collect(),
+            conditions,
         };
         match serde_json::to_string_pretty(&answer) {
             Ok(text) => println!("{text}"),

@@ -38,8 +38,15 @@ pub struct StepLoad {
     pub peak_n: [f64; 2],
     /// Time the pilot's torque was at its limit, s.
     pub saturated_s: f64,
-    /// Landing x less the plan's, m (`None`: the step did not land).
+    /// Landing x less the plan's, m (`None`: the step did not land): the
+    /// drift of the steps so far.
     pub landing_error_m: Option<f64>,
+    /// This step's own error: its landing less the previous one (or the
+    /// start) less the planned step, m.
+    pub step_error_m: Option<f64>,
+    /// Time the device waited for the pilot before this step's swing
+    /// (readiness, and a re-plan's latency), s.
+    pub waited_s: f64,
     /// When it landed, s (`None`: it did not).
     pub landing_s: Option<f64>,
 }
@@ -194,6 +201,7 @@ fn measure(
         })
         .map(|w| w[1].state.time_s - dt)
         .collect();
+    let waits = crate::summary::waited_before_swings(trace, dt);
     let landings = rig.plant.landings();
     let end_of_run = trace.last().map_or(0.0, |s| s.state.time_s);
     let limit = pilot.torque_limit_nm - 1e-9;
@@ -205,6 +213,7 @@ fn measure(
             let landing = landings.iter().find(|l| l.time_s > start);
             let next_start = starts.get(i + 1).copied().unwrap_or(f64::INFINITY);
             let end = landing.map_or(end_of_run, |l| (l.time_s + transfer).min(next_start));
+            let waited_s = waits.get(i).copied().unwrap_or(0.0);
             let mut s = StepLoad {
                 start_s: start,
                 end_s: end,
@@ -213,6 +222,8 @@ fn measure(
                 peak_n: [0.0; 2],
                 saturated_s: 0.0,
                 landing_error_m: None,
+                step_error_m: None,
+                waited_s,
                 landing_s: None,
             };
             for t in trace
@@ -230,6 +241,12 @@ fn measure(
             if let Some(l) = landing.filter(|l| l.time_s < next_start) {
                 let k = (i + 1) as f64;
                 s.landing_error_m = Some(l.position_m[0] - step_m[0] * k);
+                let from = landings
+                    .iter()
+                    .rev()
+                    .find(|p| p.time_s < start)
+                    .map_or(0.0, |p| p.position_m[0]);
+                s.step_error_m = Some(l.position_m[0] - from - step_m[0]);
                 s.landing_s = Some(l.time_s);
             }
             s

@@ -105,3 +105,29 @@ pub fn encode(recordings: &[Recording]) -> Vec<u8> {
     }
     out
 }
+
+impl crate::closed_loop::Rig<'_> {
+    /// Starts recording every tick's peripheral state and commands into
+    /// [`Rig::recorded`] (turn sensor noise off: the record holds one sample
+    /// of each reading, the driver may take others).
+    pub fn record_ticks(&mut self) {
+        self.recorded = Some(Vec::new());
+    }
+
+    /// What the peripherals present to the controller this tick.
+    pub(crate) fn peripheral_state(&self, deadline_missed: bool) -> TickRecord {
+        let now = self.now();
+        TickRecord {
+            encoder_counts: std::array::from_fn(|i| match i.checked_sub(4) {
+                None => self.joint_encoders[i].angle_register(),
+                Some(a) => self.ankle_encoders[a].angle_register(),
+            }),
+            adc_counts: std::array::from_fn(|ch| self.adc.counts(ch)),
+            mode_pressed: self.mode.pressed_at(now),
+            go_pressed: self.go.pressed_at(now),
+            e_stop_pressed: self.e_stop.is_pressed(),
+            deadline_missed,
+            host_command_nm: [0.0; 4],
+        }
+    }
+}

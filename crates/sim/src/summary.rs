@@ -263,3 +263,23 @@ fn phase_text(p: &Phase) -> String {
         Phase::SafeHold { .. } => "safe hold".into(),
     }
 }
+
+/// Per swing in `trace`: the time the device waited for the pilot before
+/// it (ticks in `WaitingReady` since the previous swing began), s.
+pub fn waited_before_swings(trace: &[Sample], dt_s: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut waiting = 0u64;
+    let mut in_swing = false;
+    for s in trace {
+        match s.report.phase {
+            gait_control::sequencer::Phase::WaitingReady { .. } => waiting += 1,
+            gait_control::sequencer::Phase::Swing { .. } if !in_swing => {
+                out.push(waiting as f64 * dt_s);
+                waiting = 0;
+            }
+            _ => {}
+        }
+        in_swing = matches!(s.report.phase, gait_control::sequencer::Phase::Swing { .. });
+    }
+    out
+}

@@ -13,5 +13,6 @@ mod documents;
 mod fault_injection;
 mod ground_search;
 mod patient_bundle;
+mod replanning;
 mod sensing_faults;
 mod set_down;

@@ -1,5 +1,5 @@
 //! exogait-device's integration tests, in one binary (one link, one lint
-//! header): the boot from flash, the drives' figures.
+//! header): the boot from flash, the drives' figures, the re-plan.
 // Clippy's allow-*-in-tests covers `#[test]` fns, not the helpers here.
 #![allow(
     clippy::unwrap_used,
@@ -11,3 +11,4 @@
 
 mod boot;
 mod drive;
+mod replan;

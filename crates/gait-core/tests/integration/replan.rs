@@ -366,3 +366,37 @@ fn generic_over_the_scalar() {
     let got = swing_ankle(&body, &s.foot, r.samples().last().unwrap());
     assert!((got[0] - planned[0]).hypot(got[1] - planned[1]) < 1e-3);
 }
+
+#[test]
+fn a_measured_posture_is_the_first_sample_and_a_kept_offset_still_lands_on_the_foothold() {
+    for kind in KINDS {
+        let table = flash_tables::of(kind).unwrap();
+        let first = table.first();
+        // The joints held where the table starts, the shank 3° forward:
+        // every link but the shank's turned with it, the trailing knee
+        // given 2° by the closed chain.
+        let lean = 3.0f32.to_radians();
+        let mut posture = first.map(|v| v + lean);
+        posture[4] += 2.0f32.to_radians();
+        for persist in [0.0f32, 1.0] {
+            let m = Measured {
+                persist,
+                posture: Some(posture),
+                ..measured(&table, 3.0)
+            };
+            let (outcome, out, _) = run(kind, m, MAX_EVALS);
+            assert!(
+                matches!(outcome, Outcome::Replanned { .. }),
+                "{kind:?} persist {persist}: {outcome:?}"
+            );
+            for (a, b) in out[0].iter().zip(&posture) {
+                assert!((a - b).abs() < 1e-4, "{kind:?}: starts at {:?}", out[0]);
+            }
+            assert!(landing_error(kind, &out) < 1e-3, "{kind:?} persist {persist}");
+            assert_within_limits(kind, &out);
+            // Kept: the stance shank lands 3° ahead of the table's.
+            let kept = out.last().unwrap()[0] - table.last()[0];
+            assert!((kept - persist * lean).abs() < 1e-4, "{kind:?}: {kept}");
+        }
+    }
+}
