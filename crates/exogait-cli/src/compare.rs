@@ -384,7 +384,11 @@ pub fn table_text(a: &CompareJson) -> String {
             "pilot: lean {:+.1}°, stiffness ×{:.2}; re-planning {} (steps re-planned: shipped {}, human {})\n",
             c.pilot_lean,
             c.pilot_stiffness,
-            if c.replan == crate::conditions::OnOff::On { "on" } else { "off" },
+            if c.replan == crate::conditions::OnOff::On {
+                "on"
+            } else {
+                "off"
+            },
             a.shipped.replanned_steps,
             a.human.replanned_steps,
         );

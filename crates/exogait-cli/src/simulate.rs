@@ -374,10 +374,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
                     x - from.unwrap_or(0.0) - step
                 })
                 .collect(),
-            waited_s: sim::summary::waited_before_swings(
-                &run.rig.trace,
-                f64::from(device.dt_s),
-            ),
+            waited_s: sim::summary::waited_before_swings(&run.rig.trace, f64::from(device.dt_s)),
             replans: run
                 .rig
                 .replans()

@@ -32,8 +32,13 @@ fn descent(replan: bool) -> (GaitRun, Vec<(ReplanOutcome, u64, u64)>) {
         .trace
         .windows(2)
         .filter(|w| {
-            matches!(w[1].report.phase, gait_control::sequencer::Phase::Swing { .. })
-                && !matches!(w[0].report.phase, gait_control::sequencer::Phase::Swing { .. })
+            matches!(
+                w[1].report.phase,
+                gait_control::sequencer::Phase::Swing { .. }
+            ) && !matches!(
+                w[0].report.phase,
+                gait_control::sequencer::Phase::Swing { .. }
+            )
         })
         .map(|w| u64::from(w[1].report.tick))
         .collect();
@@ -82,6 +87,10 @@ fn a_forward_leaning_pilots_descent_steps_land_where_planned_when_replanned() {
         .collect();
     assert!(used.len() >= 4, "{answers:?}");
     for (_, asked, swing) in used.iter().take(4) {
-        assert_eq!(*swing, asked + 1 + u64::from(REPLAN.latency_ticks), "{answers:?}");
+        assert_eq!(
+            *swing,
+            asked + 1 + u64::from(REPLAN.latency_ticks),
+            "{answers:?}"
+        );
     }
 }

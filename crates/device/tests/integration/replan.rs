@@ -54,7 +54,10 @@ fn a_lean_is_replanned_admitted_and_answered_before_the_latency() {
         assert_eq!(a.outcome, ReplanOutcome::Replanned, "slot {slot}: {a:?}");
         assert!(a.refusal.is_none() && a.setup_error.is_none());
         assert!(a.evals <= max && a.samples == len);
-        assert!(a.ticks() < u64::from(REPLAN.latency_ticks), "slot {slot}: {a:?}");
+        assert!(
+            a.ticks() < u64::from(REPLAN.latency_ticks),
+            "slot {slot}: {a:?}"
+        );
         // The answer starts at the measured shank angle.
         assert!((out[0][0] - request(slot, 3.0).phi1_rad).abs() < 1e-5);
     }

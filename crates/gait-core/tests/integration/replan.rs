@@ -392,7 +392,10 @@ fn a_measured_posture_is_the_first_sample_and_a_kept_offset_still_lands_on_the_f
             for (a, b) in out[0].iter().zip(&posture) {
                 assert!((a - b).abs() < 1e-4, "{kind:?}: starts at {:?}", out[0]);
             }
-            assert!(landing_error(kind, &out) < 1e-3, "{kind:?} persist {persist}");
+            assert!(
+                landing_error(kind, &out) < 1e-3,
+                "{kind:?} persist {persist}"
+            );
             assert_within_limits(kind, &out);
             // Kept: the stance shank lands 3° ahead of the table's.
             let kept = out.last().unwrap()[0] - table.last()[0];
