@@ -53,16 +53,20 @@ pub(crate) fn check(out: &mut Out, ctr: &mut InstrCounter) -> usize {
         let over = per_sample > INSTRUCTIONS_PER_SAMPLE || u64::from(insns) > MAX_INSTRUCTIONS;
         failed += usize::from(over);
         out.put(
-            line(if over { "FAIL replan: gait=" } else { "replan: gait=" })
-                .str(name)
-                .str(" insns=")
-                .u32(insns)
-                .str(" evals=")
-                .u32(u32::from(answer.evals))
-                .str(" used=")
-                .str(used)
-                .str(" per_sample=")
-                .u64(per_sample),
+            line(if over {
+                "FAIL replan: gait="
+            } else {
+                "replan: gait="
+            })
+            .str(name)
+            .str(" insns=")
+            .u32(insns)
+            .str(" evals=")
+            .u32(u32::from(answer.evals))
+            .str(" used=")
+            .str(used)
+            .str(" per_sample=")
+            .u64(per_sample),
         );
     }
     failed
