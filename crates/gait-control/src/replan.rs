@@ -70,7 +70,7 @@ pub struct ReplanConfig {
 
 impl ReplanConfig {
     /// Re-planned from 0.01 rad (0.6°) up to 0.12 rad (6.9°) from the
-    /// table's start, the answer taken 200 ms after the request (some 24
+    /// table's start, the answer taken 200 ms after the request (some 21
     /// evaluations of a 225-sample table in the idle time of a 168 MHz
     /// M4F), played if the ankle has moved by less than 0.02 rad meanwhile.
     pub const DEFAULT: Self = Self {
