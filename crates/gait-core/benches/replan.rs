@@ -19,59 +19,17 @@ use gait_core::flash_tables;
 use gait_core::foot::StanceFoot;
 use gait_core::ik::{IkSolver, IkTarget};
 use gait_core::kinematics::theta_from_phi;
-use gait_core::model::JointLimits;
 use gait_core::playback::swing_ankle;
-use gait_core::replan::{
-    DriveLimit, MAX_EVALS, Measured, Outcome, Progress, ReplanLimits, ReplanSetup, Replanner,
-};
-use gait_core::tables::{GaitKind, GaitTable};
+use gait_core::replan::{MAX_EVALS, Outcome, Progress, Replanner};
+use gait_core::tables::GaitKind;
 
 /// Instructions of one IK plus inverse dynamics on the M4F (issue 39).
 const M4F_SAMPLE_INSNS: f64 = 1_750.0;
 
-fn model() -> BodyModel<f32> {
-    let t3 = BodyModel::<f64>::paper_table_iii();
-    BodyModel::new(*t3.links(), JointLimits::paper_with_heel_rocker())
-        .unwrap()
-        .cast()
-}
-
-fn setup(m: &BodyModel<f32>, kind: GaitKind) -> ReplanSetup<'_, f32> {
-    ReplanSetup {
-        model: m,
-        foot: StanceFoot::for_model(m),
-        spring_nm_per_rad: 30.0,
-        spacing_m: match kind {
-            GaitKind::Walk => [0.3, 0.0],
-            GaitKind::StairUp => [0.275, 0.0935],
-            GaitKind::StairDown => [0.275, -0.0935],
-        },
-        crutch_lever_m: 0.45,
-    }
-}
-
-fn limits() -> ReplanLimits<f32> {
-    let d = |x: f32| x.to_radians();
-    ReplanLimits::clinical(
-        DriveLimit {
-            peak_nm: 150.0,
-            full_torque_speed_rad_s: 2.215,
-            no_load_speed_rad_s: 2.371,
-        },
-        [d(-75.0), d(95.0)],
-        [d(-3.0), d(95.0)],
-        d(-10.0),
-    )
-}
-
-fn measured(t: &GaitTable<'_>, deg: f32) -> Measured<f32> {
-    Measured {
-        phi1_rad: t.first()[0] + deg.to_radians(),
-        rate_rad_s: (t.sample(1).unwrap()[0] - t.first()[0]) / t.period_s(),
-        persist: 0.0,
-        posture: None,
-    }
-}
+#[path = "../tests/integration/replan_setup.rs"]
+#[allow(dead_code)]
+mod replan_setup;
+use replan_setup::{limits, measured, setup};
 
 fn replan(m: &BodyModel<f32>, kind: GaitKind, deg: f32, out: &mut [[f32; 5]]) -> Outcome<f32> {
     let table = flash_tables::of(kind).unwrap();
@@ -163,7 +121,7 @@ fn figures(m: &BodyModel<f32>) {
 }
 
 fn benches(c: &mut Criterion) {
-    let m = model();
+    let m = replan_setup::model();
     figures(&m);
     for kind in [GaitKind::Walk, GaitKind::StairUp, GaitKind::StairDown] {
         let table = flash_tables::of(kind).unwrap();

@@ -22,5 +22,6 @@ mod gait_sampling;
 mod ik_properties;
 mod periodic_steps;
 mod replan;
+mod replan_setup;
 mod table_ik_options;
 mod toe_rocker;
