@@ -45,13 +45,6 @@ pub const IDLE_INSTRUCTIONS_PER_TICK: u64 = CORE_HZ / TICK_HZ - TICK_BUDGET_INST
 /// sharing, cost), instructions on the M4F: the QEMU image measures it and
 /// fails above this.
 pub const INSTRUCTIONS_PER_SAMPLE: u64 = 6_400;
-/// Share of the start's offset from the table the re-planner expects the
-/// pilot to keep to the landing: what the simulated pilot keeps (leaning
-/// back 2° on the walk, 0.031 rad at the start and 0.018–0.024 rad at the
-/// landing). Kept whole, a forward-leaning pilot's swing foot ended above
-/// the ground and waited for the ground search; dropped, the landing was
-/// as far off as the table's.
-pub const PILOT_KEEPS_OFFSET: f32 = 0.6;
 /// The pilot's crutch lever the re-planner's cost is scaled by, m (the
 /// clinical mode's; it scales the cost, not which step is best).
 const CRUTCH_LEVER_M: f32 = 0.45;
@@ -163,7 +156,7 @@ pub fn replan(
         // The ankle at rest at the request (the sequencer holds the start
         // posture while the pilot settles).
         rate_rad_s: 0.0,
-        persist: PILOT_KEEPS_OFFSET,
+        persist: request.persist,
         posture: Some(phi_from_joints(
             &request.joints_rad,
             request.phi1_rad,

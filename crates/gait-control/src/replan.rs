@@ -47,6 +47,9 @@ pub struct ReplanRequest {
     /// The joints then (joint order), rad: with φ1, the posture the step
     /// starts from.
     pub joints_rad: [f32; JOINTS],
+    /// The share (0 … 1) of its offset from the table the pilot is
+    /// expected to keep to the landing ([`ReplanConfig::persist`]).
+    pub persist: f32,
 }
 
 /// How the sequencer uses the re-planner.
@@ -66,18 +69,28 @@ pub struct ReplanConfig {
     /// A re-planned step is played only if the stance ankle is still within
     /// this of where it was asked for, rad; else it is asked again.
     pub ankle_drift_rad: f32,
+    /// The share of the start's offset the pilot is expected to keep to
+    /// the landing.
+    pub persist: f32,
 }
 
 impl ReplanConfig {
     /// Re-planned from 0.01 rad (0.6°) up to 0.12 rad (6.9°) from the
     /// table's start, the answer taken 200 ms after the request (some 21
     /// evaluations of a 225-sample table in the idle time of a 168 MHz
-    /// M4F), played if the ankle has moved by less than 0.02 rad meanwhile.
+    /// M4F), played if the ankle has moved by less than 0.02 rad meanwhile;
+    /// 0.6 of the offset expected to be kept to the landing (what the
+    /// simulated pilot keeps: leaning back 2° on the walk, 0.031 rad at
+    /// the start, 0.018–0.024 rad at the landing; kept whole, a
+    /// forward-leaning pilot's swing foot ended above the ground and
+    /// waited for the ground search; dropped, the steps landed as far off
+    /// as the table's).
     pub const DEFAULT: Self = Self {
         min_offset_rad: 0.01,
         ankle_tolerance_rad: 0.12,
         latency_ticks: 200,
         ankle_drift_rad: 0.02,
+        persist: 0.6,
     };
 }
 
@@ -130,9 +143,9 @@ pub enum SlotView {
 /// both (a `static` on the board, the simulation's run on the host).
 pub struct ReplanSlot {
     state: AtomicU8,
-    /// Request: slot and stance (bit 8: right), then φ1 and the joints
-    /// (f32 bits).
-    request: [AtomicU32; 2 + JOINTS],
+    /// Request: slot and stance (bit 8: right), then φ1, the joints and
+    /// the share kept (f32 bits).
+    request: [AtomicU32; 3 + JOINTS],
     /// Samples published, and each sample's Φ (f32 bits).
     len: AtomicU32,
     samples: [[AtomicU32; LINKS]; REPLAN_CAPACITY],
@@ -166,7 +179,7 @@ impl ReplanSlot {
     pub const fn new() -> Self {
         Self {
             state: AtomicU8::new(state::IDLE),
-            request: [const { AtomicU32::new(0) }; 2 + JOINTS],
+            request: [const { AtomicU32::new(0) }; 3 + JOINTS],
             len: AtomicU32::new(0),
             samples: [const { [const { AtomicU32::new(0) }; LINKS] }; REPLAN_CAPACITY],
         }
@@ -177,7 +190,9 @@ impl ReplanSlot {
     /// Asks for a re-plan (replacing any request or result not played).
     pub fn request(&self, r: &ReplanRequest) {
         let who = u32::from(r.slot) | (u32::from(matches!(r.stance, Side::Right)) << 8);
-        let values = core::iter::once(r.phi1_rad).chain(r.joints_rad);
+        let values = core::iter::once(r.phi1_rad)
+            .chain(r.joints_rad)
+            .chain(core::iter::once(r.persist));
         if let Some((first, rest)) = self.request.split_first() {
             first.store(who, Ordering::Relaxed);
             for (w, v) in rest.iter().zip(values) {
@@ -257,6 +272,7 @@ impl ReplanSlot {
             },
             phi1_rad: value(1),
             joints_rad: core::array::from_fn(|j| value(2 + j)),
+            persist: value(2 + JOINTS),
         })
     }
 

@@ -27,6 +27,7 @@ fn request(slot: u8, deg: f32) -> ReplanRequest {
         stance: Side::Left,
         phi1_rad: first[0] + deg.to_radians(),
         joints_rad: joints_from_phi(&first, Side::Left),
+        persist: REPLAN.persist,
     }
 }
 

@@ -126,6 +126,7 @@ impl<'t> Sequencer<'t> {
                         stance,
                         phi1_rad: ankle,
                         joints_rad: sensed.joints_rad,
+                        persist: rc.persist,
                     });
                     self.replan_from = ankle;
                     self.replan_wait = Some(0);

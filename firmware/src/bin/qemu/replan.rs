@@ -40,6 +40,7 @@ pub(crate) fn check(out: &mut Out, ctr: &mut InstrCounter) -> usize {
             stance: Side::Left,
             phi1_rad: start[0] + LEAN_RAD,
             joints_rad: joints_from_phi(&start, Side::Left),
+            persist: REPLAN.persist,
         };
         let max_evals = evals_within(REPLAN.latency_ticks, table.len());
         let (insns, answer) =
