@@ -222,7 +222,19 @@ impl Controller<'_> {
         let single = joint_torques(&dynamics::inverse_dynamics_at(
             model, &contact, &posture, &dphi, &ddphi,
         ));
-        let shared = dynamics::share_load_at(model, &contact, &posture, &single, other_load_n);
+        // In single support nothing is shared: the sharing's answer is the
+        // single-support torques and no reaction, and the load per newton
+        // it also gives is read only while the other foot carries a share
+        // (`push_other_foot`). Most of a swing's ticks skip it.
+        let shared = if other_load_n > 0.0 {
+            dynamics::share_load_at(model, &contact, &posture, &single, other_load_n)
+        } else {
+            dynamics::DoubleSupportStatics {
+                reaction_n: [0.0; 2],
+                torques: single,
+                per_newton: ([0.0; gait_core::LINKS], [0.0; gait_core::LINKS]),
+            }
+        };
         let ff = joint_torques_from_theta_torques(&shared.torques, r.stance);
         let (_, per_newton_up) = shared.per_newton;
         let per_newton = joint_torques_from_theta_torques(&per_newton_up.map(|v| -v), r.stance);
