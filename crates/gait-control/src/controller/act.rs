@@ -219,9 +219,12 @@ impl Controller<'_> {
         // chain then turns about the toe (gait_core::foot). A constant
         // contact: the inlined dispatch folds away.
         let contact = Contact::ToeRocker(StanceFoot::for_model(model));
-        let single = joint_torques(&dynamics::inverse_dynamics_at(
-            model, &contact, &posture, &dphi, &ddphi,
-        ));
+        // A posture held at rest needs its statics alone.
+        let single = joint_torques(&if r.motion.is_some() {
+            dynamics::inverse_dynamics_at(model, &contact, &posture, &dphi, &ddphi)
+        } else {
+            dynamics::static_torques_at(model, &contact, &posture)
+        });
         // In single support nothing is shared: the sharing's answer is the
         // single-support torques and no reaction, and the load per newton
         // it also gives is read only while the other foot carries a share

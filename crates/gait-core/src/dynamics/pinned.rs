@@ -102,6 +102,17 @@ pub(super) fn inverse_dynamics_at<T: Real>(
     out
 }
 
+/// [`inverse_dynamics_at`] at rest (Φ̇ = Φ̈ = 0): the gravity terms
+/// alone, T_φi = −g_i sin φi. The same numbers as the full sum with zero
+/// rates (its other terms are all zero), a tenth of the work.
+pub(super) fn static_torques_at<T: Real>(model: &BodyModel<T>, posture: &Posture<T>) -> TPhi<T> {
+    let mut out = [T::zero(); LINKS];
+    for ((o, &(si, _)), &gi) in out.iter_mut().zip(&posture.sin_cos).zip(model.g()) {
+        *o = -gi * si;
+    }
+    out
+}
+
 /// The joint torques T_Θ that a unit ground force on the second foot takes
 /// away, for a force along x and along y: Aᵀ Jᵀ e_x and Aᵀ Jᵀ e_y, with J
 /// the Jacobian of the second foot's contact point (its ankle, moved by the

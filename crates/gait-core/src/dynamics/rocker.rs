@@ -93,6 +93,24 @@ pub(super) fn inverse_dynamics_at<T: Real>(
     out
 }
 
+/// [`inverse_dynamics_at`] at rest on this foot: the pinned statics and,
+/// with the heel up, the weight acting through the moving base
+/// (m g ∂a_y/∂φ1 on φ1). The same numbers as the full sum with zero rates.
+pub(super) fn static_torques_at<T: Real>(
+    model: &BodyModel<T>,
+    foot: &StanceFoot<T>,
+    posture: &Posture<T>,
+) -> TPhi<T> {
+    let phi = &posture.phi;
+    let mut out = pinned::static_torques_at(model, posture);
+    if foot.on_toe(first(phi)) {
+        let a = foot.ankle(first(phi));
+        let [o1, ..] = &mut out;
+        *o1 += model.total_mass_kg() * (a.d1[1] * T::lit(GRAVITY_M_S2));
+    }
+    out
+}
+
 /// D'(Φ), H'Φ̇ and G'(Φ) on this foot (the module docs' equation split by
 /// its dependence on Φ̈).
 pub(super) fn terms<T: Real>(
