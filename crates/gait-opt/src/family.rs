@@ -15,7 +15,7 @@ use exogait_device::DeviceConfig;
 use exogait_device::admission::check_table;
 use gait_core::bundle::{GaitInfo, GaitName};
 use gait_core::tables::{GaitKind, GaitTable};
-use sim::compare::play_steps;
+use sim::compare::{RunLength, play_for};
 use sim::scenario::strong_pilot;
 
 use crate::clinical::{ClinicalCase, ClinicalConfig, Evaluation, optimize_clinical};
@@ -216,8 +216,18 @@ fn attempt(
         ));
     }
     let max_s = 4.0 + VERIFY_STEPS as f64 * (plan.step_time_s + 3.0);
-    let (run, _rig) = play_steps(device, table, strong_pilot(), VERIFY_STEPS, max_s, 1.5)
-        .map_err(|err| format!("closed loop: {err}"))?;
+    let (run, _rig) = play_for(
+        device,
+        table,
+        strong_pilot(),
+        RunLength {
+            steps: VERIFY_STEPS,
+            max_s,
+            tail_s: 1.5,
+        },
+        |_| {},
+    )
+    .map_err(|err| format!("closed loop: {err}"))?;
     if let Some((code, name)) = run.faults.first() {
         return Err(format!(
             "closed loop: fault {code} ({name}) after {} of {VERIFY_STEPS} steps; planned {joints}",
@@ -337,8 +347,18 @@ pub fn check_playable(device: &DeviceConfig, table: &GaitTable<'_>) -> Result<()
         ));
     }
     let max_s = 8.0 + f64::from(table.duration_s()) + 3.0;
-    let (run, _) = play_steps(device, *table, strong_pilot(), 1, max_s, 0.5)
-        .map_err(|err| format!("closed loop: {err}"))?;
+    let (run, _) = play_for(
+        device,
+        *table,
+        strong_pilot(),
+        RunLength {
+            steps: 1,
+            max_s,
+            tail_s: 0.5,
+        },
+        |_| {},
+    )
+    .map_err(|err| format!("closed loop: {err}"))?;
     if let Some((code, name)) = run.faults.first() {
         return Err(format!(
             "its first step faults in the closed loop: {code} {name}"

@@ -132,6 +132,20 @@ pub fn tables_of<'t>(table: GaitTable<'t>) -> GaitTables<'t> {
     }
 }
 
+/// How long a run plays: `steps` landings, then `tail_s` more (a search
+/// that needs only the steps' windows stops at the end of the last weight
+/// transfer, the sequencer's `transfer_s`); 1 s into a safe hold, or
+/// `max_s` in all, at most.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunLength {
+    /// Landings asked for.
+    pub steps: usize,
+    /// The longest the run may last, s.
+    pub max_s: f64,
+    /// Time after the last landing asked for, s.
+    pub tail_s: f64,
+}
+
 /// Plays `table` on `device` with `pilot` from standing: GO, then `steps`
 /// steps (the run ends 1.5 s after the last landing asked for, 1 s into a
 /// safe hold, or at `max_s`); `prepare` is applied to the rig before the
@@ -144,32 +158,27 @@ pub fn play<'t>(
     max_s: f64,
     prepare: impl FnOnce(&mut Rig<'t>),
 ) -> Result<(GaitRun, Rig<'t>), RigError> {
-    play_then(device, table, pilot, steps, max_s, 1.5, prepare)
+    let length = RunLength {
+        steps,
+        max_s,
+        tail_s: 1.5,
+    };
+    play_for(device, table, pilot, length, prepare)
 }
 
-/// [`play`] without preparation, the run ending `tail_s` after the last
-/// landing asked for (a search that needs only the steps' windows stops at
-/// the end of the last weight transfer: the sequencer's `transfer_s`).
-pub fn play_steps<'t>(
+/// [`play`] for `length`.
+pub fn play_for<'t>(
     device: &DeviceConfig,
     table: GaitTable<'t>,
     pilot: PilotConfig,
-    steps: usize,
-    max_s: f64,
-    tail_s: f64,
-) -> Result<(GaitRun, Rig<'t>), RigError> {
-    play_then(device, table, pilot, steps, max_s, tail_s, |_| {})
-}
-
-fn play_then<'t>(
-    device: &DeviceConfig,
-    table: GaitTable<'t>,
-    pilot: PilotConfig,
-    steps: usize,
-    max_s: f64,
-    tail_s: f64,
+    length: RunLength,
     prepare: impl FnOnce(&mut Rig<'t>),
 ) -> Result<(GaitRun, Rig<'t>), RigError> {
+    let RunLength {
+        steps,
+        max_s,
+        tail_s,
+    } = length;
     let gait = gait_of(table.kind());
     let geometry = table_geometry(&table, &device.body);
     let mut rig = started_rig(device, tables_of(table), gait, pilot, prepare)?;

@@ -39,7 +39,7 @@ use exogait_device::DeviceConfig;
 use exogait_device::admission::check_table;
 use gait_core::kinematics::Phi;
 use gait_core::tables::GaitTable;
-use sim::compare::{GaitRun, play_steps};
+use sim::compare::{GaitRun, RunLength, play_for};
 use sim::pilot::PilotConfig;
 use sim::scenario::{strong_pilot, table_geometry};
 
@@ -169,8 +169,18 @@ impl<'a> ClosedLoop<'a> {
             .map_err(|e| RefineError::Human(e.to_string()))?;
         let htable = GaitTable::parse(&image).map_err(|e| RefineError::Human(e.to_string()))?;
         let steps = VERIFY_STEPS[0];
-        let (run, _) = play_steps(device, htable, pilot, steps, max_s(steps), 1.5)
-            .map_err(|e| RefineError::Human(e.to_string()))?;
+        let (run, _) = play_for(
+            device,
+            htable,
+            pilot,
+            RunLength {
+                steps,
+                max_s: max_s(steps),
+                tail_s: 1.5,
+            },
+            |_| {},
+        )
+        .map_err(|e| RefineError::Human(e.to_string()))?;
         let (Some(crutch_peak_n), Some(balance_ns)) = (run.peak_n(), run.mean(|s| s.balance_ns))
         else {
             return Err(RefineError::Human("no step landed".into()));
@@ -218,8 +228,18 @@ impl<'a> ClosedLoop<'a> {
         if demand.drive_use > 0.8 {
             return Err(format!("admission: drive use {}", demand.drive_use));
         }
-        let (run, rig) = play_steps(self.device, table, self.pilot, steps, max_s(steps), tail_s)
-            .map_err(|e| e.to_string())?;
+        let (run, rig) = play_for(
+            self.device,
+            table,
+            self.pilot,
+            RunLength {
+                steps,
+                max_s: max_s(steps),
+                tail_s,
+            },
+            |_| {},
+        )
+        .map_err(|e| e.to_string())?;
         self.loop_requirements(&run, steps, &table)?;
         let landings = rig.plant.landings();
         for (n, l) in landings.iter().take(steps).enumerate() {
