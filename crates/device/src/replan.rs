@@ -163,7 +163,11 @@ pub fn replan(
             request.stance,
         )),
     };
-    let budget = max_evals.clamp(1, MAX_EVALS);
+    // Not one evaluation fits in the time: the table.
+    if max_evals == 0 {
+        return answer;
+    }
+    let budget = max_evals.min(MAX_EVALS);
     let mut planner = match Replanner::new(setup, limits(cfg), table, measured, buffer, budget) {
         Ok(p) => p,
         Err(e) => {

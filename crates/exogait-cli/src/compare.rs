@@ -70,8 +70,9 @@ pub struct RunJson {
     /// Per step: time the device waited for the pilot before its swing
     /// (readiness, a re-plan's latency), s.
     pub waited_s: Vec<f64>,
-    /// Steps played re-planned.
-    pub replanned_steps: usize,
+    /// Re-plans answered with a re-planned step (the sequencer plays it
+    /// unless the ankle has moved since the request).
+    pub replanned_answers: usize,
     /// Landings (world x, y), m.
     pub landings: Vec<[f64; 2]>,
     /// Faults latched, code and name.
@@ -177,7 +178,7 @@ fn run_json(r: &GaitRun, rig: &sim::closed_loop::Rig<'_>) -> RunJson {
     RunJson {
         step_error_m: r.steps.iter().map(|s| s.step_error_m).collect(),
         waited_s: r.steps.iter().map(|s| s.waited_s).collect(),
-        replanned_steps: rig
+        replanned_answers: rig
             .replans()
             .iter()
             .filter(|p| p.answer.outcome == gait_control::replan::ReplanOutcome::Replanned)
@@ -381,7 +382,7 @@ pub fn table_text(a: &CompareJson) -> String {
     let c = &a.conditions;
     if c.replan == crate::conditions::OnOff::On || c.pilot_lean != 0.0 || c.pilot_stiffness != 1.0 {
         out += &format!(
-            "pilot: lean {:+.1}°, stiffness ×{:.2}; re-planning {} (steps re-planned: shipped {}, human {})\n",
+            "pilot: lean {:+.1}°, stiffness ×{:.2}; re-planning {} (re-planned answers: shipped {}, human {})\n",
             c.pilot_lean,
             c.pilot_stiffness,
             if c.replan == crate::conditions::OnOff::On {
@@ -389,8 +390,8 @@ pub fn table_text(a: &CompareJson) -> String {
             } else {
                 "off"
             },
-            a.shipped.replanned_steps,
-            a.human.replanned_steps,
+            a.shipped.replanned_answers,
+            a.human.replanned_answers,
         );
     }
     out += &format!(

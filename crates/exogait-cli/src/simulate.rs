@@ -136,7 +136,8 @@ struct SimulateJson {
 #[derive(Debug, Serialize)]
 struct ReplanJson {
     asked_s: f64,
-    used: &'static str,
+    /// The re-planner's answer: `replanned` or `table`.
+    answer: &'static str,
     evals: u16,
     instructions: u64,
 }
@@ -381,7 +382,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
                 .iter()
                 .map(|r| ReplanJson {
                     asked_s: r.asked_at as f64 * f64::from(device.dt_s),
-                    used: match r.answer.outcome {
+                    answer: match r.answer.outcome {
                         gait_control::replan::ReplanOutcome::Replanned => "replanned",
                         _ => "table",
                     },

@@ -16,6 +16,10 @@
 //!              only in Working, which only a new request leads to)
 //! ```
 //!
+//! Each request is a new generation of the state word: the idle side's
+//! [`Ticket`] names the one it works on, and an answer for a request the
+//! tick has since withdrawn or replaced is never published.
+//!
 //! The tick takes the result exactly [`crate::sequencer::SequencerConfig`]'s
 //! `replan_latency_ticks` after its request, never earlier: the step then
 //! starts at the same tick whether the re-planner needed a tenth or all of
@@ -23,7 +27,7 @@
 //! A result not there by then is late: the table is played (the fault
 //! table's notice rows).
 
-use core::sync::atomic::{AtomicU8, AtomicU32, Ordering};
+use core::sync::atomic::{AtomicU32, Ordering};
 
 use gait_core::LINKS;
 
@@ -119,14 +123,26 @@ pub enum ReplanOutcome {
 
 /// The slot's states (one byte, so each side reads it in one load).
 mod state {
-    pub const IDLE: u8 = 0;
-    pub const REQUESTED: u8 = 1;
-    pub const WORKING: u8 = 2;
-    pub const REPLANNED: u8 = 3;
-    pub const DECLINED: u8 = 4;
-    pub const REFUSED: u8 = 5;
-    pub const PLAYING: u8 = 6;
+    pub const IDLE: u32 = 0;
+    pub const REQUESTED: u32 = 1;
+    pub const WORKING: u32 = 2;
+    pub const REPLANNED: u32 = 3;
+    pub const DECLINED: u32 = 4;
+    pub const REFUSED: u32 = 5;
+    pub const PLAYING: u32 = 6;
+    /// The state's bits; the generation is above them.
+    pub const MASK: u32 = 0xFF;
+
+    /// `state` in the generation of `word`.
+    pub const fn with(word: u32, state: u32) -> u32 {
+        (word & !MASK) | state
+    }
 }
+
+/// Which request an answer is for (the idle side's receipt from
+/// [`ReplanSlot::take_request`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ticket(u32);
 
 /// Where a request stands, as the tick sees it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -142,7 +158,9 @@ pub enum SlotView {
 /// re-planner: a request, then the re-planned samples. Lives as long as
 /// both (a `static` on the board, the simulation's run on the host).
 pub struct ReplanSlot {
-    state: AtomicU8,
+    /// The request's generation (bits 8…) and the state (bits 0–7): an
+    /// answer is published only for the generation it was worked on.
+    state: AtomicU32,
     /// Request: slot and stance (bit 8: right), then φ1, the joints and
     /// the share kept (f32 bits).
     request: [AtomicU32; 3 + JOINTS],
@@ -178,7 +196,7 @@ impl ReplanSlot {
     #[must_use]
     pub const fn new() -> Self {
         Self {
-            state: AtomicU8::new(state::IDLE),
+            state: AtomicU32::new(state::IDLE),
             request: [const { AtomicU32::new(0) }; 3 + JOINTS],
             len: AtomicU32::new(0),
             samples: [const { [const { AtomicU32::new(0) }; LINKS] }; REPLAN_CAPACITY],
@@ -199,13 +217,15 @@ impl ReplanSlot {
                 w.store(v.to_bits(), Ordering::Relaxed);
             }
         }
-        self.state.store(state::REQUESTED, Ordering::Release);
+        let next = self.state.load(Ordering::Relaxed).wrapping_add(1 << 8);
+        self.state
+            .store(state::with(next, state::REQUESTED), Ordering::Release);
     }
 
     /// The answer to the last request, if there is one.
     #[must_use]
     pub fn view(&self) -> SlotView {
-        match self.state.load(Ordering::Acquire) {
+        match self.state.load(Ordering::Acquire) & state::MASK {
             state::REPLANNED => SlotView::Done(ReplanOutcome::Replanned),
             state::DECLINED => SlotView::Done(ReplanOutcome::Declined),
             state::REFUSED => SlotView::Done(ReplanOutcome::Refused),
@@ -218,10 +238,14 @@ impl ReplanSlot {
     /// or the next request. `None` if there is no such result.
     #[must_use]
     pub fn take(&self) -> Option<usize> {
+        let now = self.state.load(Ordering::Acquire);
+        if now & state::MASK != state::REPLANNED {
+            return None;
+        }
         self.state
             .compare_exchange(
-                state::REPLANNED,
-                state::PLAYING,
+                now,
+                state::with(now, state::PLAYING),
                 Ordering::AcqRel,
                 Ordering::Relaxed,
             )
@@ -233,7 +257,9 @@ impl ReplanSlot {
     /// one that has been played): a re-planner still working discards its
     /// answer.
     pub fn release(&self) {
-        self.state.store(state::IDLE, Ordering::Release);
+        let now = self.state.load(Ordering::Relaxed);
+        self.state
+            .store(state::with(now, state::IDLE), Ordering::Release);
     }
 
     /// Sample `k` of the taken step.
@@ -249,21 +275,22 @@ impl ReplanSlot {
 
     // --- The re-planner's side -------------------------------------------
 
-    /// Takes the pending request for working on it.
+    /// Takes the pending request for working on it, with the ticket its
+    /// answer is published with.
     #[must_use]
-    pub fn take_request(&self) -> Option<ReplanRequest> {
+    pub fn take_request(&self) -> Option<(ReplanRequest, Ticket)> {
+        let now = self.state.load(Ordering::Acquire);
+        if now & state::MASK != state::REQUESTED {
+            return None;
+        }
+        let working = state::with(now, state::WORKING);
         self.state
-            .compare_exchange(
-                state::REQUESTED,
-                state::WORKING,
-                Ordering::AcqRel,
-                Ordering::Relaxed,
-            )
+            .compare_exchange(now, working, Ordering::AcqRel, Ordering::Relaxed)
             .ok()?;
         let word = |i: usize| self.request.get(i).map_or(0, |w| w.load(Ordering::Relaxed));
         let value = |i: usize| f32::from_bits(word(i));
         let who = word(0);
-        Some(ReplanRequest {
+        let request = ReplanRequest {
             slot: (who & 0xFF) as u8,
             stance: if who & 0x100 != 0 {
                 Side::Right
@@ -273,22 +300,31 @@ impl ReplanSlot {
             phi1_rad: value(1),
             joints_rad: core::array::from_fn(|j| value(2 + j)),
             persist: value(2 + JOINTS),
-        })
+        };
+        // A new request written while these words were read (the tick
+        // preempts) is a new generation: this one is not worked on.
+        let ticket = Ticket(working);
+        self.still_wanted(ticket).then_some((request, ticket))
     }
 
-    /// Whether the request being worked on still stands (the tick has not
+    /// Whether the request `ticket` is for still stands (the tick has not
     /// withdrawn or replaced it): a re-planner may stop early when not.
     #[must_use]
-    pub fn still_wanted(&self) -> bool {
-        self.state.load(Ordering::Acquire) == state::WORKING
+    pub fn still_wanted(&self, ticket: Ticket) -> bool {
+        self.state.load(Ordering::Acquire) == ticket.0
     }
 
-    /// Publishes the answer to the request being worked on: `samples` (at
+    /// Publishes the answer to the request `ticket` is for: `samples` (at
     /// most [`REPLAN_CAPACITY`]) with [`ReplanOutcome::Replanned`], none
     /// otherwise. Returns `false`, publishing nothing, if the tick has
     /// withdrawn or replaced the request meanwhile.
-    pub fn publish(&self, outcome: ReplanOutcome, samples: &[[f32; LINKS]]) -> bool {
-        if !self.still_wanted() {
+    pub fn publish(
+        &self,
+        ticket: Ticket,
+        outcome: ReplanOutcome,
+        samples: &[[f32; LINKS]],
+    ) -> bool {
+        if !self.still_wanted(ticket) {
             return false;
         }
         // A step longer than the slot is not played cut short.
@@ -317,7 +353,12 @@ impl ReplanSlot {
             ReplanOutcome::Refused => state::REFUSED,
         };
         self.state
-            .compare_exchange(state::WORKING, done, Ordering::AcqRel, Ordering::Relaxed)
+            .compare_exchange(
+                ticket.0,
+                state::with(ticket.0, done),
+                Ordering::AcqRel,
+                Ordering::Relaxed,
+            )
             .is_ok()
     }
 }

@@ -12,30 +12,29 @@
 //! # Design
 //!
 //! - **Warm start from the table.** Each re-planned sample is the table's
-//!   sample with three corrections that fade to nothing at t_f, a fraction
-//!   of the step time well before the landing; from t_f on the table's own
-//!   samples are played, so the landing and the posture the next step
-//!   starts from are the table's, exactly. The corrections
-//!   (`replan/curves.rs`):
+//!   sample with corrections that fade by t_f, a fraction of the step time
+//!   well before the landing (`replan/curves.rs`):
 //!   - stance shank: φ1' = φ1 + δ·w(t/t_f) + ω_e·t_f·g(t/t_f), w a
-//!     degree-5 Bézier [1, 1, w2, w3, 0, 0] (starts at the measured
-//!     angle, at rest relative to the table's, ends at rest), g a fixed
-//!     curve of slope 1 at the start that brings the plan's initial rate to
-//!     the measured one (ω_e: measured rate less the table's);
-//!   - torso: φ3' = φ3 + δ·u(t/t_f), u = [1, 1, u2, u3, 0, 0]: at the start
-//!     the torso has turned with the stance leg (hip held), then returns;
+//!     degree-5 Bézier [1, 1, w2, w3, p, p] from the measured angle to the
+//!     share p of δ the pilot is expected to keep to the landing
+//!     ([`Measured::persist`]), g a fixed curve of slope 1 at the start
+//!     that brings the plan's initial rate to the measured one (ω_e:
+//!     measured rate less the table's);
+//!   - torso: φ3' = φ3 + δ3·u(t/t_f), u = [1, 1, u2, u3, 0, 0], δ3 the
+//!     start posture's torso less the table's: it starts where it is and
+//!     returns to the table's;
 //!   - knee choice: r2' = r2 + δ·ρ·b(t/t_f), b a bump [0, 0, 1, 1, 0, 0].
 //!
 //!   The swing ankle is kept on the table's path in the stance foot's flat
-//!   frame ([`crate::playback::swing_ankle`]) through the IK, so the
-//!   trailing foot stays on its footprint while it is planted (the start
-//!   posture is the one a pilot leaning δ with both feet down actually
-//!   has, not the table's chain rotated off the floor) and the swing lands
-//!   on the planned foothold. The price: the first sample's swing hip and
-//!   knee differ from the table's (by 3–6° for a 3° lean). The decision
-//!   variables are the six numbers (t_f/ts, w2, w3, u2, u3, ρ); every
-//!   correction is proportional to δ, so with the pilot on the plan every
-//!   candidate is the table.
+//!   frame ([`crate::playback::swing_ankle`]) through the IK, shifted at
+//!   the start to where the start posture ([`Measured::posture`], the
+//!   measured joints; else the table's first posture turned by δ) has it,
+//!   the shift fading with u. So the first sample is the posture the body
+//!   is in, and the swing lands on the planned foothold; from t_f on, the
+//!   samples are the table's with p·δ on the stance shank (the table's own
+//!   when p = 0). The decision variables are the six numbers (t_f/ts, w2,
+//!   w3, u2, u3, ρ); every correction is proportional to the start's
+//!   offsets, so with the pilot on the plan every candidate is the table.
 //! - **Cost and constraints of the clinical mode** (`replan/cost.rs`): gait-core's
 //!   playback of the samples ([`crate::playback::for_each_sample`]) gives
 //!   the predicted balance impulse Σ|τ_pilot|Δt/lever plus the clinical
@@ -68,8 +67,9 @@
 //!   over the table's samples) and returns; the board calls it in the idle
 //!   time of its tick and plays the table if it has not finished in time.
 //!
-//! The transfer after the landing is not counted: every candidate lands in
-//! the table's posture, so it adds the same to each. Nor is the drives' I²t
+//! The transfer after the landing is not counted: every candidate lands on
+//! the table's foothold with the same stance shank (the table's, less p·δ),
+//! so it adds nearly the same to each. Nor is the drives' I²t
 //! over two steps: a fade of a few degrees changes it little, and the
 //! device's I²t monitor guards it.
 

@@ -7,7 +7,7 @@
 
 use exogait_device::DeviceConfig;
 use exogait_device::replan::{Answer, REPLAN, evals_within, replan};
-use gait_control::replan::{REPLAN_CAPACITY, ReplanSlot};
+use gait_control::replan::{REPLAN_CAPACITY, ReplanSlot, Ticket};
 use gait_control::sequencer::GaitTables;
 
 use crate::closed_loop::Rig;
@@ -28,7 +28,7 @@ pub struct ReplanRecord {
 #[derive(Debug)]
 pub(crate) struct SimReplanner<'t> {
     slot: &'t ReplanSlot,
-    pending: Option<(u64, Answer)>,
+    pending: Option<(u64, Ticket, Answer)>,
     buffer: Vec<[f32; 5]>,
     /// Every re-plan so far.
     pub(crate) log: Vec<ReplanRecord>,
@@ -50,7 +50,7 @@ impl<'t> SimReplanner<'t> {
 
     /// The idle time after tick `now`.
     pub(crate) fn idle(&mut self, now: u64, device: &DeviceConfig, tables: &GaitTables<'_>) {
-        if let Some(request) = self.slot.take_request() {
+        if let Some((request, ticket)) = self.slot.take_request() {
             let len = tables
                 .slot(usize::from(request.slot))
                 .map_or(0, |t| t.len());
@@ -62,15 +62,15 @@ impl<'t> SimReplanner<'t> {
                 ready_at,
                 answer,
             });
-            self.pending = Some((ready_at, answer));
+            self.pending = Some((ready_at, ticket, answer));
         }
-        if let Some((ready_at, answer)) = self.pending
+        if let Some((ready_at, ticket, answer)) = self.pending
             && now + 1 >= ready_at
         {
             self.pending = None;
             let samples = self.buffer.get(..answer.samples).unwrap_or(&[]);
             // Withdrawn meanwhile: nothing is published.
-            let _ = self.slot.publish(answer.outcome, samples);
+            let _ = self.slot.publish(ticket, answer.outcome, samples);
         }
     }
 }

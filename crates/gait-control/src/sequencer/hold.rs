@@ -108,6 +108,9 @@ impl Sequencer<'_> {
         if matches!(self.phase, Phase::SafeHold { .. }) {
             return;
         }
+        // A re-plan asked for is withdrawn: its answer must not start a
+        // step after the hold.
+        self.withdraw_replan();
         let swinging = match self.phase {
             Phase::Swing { stance, .. } => Some(stance),
             _ => None,
@@ -136,6 +139,7 @@ impl Sequencer<'_> {
     /// as after a fault in a swing, the stance shank from its ankle's
     /// reading; otherwise a hold of `measured` as [`Sequencer::enter_safe_hold`].
     fn enter_safe_hold_after_restart(&mut self, measured: &[f32; JOINTS], sensed: &Measured) {
+        self.withdraw_replan();
         if matches!(self.phase, Phase::SafeHold { .. }) {
             return;
         }
@@ -252,6 +256,7 @@ impl Sequencer<'_> {
     /// follows the measured posture (so no tracking error builds up and
     /// nothing jumps when the motors come back after a reset).
     fn follow_measured(&mut self, measured: &[f32; JOINTS]) {
+        self.withdraw_replan();
         let target = pick_finite(measured, &self.reference);
         self.reference = target;
         self.blend_from = target;
@@ -264,6 +269,7 @@ impl Sequencer<'_> {
 
     /// After a clinician reset: stand where the reference is, allow steps.
     pub(super) fn reset_after_faults(&mut self) {
+        self.withdraw_replan();
         self.new_steps_blocked = false;
         self.stop_requested = false;
         self.blend_to = self.reference;

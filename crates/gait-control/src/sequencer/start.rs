@@ -39,6 +39,7 @@ impl<'t> Sequencer<'t> {
                 .zip(&sensed.joints_rad)
                 .all(|(a, b)| (a - b).abs() <= tol);
             if close {
+                self.withdraw_replan();
                 self.gait = gait;
                 self.slot = slot;
                 self.table = Some(table);
@@ -78,7 +79,15 @@ impl<'t> Sequencer<'t> {
         let lands_first_from_s = self.lands_first_from_s();
         self.swing.begin(start_m, lands_first_from_s);
         events.push(SeqEvent::SwingStarted(self.gait, stance));
-        joints_from_phi(&start, stance)
+        let joints = joints_from_phi(&start, stance);
+        if matches!(step, StepTable::Replanned { .. }) {
+            // A re-planned step starts from the posture measured at the
+            // request, not the held one: the reference moves there in this
+            // tick, with no rate (the difference is the joints' tracking
+            // error, not a motion to follow).
+            self.reference = joints;
+        }
+        joints
     }
 
     /// The step to start now, if the pilot is ready: both crutches loaded,

@@ -9,7 +9,9 @@ use gait_core::kinematics::Posture;
 
 use crate::posture::{Side, joints_from_phi};
 
-use super::{JOINTS, Phase, Sensed, SeqEvent, SeqEvents, Sequencer, smoothstep, transfer};
+use super::{
+    JOINTS, Phase, Sensed, SeqEvent, SeqEvents, Sequencer, StepTable, smoothstep, transfer,
+};
 
 /// The ground search stops where the swing knee would straighten past this
 /// flexion, rad (6°): a leg locked straight takes the landing on its stop.
@@ -119,6 +121,9 @@ impl Sequencer<'_> {
         let landed = in_window && (touched || blind_landed);
         let reference = phi_t.map_or(self.reference, |p| joints_from_phi(&p, stance));
         let mut playing = None;
+        if landed || t > duration + cfg.landing_timeout_s {
+            self.release_played();
+        }
         if landed {
             events.push(SeqEvent::Landed);
             if self.stop_requested {
@@ -213,5 +218,14 @@ impl Sequencer<'_> {
         self.planned_swing_toe(posture).map_or(0.0, |p| {
             gait_core::playback::other_foot_share(p, self.swing.start_m)
         })
+    }
+
+    /// The step has ended: a re-planned one's samples go back to the
+    /// re-planner (the next request may overwrite them).
+    fn release_played(&mut self) {
+        if let Some(StepTable::Replanned { slot, .. }) = self.step {
+            slot.release();
+            self.step = None;
+        }
     }
 }

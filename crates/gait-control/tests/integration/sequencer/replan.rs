@@ -3,7 +3,7 @@
 //! the latency, plays the re-planned samples, and the table whenever the
 //! answer is late, declined, refused or stale.
 
-use gait_control::replan::{ReplanConfig, ReplanOutcome, ReplanResult, ReplanSlot};
+use gait_control::replan::{ReplanConfig, ReplanOutcome, ReplanResult, ReplanSlot, Ticket};
 
 use super::*;
 
@@ -36,15 +36,16 @@ fn shifted(table: &GaitTable<'_>, d: f32) -> Vec<[f32; 5]> {
         .collect()
 }
 
-/// Ticks until the slot holds a request; how many ticks that took.
-fn until_requested(rig: &mut Rig<'_>, slot: &ReplanSlot, s: &Sensed) -> usize {
-    for n in 1..=10 {
+/// Ticks until the slot holds a request, taken as the re-planner takes
+/// it; its ticket.
+fn until_requested(rig: &mut Rig<'_>, slot: &ReplanSlot, s: &Sensed) -> Ticket {
+    for _ in 1..=10 {
         rig.step(s);
-        if let Some(req) = slot.take_request() {
+        if let Some((req, ticket)) = slot.take_request() {
             assert_eq!(req.stance, Side::Left);
             assert_eq!(req.slot, 0);
             assert_eq!(req.phi1_rad, s.ankles_rad[0]);
-            return n;
+            return ticket;
         }
     }
     panic!("no request");
@@ -59,9 +60,9 @@ fn a_replanned_step_is_played_exactly_at_the_latency() {
     let ankle = START_ANKLE + 0.08;
     const { assert!(0.08 > SequencerConfig::DEFAULT.start_ankle_tolerance_rad) };
     let s = ready_at(pose, ankle);
-    until_requested(&mut rig, &slot, &s);
+    let ticket = until_requested(&mut rig, &slot, &s);
     let answer = shifted(&rig.table, 0.08);
-    assert!(slot.publish(ReplanOutcome::Replanned, &answer));
+    assert!(slot.publish(ticket, ReplanOutcome::Replanned, &answer));
     // Answered at once, but taken only at the latency.
     for _ in 1..RC.latency_ticks {
         rig.step(&s);
@@ -104,9 +105,9 @@ fn late_declined_or_stale_answers_play_the_table_where_the_ankle_allows() {
         let slot = ReplanSlot::new();
         let (mut rig, pose) = replanning(&img, &slot);
         let s = ready_at(pose, ankle);
-        until_requested(&mut rig, &slot, &s);
+        let ticket = until_requested(&mut rig, &slot, &s);
         if let Some(outcome) = answer {
-            assert!(slot.publish(outcome, &[]));
+            assert!(slot.publish(ticket, outcome, &[]));
         }
         for _ in 0..RC.latency_ticks {
             rig.step(&s);
@@ -133,8 +134,8 @@ fn late_declined_or_stale_answers_play_the_table_where_the_ankle_allows() {
     // An answer for an ankle that has since moved is not played.
     let slot = ReplanSlot::new();
     let (mut rig, pose) = replanning(&img, &slot);
-    until_requested(&mut rig, &slot, &ready_at(pose, beyond));
-    assert!(slot.publish(ReplanOutcome::Replanned, &shifted(&rig.table, 0.08)));
+    let ticket = until_requested(&mut rig, &slot, &ready_at(pose, beyond));
+    assert!(slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&rig.table, 0.08)));
     let moved = ready_at(pose, beyond + 1.5 * RC.ankle_drift_rad);
     for _ in 0..RC.latency_ticks {
         rig.step(&moved);
@@ -158,12 +159,12 @@ fn a_request_is_withdrawn_when_the_pilot_unloads_and_never_made_beyond_reach() {
     // re-planner still working on it cannot publish.
     let s = ready_at(pose, START_ANKLE + 0.08);
     rig.step(&s);
-    assert!(slot.take_request().is_some());
+    let (_, ticket) = slot.take_request().unwrap();
     let mut unloaded = s;
     unloaded.crutches_n = [0.0; 2];
     rig.step(&unloaded);
-    assert!(!slot.still_wanted());
-    assert!(!slot.publish(ReplanOutcome::Replanned, &shifted(&rig.table, 0.08)));
+    assert!(!slot.still_wanted(ticket));
+    assert!(!slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&rig.table, 0.08)));
 }
 
 #[test]
@@ -230,4 +231,50 @@ fn a_pilot_on_the_plan_steps_at_once_without_a_request() {
     assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
     assert!(slot.take_request().is_none());
     assert!(!rig.events.iter().any(|e| matches!(e, SeqEvent::Replan(_))));
+}
+
+#[test]
+fn a_hold_withdraws_the_request() {
+    let img = walk_image();
+    let slot = ReplanSlot::new();
+    let (mut rig, pose) = replanning(&img, &slot);
+    let s = ready_at(pose, START_ANKLE + 0.08);
+    let ticket = until_requested(&mut rig, &slot, &s);
+    // A safe hold while the re-planner works: the request is withdrawn,
+    // its answer is not published, and no step starts from it.
+    rig.hold(pose, InSwing::HoldNow);
+    rig.step(&s);
+    assert!(!slot.still_wanted(ticket));
+    assert!(!slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&rig.table, 0.08)));
+    for _ in 0..RC.latency_ticks {
+        rig.step(&s);
+    }
+    assert!(matches!(rig.seq.phase(), Phase::SafeHold { .. }));
+    assert!(!rig.events.iter().any(|e| matches!(e, SeqEvent::Replan(_))));
+}
+
+#[test]
+fn an_answer_counts_only_for_the_request_it_was_worked_on() {
+    let slot = ReplanSlot::new();
+    let request = |phi1_rad: f32| gait_control::replan::ReplanRequest {
+        slot: 0,
+        stance: Side::Left,
+        phi1_rad,
+        joints_rad: [0.0; JOINTS],
+        persist: RC.persist,
+    };
+    slot.request(&request(0.1));
+    let (_, old) = slot.take_request().unwrap();
+    // The tick withdraws it and asks again; the re-planner takes the new
+    // one before the old answer is out.
+    slot.release();
+    slot.request(&request(0.2));
+    let (taken, new) = slot.take_request().unwrap();
+    assert_eq!(taken.phi1_rad, 0.2);
+    assert!(!slot.publish(old, ReplanOutcome::Replanned, &[[0.0; 5]; 4]));
+    assert!(slot.publish(new, ReplanOutcome::Declined, &[]));
+    assert_eq!(
+        slot.view(),
+        gait_control::replan::SlotView::Done(ReplanOutcome::Declined)
+    );
 }
