@@ -79,15 +79,7 @@ impl<'t> Sequencer<'t> {
         let lands_first_from_s = self.lands_first_from_s();
         self.swing.begin(start_m, lands_first_from_s);
         events.push(SeqEvent::SwingStarted(self.gait, stance));
-        let joints = joints_from_phi(&start, stance);
-        if matches!(step, StepTable::Replanned { .. }) {
-            // A re-planned step starts from the posture measured at the
-            // request, not the held one: the reference moves there in this
-            // tick, with no rate (the difference is the joints' tracking
-            // error, not a motion to follow).
-            self.reference = joints;
-        }
-        joints
+        joints_from_phi(&start, stance)
     }
 
     /// The step to start now, if the pilot is ready: both crutches loaded,
@@ -156,6 +148,13 @@ impl<'t> Sequencer<'t> {
                 let still = (ankle - self.replan_from).abs() <= rc.ankle_drift_rad;
                 if result == ReplanResult::Answered(ReplanOutcome::Replanned) && still {
                     if let Some(len) = slot.take() {
+                        // It starts from the posture measured at the
+                        // request, not the held one: the reference moves
+                        // there in this tick with no rate (the difference
+                        // is the joints' tracking error, not a motion).
+                        if let Some(first) = slot.sample(0) {
+                            self.reference = joints_from_phi(&first, stance);
+                        }
                         return Some(StepTable::Replanned { slot, len, table });
                     }
                 }

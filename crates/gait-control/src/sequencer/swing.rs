@@ -121,10 +121,8 @@ impl Sequencer<'_> {
         let landed = in_window && (touched || blind_landed);
         let reference = phi_t.map_or(self.reference, |p| joints_from_phi(&p, stance));
         let mut playing = None;
-        if landed || t > duration + cfg.landing_timeout_s {
-            self.release_played();
-        }
         if landed {
+            self.release_played();
             events.push(SeqEvent::Landed);
             if self.stop_requested {
                 self.blend_from = reference;
@@ -146,6 +144,7 @@ impl Sequencer<'_> {
                 };
             }
         } else if t > duration + cfg.landing_timeout_s {
+            self.release_played();
             events.push(SeqEvent::LandingTimeout);
             self.blend_from = reference;
             self.blend_to = reference;
