@@ -91,7 +91,9 @@ pub struct SimulateArgs {
     /// adc-bus; motor-weak=<fraction>, gear-slip=<fraction>, motor-stuck,
     /// pwm-fail, dir-fail, current-open, current-short (on a hip or knee);
     /// estop, estop-read, button-read, overrun=<count>,
-    /// pilot-lean=<rad>, pilot-stops-balancing (no target).
+    /// pilot-lean=<rad>, pilot-stops-balancing, and with `--replan on`
+    /// replan-timeout, replan-refused (the next re-plan's answer late or
+    /// refused: the table is played) (no target).
     #[arg(long, value_name = "FAULT", value_parser = parse_injection)]
     pub inject: Vec<Injection>,
     /// Print a JSON summary (landings, tracking, limit margins, fall,
@@ -383,6 +385,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
                 .map(|r| ReplanJson {
                     asked_s: r.asked_at as f64 * f64::from(device.dt_s),
                     answer: match r.answer.outcome {
+                        _ if r.ready_at == u64::MAX => "late",
                         gait_control::replan::ReplanOutcome::Replanned => "replanned",
                         _ => "table",
                     },

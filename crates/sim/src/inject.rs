@@ -69,6 +69,12 @@ pub enum Kind {
     PilotLean(f64),
     /// The pilot stops balancing on the crutches.
     PilotStopsBalancing,
+    /// The board's re-planner gives no answer to its next request in time
+    /// (with re-planning on).
+    ReplanTimeout,
+    /// The device's admission check refuses the re-planner's next answer
+    /// (with re-planning on).
+    ReplanRefused,
     /// The firmware panics: the panic handler resets the board, the motors
     /// are off (limp) for the boot, this many milliseconds, and the new
     /// controller starts with fault 0x0603 (`docs/safety.md`).
@@ -152,6 +158,8 @@ impl Kind {
             Self::Overrun(_) => "overrun",
             Self::PilotLean(_) => "pilot-lean",
             Self::PilotStopsBalancing => "pilot-stops-balancing",
+            Self::ReplanTimeout => "replan-timeout",
+            Self::ReplanRefused => "replan-refused",
             Self::Panic(_) => "panic",
         }
     }
@@ -179,12 +187,14 @@ impl Kind {
             | Self::Overrun(_)
             | Self::PilotLean(_)
             | Self::PilotStopsBalancing
+            | Self::ReplanTimeout
+            | Self::ReplanRefused
             | Self::Panic(_) => Needs::Nothing,
         }
     }
 
     /// Every kind's name, for help texts and errors.
-    pub const NAMES: [&'static str; 25] = [
+    pub const NAMES: [&'static str; 27] = [
         "encoder-bus",
         "encoder-parity",
         "encoder-error-flag",
@@ -209,6 +219,8 @@ impl Kind {
         "overrun=<count>",
         "pilot-lean=<rad>",
         "pilot-stops-balancing",
+        "replan-timeout",
+        "replan-refused",
         "panic=<boot ms>",
     ];
 }
@@ -378,6 +390,8 @@ fn parse_kind(text: &str, name: &str, value: Option<&str>) -> Result<Kind, Parse
         }
         "pilot-lean" => Kind::PilotLean(number(-0.5, 0.5, "radians")?),
         "pilot-stops-balancing" => Kind::PilotStopsBalancing,
+        "replan-timeout" => Kind::ReplanTimeout,
+        "replan-refused" => Kind::ReplanRefused,
         "panic" => Kind::Panic(match value {
             Some(_) => number(0.0, 1_000.0, "milliseconds")?,
             None => DEFAULT_BOOT_MS,

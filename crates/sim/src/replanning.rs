@@ -7,10 +7,11 @@
 
 use exogait_device::DeviceConfig;
 use exogait_device::replan::{Answer, REPLAN, evals_within, replan};
-use gait_control::replan::{REPLAN_CAPACITY, ReplanSlot, Ticket};
+use gait_control::replan::{REPLAN_CAPACITY, ReplanOutcome, ReplanSlot, Ticket};
 use gait_control::sequencer::GaitTables;
 
 use crate::closed_loop::Rig;
+use crate::inject::Kind;
 
 /// One re-plan: when it was asked for, when the board would have had it,
 /// and what it came to.
@@ -32,6 +33,10 @@ pub(crate) struct SimReplanner<'t> {
     buffer: Vec<[f32; 5]>,
     /// Every re-plan so far.
     pub(crate) log: Vec<ReplanRecord>,
+    /// An injected failure of the next re-plan: no answer in time
+    /// (`replan-timeout`) or the admission check's refusal
+    /// (`replan-refused`).
+    pub(crate) sabotage: Option<Kind>,
 }
 
 impl<'t> SimReplanner<'t> {
@@ -41,6 +46,7 @@ impl<'t> SimReplanner<'t> {
             pending: None,
             buffer: vec![[0.0; 5]; REPLAN_CAPACITY],
             log: Vec::new(),
+            sabotage: None,
         }
     }
 
@@ -55,8 +61,13 @@ impl<'t> SimReplanner<'t> {
                 .slot(usize::from(request.slot))
                 .map_or(0, |t| t.len());
             let max_evals = evals_within(REPLAN.latency_ticks, len);
-            let answer = replan(device, tables, &request, &mut self.buffer, max_evals);
-            let ready_at = now + answer.ticks();
+            let mut answer = replan(device, tables, &request, &mut self.buffer, max_evals);
+            let mut ready_at = now + answer.ticks();
+            match self.sabotage.take() {
+                Some(Kind::ReplanTimeout) => ready_at = u64::MAX,
+                Some(Kind::ReplanRefused) => answer.outcome = ReplanOutcome::Refused,
+                _ => {}
+            }
             self.log.push(ReplanRecord {
                 asked_at: now,
                 ready_at,

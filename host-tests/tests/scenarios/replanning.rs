@@ -94,3 +94,60 @@ fn a_forward_leaning_pilots_descent_steps_land_where_planned_when_replanned() {
         );
     }
 }
+
+/// The descent of [`descent`] re-planned, with `fault` injected before the
+/// first request: its run, the first swing's first tick, and each re-plan
+/// (its answer, the tick it was asked at, the tick it is in the slot
+/// after: never for a timed-out one).
+fn descent_with(fault: &str) -> (GaitRun, u64, Vec<(ReplanOutcome, u64, u64)>) {
+    let device = DeviceConfig::exogait().unwrap();
+    let table = flash_tables::stair_down().unwrap();
+    let pilot = PilotConfig {
+        habit_lean_rad: 2.0f64.to_radians(),
+        ..strong_pilot()
+    };
+    let slot = ReplanSlot::new();
+    let (run, rig) = play(&device, table, pilot, 4, 40.0, |rig| {
+        rig.replan_with(&slot);
+        rig.schedule(fault.parse().unwrap());
+    })
+    .unwrap();
+    let first_swing = rig
+        .trace
+        .iter()
+        .find(|s| matches!(s.report.phase, gait_control::sequencer::Phase::Swing { .. }))
+        .map_or(0, |s| u64::from(s.report.tick));
+    let replans = rig
+        .replans()
+        .iter()
+        .map(|r| (r.answer.outcome, r.asked_at, r.ready_at))
+        .collect();
+    (run, first_swing, replans)
+}
+
+#[test]
+fn a_late_or_refused_answer_plays_the_table_and_the_steps_go_on() {
+    let (plain, _) = descent(false);
+    for fault in ["replan-timeout@1.0", "replan-refused@1.0"] {
+        let (run, first_swing, replans) = descent_with(fault);
+        let (outcome, asked, ready) = replans[0];
+        match fault {
+            "replan-timeout@1.0" => assert_eq!(ready, u64::MAX, "never answered"),
+            _ => assert_eq!(outcome, ReplanOutcome::Refused),
+        }
+        // The pilot's 2° is within the table's tolerance: the first step
+        // plays the table at the latency, the next ones are re-planned.
+        assert_eq!(first_swing, asked + 1 + u64::from(REPLAN.latency_ticks));
+        assert!(replans[1..].iter().all(|r| r.0 == ReplanOutcome::Replanned));
+        assert!(run.faults.is_empty(), "{fault}: {:?}", run.faults);
+        assert_eq!(run.landed(), 4, "{fault}");
+        // That first step is the table's: it lands as the plain run's does.
+        let err = |r: &GaitRun| r.steps[0].step_error_m.unwrap();
+        assert!(
+            (err(&run) - err(&plain)).abs() < 2e-3,
+            "{fault}: {} against {}",
+            err(&run),
+            err(&plain)
+        );
+    }
+}

@@ -218,6 +218,11 @@ impl Rig<'_> {
                 self.set_pilot_behaviour(PilotBehaviour::Fixed(PilotTarget::Off));
             }
             Kind::Panic(boot_ms) => self.panic_reset(now, boot_ms),
+            Kind::ReplanTimeout | Kind::ReplanRefused => {
+                if let Some(r) = &mut self.replanner {
+                    r.sabotage = Some(f.kind);
+                }
+            }
         }
     }
 }
