@@ -11,10 +11,21 @@ use sim::compare::{GaitRun, play};
 use sim::pilot::PilotConfig;
 use sim::scenario::strong_pilot;
 
+/// One re-plan as the run saw it: its answer, the tick it was asked at,
+/// the tick its answer was in the slot after (never for a timed-out one),
+/// and the first tick of the swing that followed the request.
+#[derive(Clone, Copy, Debug)]
+struct Seen {
+    outcome: ReplanOutcome,
+    asked: u64,
+    ready: u64,
+    next_swing: u64,
+}
+
 /// Four descent steps of a pilot leaning 2° forward, the board
-/// re-planning or not; the run and the re-plans' answers with the tick
-/// each was asked at and the next swing's first tick.
-fn descent(replan: bool) -> (GaitRun, Vec<(ReplanOutcome, u64, u64)>) {
+/// re-planning or not, `fault` injected (before the first request); the
+/// run and its re-plans.
+fn descent_run(replan: bool, fault: Option<&str>) -> (GaitRun, Vec<Seen>) {
     let device = DeviceConfig::exogait().unwrap();
     let table = flash_tables::stair_down().unwrap();
     let pilot = PilotConfig {
@@ -26,35 +37,39 @@ fn descent(replan: bool) -> (GaitRun, Vec<(ReplanOutcome, u64, u64)>) {
         if replan {
             rig.replan_with(&slot);
         }
+        if let Some(f) = fault {
+            rig.schedule(f.parse().unwrap());
+        }
     })
     .unwrap();
+    let swing = |s: &sim::closed_loop::Sample| {
+        matches!(s.report.phase, gait_control::sequencer::Phase::Swing { .. })
+    };
     let swings: Vec<u64> = rig
         .trace
         .windows(2)
-        .filter(|w| {
-            matches!(
-                w[1].report.phase,
-                gait_control::sequencer::Phase::Swing { .. }
-            ) && !matches!(
-                w[0].report.phase,
-                gait_control::sequencer::Phase::Swing { .. }
-            )
-        })
+        .filter(|w| swing(&w[1]) && !swing(&w[0]))
         .map(|w| u64::from(w[1].report.tick))
         .collect();
-    let replans = rig
+    let seen = rig
         .replans()
         .iter()
-        .map(|r| {
-            let next = swings
+        .map(|r| Seen {
+            outcome: r.answer.outcome,
+            asked: r.asked_at,
+            ready: r.ready_at,
+            next_swing: swings
                 .iter()
                 .copied()
                 .find(|&t| t > r.asked_at)
-                .unwrap_or(0);
-            (r.answer.outcome, r.asked_at, next)
+                .unwrap_or(0),
         })
         .collect();
-    (run, replans)
+    (run, seen)
+}
+
+fn descent(replan: bool) -> (GaitRun, Vec<Seen>) {
+    descent_run(replan, None)
 }
 
 fn mean_step_error_mm(run: &GaitRun) -> f64 {
@@ -83,62 +98,39 @@ fn a_forward_leaning_pilots_descent_steps_land_where_planned_when_replanned() {
     // its request (the sequencer's tick counts from 1, the clock from 0).
     let used: Vec<_> = answers
         .iter()
-        .filter(|(o, ..)| *o == ReplanOutcome::Replanned)
+        .filter(|r| r.outcome == ReplanOutcome::Replanned)
         .collect();
     assert!(used.len() >= 4, "{answers:?}");
-    for (_, asked, swing) in used.iter().take(4) {
+    for r in used.iter().take(4) {
         assert_eq!(
-            *swing,
-            asked + 1 + u64::from(REPLAN.latency_ticks),
+            r.next_swing,
+            r.asked + 1 + u64::from(REPLAN.latency_ticks),
             "{answers:?}"
         );
     }
-}
-
-/// The descent of [`descent`] re-planned, with `fault` injected before the
-/// first request: its run, the first swing's first tick, and each re-plan
-/// (its answer, the tick it was asked at, the tick it is in the slot
-/// after: never for a timed-out one).
-fn descent_with(fault: &str) -> (GaitRun, u64, Vec<(ReplanOutcome, u64, u64)>) {
-    let device = DeviceConfig::exogait().unwrap();
-    let table = flash_tables::stair_down().unwrap();
-    let pilot = PilotConfig {
-        habit_lean_rad: 2.0f64.to_radians(),
-        ..strong_pilot()
-    };
-    let slot = ReplanSlot::new();
-    let (run, rig) = play(&device, table, pilot, 4, 40.0, |rig| {
-        rig.replan_with(&slot);
-        rig.schedule(fault.parse().unwrap());
-    })
-    .unwrap();
-    let first_swing = rig
-        .trace
-        .iter()
-        .find(|s| matches!(s.report.phase, gait_control::sequencer::Phase::Swing { .. }))
-        .map_or(0, |s| u64::from(s.report.tick));
-    let replans = rig
-        .replans()
-        .iter()
-        .map(|r| (r.answer.outcome, r.asked_at, r.ready_at))
-        .collect();
-    (run, first_swing, replans)
 }
 
 #[test]
 fn a_late_or_refused_answer_plays_the_table_and_the_steps_go_on() {
     let (plain, _) = descent(false);
     for fault in ["replan-timeout@1.0", "replan-refused@1.0"] {
-        let (run, first_swing, replans) = descent_with(fault);
-        let (outcome, asked, ready) = replans[0];
+        let (run, replans) = descent_run(true, Some(fault));
+        let first = replans[0];
         match fault {
-            "replan-timeout@1.0" => assert_eq!(ready, u64::MAX, "never answered"),
-            _ => assert_eq!(outcome, ReplanOutcome::Refused),
+            "replan-timeout@1.0" => assert_eq!(first.ready, u64::MAX, "never answered"),
+            _ => assert_eq!(first.outcome, ReplanOutcome::Refused),
         }
         // The pilot's 2° is within the table's tolerance: the first step
         // plays the table at the latency, the next ones are re-planned.
-        assert_eq!(first_swing, asked + 1 + u64::from(REPLAN.latency_ticks));
-        assert!(replans[1..].iter().all(|r| r.0 == ReplanOutcome::Replanned));
+        assert_eq!(
+            first.next_swing,
+            first.asked + 1 + u64::from(REPLAN.latency_ticks)
+        );
+        assert!(
+            replans[1..]
+                .iter()
+                .all(|r| r.outcome == ReplanOutcome::Replanned)
+        );
         assert!(run.faults.is_empty(), "{fault}: {:?}", run.faults);
         assert_eq!(run.landed(), 4, "{fault}");
         // That first step is the table's: it lands as the plain run's does.
