@@ -37,6 +37,27 @@ fn simulate_refuses_bad_options() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--seconds"));
 }
 
+#[test]
+fn a_pilot_out_of_range_or_a_bad_replan_value_is_refused_before_the_run() {
+    for (cmd, args, says) in [
+        ("simulate", ["--pilot-lean", "30"], "--pilot-lean"),
+        ("simulate", ["--pilot-stiffness", "0"], "--pilot-stiffness"),
+        ("compare", ["--pilot-lean", "-11"], "--pilot-lean"),
+        ("simulate", ["--replan", "maybe"], "--replan"),
+    ] {
+        let mut all = vec![cmd, "--gait", "walk"];
+        all.extend(args);
+        let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
+            .args(&all)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{all:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{all:?}: {err}");
+        assert!(out.stdout.is_empty(), "{all:?}: nothing run");
+    }
+}
+
 fn simulate_json(args: &[&str]) -> (serde_json::Value, Option<i32>) {
     let out = Command::new(env!("CARGO_BIN_EXE_exogait"))
         .arg("simulate")
