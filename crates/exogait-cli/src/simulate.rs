@@ -171,6 +171,7 @@ fn reaction_name(r: gait_control::faults::Reaction) -> &'static str {
     use gait_control::faults::Reaction;
     match r {
         Reaction::None => "none",
+        Reaction::PlayTable => "play-table",
         Reaction::FinishStepThenHold => "finish-step-then-hold",
         Reaction::SafeHold => "safe-hold",
         Reaction::DisableMotors => "motors-disabled",

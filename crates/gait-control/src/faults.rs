@@ -14,7 +14,7 @@
 //! | `0x03xx` | force sensors |
 //! | `0x04xx` | motor outputs |
 //! | `0x05xx` | operator inputs (e-stop, buttons) |
-//! | `0x06xx` | the controller itself (timing, values it computed) |
+//! | `0x06xx` | the controller itself (timing, values it computed, flash data, the re-planner) |
 
 mod set;
 
@@ -28,6 +28,12 @@ pub enum Reaction {
     /// Nothing latched: carry on.
     #[default]
     None,
+    /// Only for the re-planner's faults: the step about to start plays its
+    /// verified flash table instead of the re-planned samples, as it would
+    /// without a re-planner. The sequencer does so in the tick that finds
+    /// the fault, so the fault is logged, not latched: the steps go on and
+    /// nothing needs a reset.
+    PlayTable,
     /// Warning class: let the current step finish, then hold the standing
     /// posture; refuse to start another step until a reset.
     FinishStepThenHold,
@@ -489,6 +495,23 @@ fault_table! {
         reaction: Reaction::DisableMotors,
         detection_bound: "at boot, before the first tick",
         reset_allowed_when: "never: record the calibration and restart",
+    },
+    /// The idle-time re-planner did not answer by the sequencer's latency
+    /// (the tick left it too little time, or it ran past its bound): the
+    /// step starts on its table at the latency.
+    ReplanLate = 0x0606 {
+        name: "re-plan late",
+        reaction: Reaction::PlayTable,
+        detection_bound: "the re-plan latency (200 ticks after the request)",
+        reset_allowed_when: "not latched: logged, the next step is re-planned afresh",
+    },
+    /// The re-planner's step failed the device's admission check (drive,
+    /// envelope, a sample not finite): the step starts on its table.
+    ReplanRefused = 0x0607 {
+        name: "re-plan refused",
+        reaction: Reaction::PlayTable,
+        detection_bound: "the re-plan latency (the answer is read then)",
+        reset_allowed_when: "not latched: logged, the next step is re-planned afresh",
     },
 }
 

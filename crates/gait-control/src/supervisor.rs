@@ -175,8 +175,8 @@ pub struct Verdict {
     /// dragged by the braked one, not faulty (its current follows its
     /// command, or 0x0405 would have braked it). Held where they are now
     /// with their drive, not braked: braked, a loaded joint sinks, and
-    /// held at the hold's old reference its drive pushes the body (session
-    /// 16). A second trip on the same joint brakes it.
+    /// held at the hold's old reference its drive pushes the body. A
+    /// second trip on the same joint brakes it.
     pub rehold_joints: [bool; JOINTS],
 }
 
@@ -417,6 +417,29 @@ impl Supervisor {
         self.boot_faults.insert(code);
         self.present.insert(code);
         self.latch.raise(&mut t, code, NO_CHANNEL, 0.0);
+    }
+
+    /// Logs a fault whose reaction the sequencer has already carried out in
+    /// the tick that found it ([`Reaction::PlayTable`]: the re-planner's
+    /// 0x0606 and 0x0607). It is not latched: it orders nothing, blocks no
+    /// step and needs no reset; each occurrence is one post-mortem record.
+    /// A code of any other reaction is latched as a found fault.
+    pub fn log_played_table(&mut self, tick: u32, code: FaultCode) {
+        if code.reaction() == Reaction::PlayTable {
+            self.latch.log.push(FaultRecord {
+                tick,
+                code,
+                channel: NO_CHANNEL,
+                value: 0.0,
+            });
+        } else {
+            let mut t = Tick {
+                tick,
+                present: FaultSet::EMPTY,
+                new: FaultSet::EMPTY,
+            };
+            self.latch.raise(&mut t, code, NO_CHANNEL, 0.0);
+        }
     }
 
     /// The per-tick check: updates every detector with `input`, latches

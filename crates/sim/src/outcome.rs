@@ -225,7 +225,7 @@ fn fault_outcomes(rig: &Rig<'_>, dt: f64) -> Vec<FaultOutcome> {
                 .rfind(|&t| t <= detected_s + 1e-9);
             let reaction = code.reaction();
             let reached = |x: &crate::closed_loop::Sample| match reaction {
-                Reaction::None => true,
+                Reaction::None | Reaction::PlayTable => true,
                 Reaction::FinishStepThenHold => {
                     matches!(x.report.phase, Phase::Standing | Phase::SafeHold { .. })
                 }

@@ -236,6 +236,7 @@ fn reaction_text(r: gait_control::faults::Reaction) -> &'static str {
     use gait_control::faults::Reaction;
     match r {
         Reaction::None => "none",
+        Reaction::PlayTable => "play the table",
         Reaction::FinishStepThenHold => "finish the step, then hold",
         Reaction::SafeHold => "safe hold",
         Reaction::DisableMotors => "motors disabled",

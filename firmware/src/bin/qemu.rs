@@ -100,6 +100,7 @@ fn device_error(l: &mut Line, e: &DeviceError) {
 const fn reaction_name(r: Reaction) -> &'static str {
     match r {
         Reaction::None => "None",
+        Reaction::PlayTable => "PlayTable",
         Reaction::FinishStepThenHold => "FinishStepThenHold",
         Reaction::SafeHold => "SafeHold",
         Reaction::DisableMotors => "DisableMotors",

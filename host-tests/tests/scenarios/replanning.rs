@@ -1,11 +1,14 @@
 //! The board's idle-time re-planner in the closed loop: the answer reaches
 //! the sequencer on the tick the board would have it, the swing starts
 //! exactly the latency after the request, and a pilot who stands leaning
-//! forward on a stair descent has each step land where it is planned.
+//! forward on a stair descent has each step land where it is planned; a
+//! late or refused answer is logged (0x0606, 0x0607) and the table played.
 
 use exogait_device::DeviceConfig;
 use exogait_device::replan::REPLAN;
+use gait_control::faults::{FaultCode, Reaction};
 use gait_control::replan::{ReplanOutcome, ReplanSlot};
+use gait_control::supervisor::FaultRecord;
 use gait_core::flash_tables;
 use sim::compare::{GaitRun, play};
 use sim::pilot::PilotConfig;
@@ -24,8 +27,8 @@ struct Seen {
 
 /// Four descent steps of a pilot leaning 2° forward, the board
 /// re-planning or not, `fault` injected (before the first request); the
-/// run and its re-plans.
-fn descent_run(replan: bool, fault: Option<&str>) -> (GaitRun, Vec<Seen>) {
+/// run, its re-plans and the controller's fault log.
+fn descent_run(replan: bool, fault: Option<&str>) -> (GaitRun, Vec<Seen>, Vec<FaultRecord>) {
     let device = DeviceConfig::exogait().unwrap();
     let table = flash_tables::stair_down().unwrap();
     let pilot = PilotConfig {
@@ -65,11 +68,13 @@ fn descent_run(replan: bool, fault: Option<&str>) -> (GaitRun, Vec<Seen>) {
                 .unwrap_or(0),
         })
         .collect();
-    (run, seen)
+    let log = rig.controller.supervisor().log().copied().collect();
+    (run, seen, log)
 }
 
 fn descent(replan: bool) -> (GaitRun, Vec<Seen>) {
-    descent_run(replan, None)
+    let (run, seen, _) = descent_run(replan, None);
+    (run, seen)
 }
 
 fn mean_step_error_mm(run: &GaitRun) -> f64 {
@@ -114,12 +119,25 @@ fn a_forward_leaning_pilots_descent_steps_land_where_planned_when_replanned() {
 fn a_late_or_refused_answer_plays_the_table_and_the_steps_go_on() {
     let (plain, _) = descent(false);
     for fault in ["replan-timeout@1.0", "replan-refused@1.0"] {
-        let (run, replans) = descent_run(true, Some(fault));
+        let (run, replans, log) = descent_run(true, Some(fault));
         let first = replans[0];
-        match fault {
-            "replan-timeout@1.0" => assert_eq!(first.ready, u64::MAX, "never answered"),
-            _ => assert_eq!(first.outcome, ReplanOutcome::Refused),
-        }
+        let code = match fault {
+            "replan-timeout@1.0" => {
+                assert_eq!(first.ready, u64::MAX, "never answered");
+                FaultCode::ReplanLate
+            }
+            _ => {
+                assert_eq!(first.outcome, ReplanOutcome::Refused);
+                FaultCode::ReplanRefused
+            }
+        };
+        // Logged once, on the tick the swing starts on the table; not
+        // latched (the steps go on, nothing to reset).
+        let logged: Vec<_> = log.iter().filter(|r| r.code.code() >= 0x0606).collect();
+        assert_eq!(logged.len(), 1, "{fault}: {log:?}");
+        assert_eq!(logged[0].code, code);
+        assert_eq!(u64::from(logged[0].tick), first.next_swing, "{fault}");
+        assert_eq!(code.reaction(), Reaction::PlayTable);
         // The pilot's 2° is within the table's tolerance: the first step
         // plays the table at the latency, the next ones are re-planned.
         assert_eq!(

@@ -1,15 +1,17 @@
 //! *write*: the motors enabled only as the verdict allows (every one for
 //! its reaction, one by one for the braked joints) and the commands
-//! written; indicators; the crutch-load metric; the tick's report.
+//! written; indicators; the crutch-load metric and the re-planner's
+//! faults in the log; the tick's report.
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
 
 use crate::drivers::motor;
-use crate::faults::Reaction;
+use crate::faults::{FaultCode, Reaction};
 use crate::layout::force;
 use crate::position_loop::JointLoop;
 use crate::posture::JOINTS;
+use crate::replan::{ReplanOutcome, ReplanResult};
 use crate::sequencer::SeqEvent;
 use crate::supervisor::Verdict;
 
@@ -41,7 +43,7 @@ impl Controller<'_> {
         let _ = hw.gait_led.update(fb.gait_led, op.tick);
         let _ = hw.fault_led.update(fb.fault_led, op.tick);
         let _ = hw.buzzer.update(fb.buzzer, op.tick);
-        self.log_crutch_load(s, plan, verdict.reaction);
+        self.log_events(s, plan, verdict.reaction);
         TickReport {
             tick: self.tick,
             joints_rad: s.sensed.joints_rad,
@@ -126,12 +128,28 @@ impl Controller<'_> {
         written
     }
 
-    /// The crutch-load metric: a step's log opens with its swing and closes
-    /// when the gait stops or a fatal reaction ends it.
+    /// A re-plan late or refused: the sequencer played the table; the
+    /// code goes into the log (once a step at most: kept off the tick's
+    /// usual path).
+    #[cold]
+    #[inline(never)]
+    fn log_replan(&mut self, result: ReplanResult) {
+        let code = match result {
+            ReplanResult::Late => FaultCode::ReplanLate,
+            ReplanResult::Answered(ReplanOutcome::Refused) => FaultCode::ReplanRefused,
+            ReplanResult::Answered(ReplanOutcome::Replanned | ReplanOutcome::Declined) => return,
+        };
+        self.supervisor.log_played_table(self.tick, code);
+    }
+
+    /// The crutch-load metric (a step's log opens with its swing and closes
+    /// when the gait stops or a fatal reaction ends it), and the
+    /// re-planner's faults, whose table the sequencer played this tick.
     #[inline(always)]
-    fn log_crutch_load(&mut self, s: &Senses, plan: &Planned, reaction: Reaction) {
+    fn log_events(&mut self, s: &Senses, plan: &Planned, reaction: Reaction) {
         for ev in plan.reference.events.iter() {
             match ev {
+                SeqEvent::Replan(result) => self.log_replan(result),
                 SeqEvent::SwingStarted(..) => {
                     self.crutch.begin_step();
                 }

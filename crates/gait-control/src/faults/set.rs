@@ -81,6 +81,8 @@ impl FaultSet {
             Reaction::SafeHold
         } else if self.0 & REACTION_FINISH_STEP != 0 {
             Reaction::FinishStepThenHold
+        } else if self.0 & REACTION_PLAY_TABLE != 0 {
+            Reaction::PlayTable
         } else {
             Reaction::None
         }
@@ -113,6 +115,7 @@ const HOLD_IN_AIR_IN_SWING: u32 = in_swing_mask(&FaultCode::ALL, InSwing::HoldIn
 const REACTION_DISABLE_MOTORS: u32 = reaction_mask(&FaultCode::ALL, Reaction::DisableMotors);
 const REACTION_SAFE_HOLD: u32 = reaction_mask(&FaultCode::ALL, Reaction::SafeHold);
 const REACTION_FINISH_STEP: u32 = reaction_mask(&FaultCode::ALL, Reaction::FinishStepThenHold);
+const REACTION_PLAY_TABLE: u32 = reaction_mask(&FaultCode::ALL, Reaction::PlayTable);
 
 /// The [`FaultSet`] bits of the codes in `codes` whose reaction is `which`.
 const fn reaction_mask(codes: &[FaultCode], which: Reaction) -> u32 {

@@ -147,7 +147,8 @@ impl Orders {
         let found_at_boot = verdict.latched.contains(FaultCode::RestartedAfterPanic)
             || verdict.latched.contains(FaultCode::BundleRefused);
         let order = match verdict.reaction {
-            Reaction::None => Order::Carry,
+            // The sequencer played the table itself when it found it.
+            Reaction::None | Reaction::PlayTable => Order::Carry,
             Reaction::FinishStepThenHold => Order::FinishStepThenHold,
             Reaction::SafeHold if found_at_boot => Order::HoldWhereFound,
             Reaction::SafeHold => Order::SafeHold(verdict.latched.in_swing()),

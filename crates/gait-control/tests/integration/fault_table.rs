@@ -78,6 +78,7 @@ fn doc_rows() -> Vec<DocRow> {
 fn doc_label(r: Reaction) -> &'static str {
     match r {
         Reaction::None => "NONE",
+        Reaction::PlayTable => "PLAY THE TABLE",
         Reaction::FinishStepThenHold => "FINISH STEP, THEN HOLD",
         Reaction::SafeHold => "SAFE HOLD",
         Reaction::DisableMotors => "MOTORS DISABLED",

@@ -273,3 +273,37 @@ fn a_boot_fault_latches_before_the_first_tick_and_no_reset_clears_it() {
         assert_eq!(sup.log().filter(|r| r.code == code).count(), 1);
     }
 }
+
+#[test]
+fn the_replanners_faults_are_logged_each_time_and_never_latched() {
+    let mut sup = supervisor();
+    sup.log_played_table(10, FaultCode::ReplanLate);
+    sup.log_played_table(500, FaultCode::ReplanRefused);
+    sup.log_played_table(900, FaultCode::ReplanLate);
+    let v = sup.check(&healthy_input(901));
+    assert_eq!(v.reaction, Reaction::None);
+    assert!(v.latched.is_empty() && sup.latched().is_empty());
+    let logged: Vec<_> = sup.log().map(|r| (r.tick, r.code)).collect();
+    assert_eq!(
+        logged,
+        [
+            (10, FaultCode::ReplanLate),
+            (500, FaultCode::ReplanRefused),
+            (900, FaultCode::ReplanLate)
+        ]
+    );
+    // Their reaction sits between none and finishing the step.
+    let mut set = FaultSet::EMPTY;
+    set.insert(FaultCode::ReplanLate);
+    assert_eq!(set.reaction(), Reaction::PlayTable);
+    set.insert(FaultCode::AnklePositionLimit);
+    assert_eq!(set.reaction(), Reaction::FinishStepThenHold);
+}
+
+#[test]
+fn a_fault_of_another_reaction_given_as_played_latches() {
+    let mut sup = supervisor();
+    sup.log_played_table(7, FaultCode::TrackingError);
+    assert!(sup.latched().contains(FaultCode::TrackingError));
+    assert_eq!(sup.log().count(), 1);
+}
