@@ -31,14 +31,20 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     // The QEMU image's tick replay (`tick_replay`): the recording xtask
     // names, or nothing to replay.
-    println!("cargo:rerun-if-env-changed=EXOGAIT_TICK_RECORDS");
-    let records = out.join("tick_records.bin");
-    match env::var_os("EXOGAIT_TICK_RECORDS") {
-        Some(path) if qemu => {
-            println!("cargo:rerun-if-changed={}", PathBuf::from(&path).display());
-            fs::copy(&path, &records).expect("copy the tick recording");
+    // Likewise the run it replays with the idle-time re-planner on.
+    for (var, name) in [
+        ("EXOGAIT_TICK_RECORDS", "tick_records.bin"),
+        ("EXOGAIT_REPLANNING_RECORDS", "replanning_records.bin"),
+    ] {
+        println!("cargo:rerun-if-env-changed={var}");
+        let records = out.join(name);
+        match env::var_os(var) {
+            Some(path) if qemu => {
+                println!("cargo:rerun-if-changed={}", PathBuf::from(&path).display());
+                fs::copy(&path, &records).expect("copy the tick recording");
+            }
+            _ => fs::write(&records, []).expect("write an empty tick recording"),
         }
-        _ => fs::write(&records, []).expect("write an empty tick recording"),
     }
     let target = env::var("TARGET").unwrap_or_default();
     if target.starts_with("thumb") {

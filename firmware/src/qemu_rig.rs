@@ -350,6 +350,18 @@ impl InputPin for FakeInput {
 pub type RigIo =
     BoardIo<FakeAs5048a, FakeMcp3208, FakePwm, FakeOutput, FakeOutput, FakeInput, FakeOutput>;
 
+/// The controller's drivers over the rig's peripherals, as
+/// [`crate::board_config::hardware`] builds them from [`RigIo`].
+pub type RigHardware = gait_control::controller::Hardware<
+    FakeAs5048a,
+    FakeMcp3208,
+    FakePwm,
+    FakeOutput,
+    FakeOutput,
+    FakeInput,
+    FakeOutput,
+>;
+
 /// Standing posture of the rig, rad: hips and knees slightly flexed (joint
 /// order), ankles neutral (left, right).
 pub const STANDING_JOINTS_RAD: [f32; 4] = [0.05, 0.05, 0.05, 0.05];

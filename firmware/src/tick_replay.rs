@@ -18,6 +18,11 @@ use crate::{board_config, qemu_rig};
 /// The recording this image carries.
 pub static TICK_RECORDS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/tick_records.bin"));
 
+/// The run this image replays with its idle-time re-planner on
+/// (`sim::replay::record_replanning`; empty: none).
+pub static REPLANNING_RECORDS: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/replanning_records.bin"));
+
 /// The phases ticks are grouped by, as printed.
 pub const PHASES: [&str; 5] = [
     "standing",
@@ -129,42 +134,46 @@ pub fn replay_with<'t>(
         for (k, record) in (0u32..).zip(segment.ticks()) {
             qemu_rig::replay(device, &record);
             let (instr, report) = time(&mut || controller.tick(&mut hw, record.deadline_missed));
-            out.ticks += 1;
-            if let Some(p) = out.phases.get_mut(phase_index(&report.phase)) {
-                p.ticks += 1;
-                p.total += u64::from(instr);
-                if instr > p.worst {
-                    p.worst = instr;
-                    p.worst_at = (out.segments - 1, k);
-                }
-            }
-            let diff = report
-                .command_nm
-                .iter()
-                .zip(record.host_command_nm)
-                .map(|(t, h)| {
-                    if t.to_bits() == h.to_bits() {
-                        0.0
-                    } else {
-                        (t - h).abs()
-                    }
-                })
-                .fold(0.0f32, |m, d| if d.is_nan() || d > m { d } else { m });
-            if diff != 0.0 {
-                out.differing_ticks += 1;
-                if out.first_differing.is_none() {
-                    out.first_differing = Some((
-                        out.segments - 1,
-                        k,
-                        report.command_nm,
-                        record.host_command_nm,
-                    ));
-                }
-            }
-            if diff.is_nan() || diff > out.max_command_diff_nm {
-                out.max_command_diff_nm = diff;
-            }
+            out.account(k, instr, &report, &record.host_command_nm);
         }
     }
     Ok(out)
+}
+
+impl Replay {
+    /// Counts tick `k` of the current run: its cost `instr` under its
+    /// phase, and its commands against the host's.
+    pub fn account(&mut self, k: u32, instr: u32, report: &TickReport, host_nm: &[f32; 4]) {
+        let run = self.segments.saturating_sub(1);
+        self.ticks += 1;
+        if let Some(p) = self.phases.get_mut(phase_index(&report.phase)) {
+            p.ticks += 1;
+            p.total += u64::from(instr);
+            if instr > p.worst {
+                p.worst = instr;
+                p.worst_at = (run, k);
+            }
+        }
+        let diff = report
+            .command_nm
+            .iter()
+            .zip(host_nm)
+            .map(|(t, h)| {
+                if t.to_bits() == h.to_bits() {
+                    0.0
+                } else {
+                    (t - h).abs()
+                }
+            })
+            .fold(0.0f32, |m, d| if d.is_nan() || d > m { d } else { m });
+        if diff != 0.0 {
+            self.differing_ticks += 1;
+            if self.first_differing.is_none() {
+                self.first_differing = Some((run, k, report.command_nm, *host_nm));
+            }
+        }
+        if diff.is_nan() || diff > self.max_command_diff_nm {
+            self.max_command_diff_nm = diff;
+        }
+    }
 }

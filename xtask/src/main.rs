@@ -478,7 +478,10 @@ fn build_firmware(tc: &Toolchain, board: Board) -> Result<PathBuf> {
     let mut build = tc.cargo("build");
     build.args(["--release", "--features", board.feature, "--bin", board.bin]);
     if board.name == "qemu" {
-        build.env("EXOGAIT_TICK_RECORDS", tick_replay::recording()?);
+        let files = tick_replay::recording()?;
+        build
+            .env("EXOGAIT_TICK_RECORDS", files.ticks)
+            .env("EXOGAIT_REPLANNING_RECORDS", files.replanning);
     }
     run(&mut build)?;
     let elf = root()

@@ -145,7 +145,7 @@ pub fn profile(elf: &Path) -> Result {
         .args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
         .args(["-monitor", "none", "-serial", "none"])
         .args(["-semihosting-config", "enable=on,target=native"])
-        .args(["-icount", "shift=0"])
+        .args(["-icount", "shift=0,sleep=off"])
         .args(["-d", "in_asm,exec,nochain"])
         .arg("-kernel")
         .arg(elf)

@@ -34,7 +34,7 @@ pub fn run_qemu(tc: &Toolchain, loads: &[(PathBuf, u32)]) -> Result<String> {
         .args(["-monitor", "none", "-serial", "none"])
         .args(["-semihosting-config", "enable=on,target=native"])
         // One instruction per virtual nanosecond: SysTick counts instructions.
-        .args(["-icount", "shift=0"])
+        .args(["-icount", "shift=0,sleep=off"])
         .arg("-kernel")
         .arg(&elf);
     for (file, addr) in loads {

@@ -15,17 +15,31 @@ pub const BUDGET_INSTR: u64 = 10_000;
 /// replay finds none; this leaves room for a compiler's reassociation).
 pub const COMMAND_BOUND_NM: f64 = 1e-3;
 
-/// The recording (made once per xtask run): `target/replay/ticks.bin`.
-pub fn recording() -> Result<PathBuf> {
-    static MADE: OnceLock<std::result::Result<PathBuf, String>> = OnceLock::new();
+/// The recordings the QEMU image replays.
+#[derive(Clone, Debug)]
+pub struct Recordings {
+    /// The gaits' runs: `target/replay/ticks.bin`.
+    pub ticks: PathBuf,
+    /// The run with the idle-time re-planner on:
+    /// `target/replay/replanning.bin`.
+    pub replanning: PathBuf,
+}
+
+/// The recordings (made once per xtask run).
+pub fn recording() -> Result<Recordings> {
+    static MADE: OnceLock<std::result::Result<Recordings, String>> = OnceLock::new();
     MADE.get_or_init(|| {
         let dir = root().join("target/replay");
         std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        let file = dir.join("ticks.bin");
+        let files = Recordings {
+            ticks: dir.join("ticks.bin"),
+            replanning: dir.join("replanning.bin"),
+        };
         run(cargo()
             .args(["run", "-q", "-p", "sim", "--example", "record_ticks", "--"])
-            .arg(&file))?;
-        Ok(file)
+            .arg(&files.ticks)
+            .arg(&files.replanning))?;
+        Ok(files)
     })
     .clone()
 }
@@ -89,6 +103,53 @@ pub fn check(qemu_stdout: &str) -> Result {
     println!(
         "tick replay: every phase within {BUDGET_INSTR} instructions; commands within \
          {diff:e} N·m of the host's"
+    );
+    check_replanning(qemu_stdout)
+}
+
+/// The re-planner's latency, ticks: every answer of the preempted replay
+/// must come sooner (`exogait_device::replan::REPLAN`).
+const LATENCY_TICKS: u64 = exogait_device::replan::REPLAN.latency_ticks as u64;
+/// 0.5 s of the 168 MHz core: the most one re-plan may take.
+const MAX_REPLAN_INSTR: u64 = 84_000_000;
+
+/// Checks the replay with the re-planner in the tick's idle time
+/// (`firmware/src/bin/qemu/preempted.rs`): re-planned steps played, each
+/// answer within the latency and 0.5 s of the core, no tick overrun, the
+/// commands the host's. Its `tick:` phase lines are within the budget
+/// with the others.
+fn check_replanning(qemu_stdout: &str) -> Result {
+    let summary = qemu_stdout
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("tick: replanning replayed "))
+        .ok_or("the QEMU image did not replay the re-planning run")?;
+    let number = |l: &str, key: &str| -> Result<u64> {
+        field(l, key)
+            .and_then(|v| v.parse().ok())
+            .ok_or_else(|| format!("no {key}= in `{l}`"))
+    };
+    if number(summary, "differing_ticks")? != 0 || number(summary, "overruns")? != 0 {
+        return Err(format!("the re-planning replay failed: {summary}"));
+    }
+    let replans: Vec<&str> = qemu_stdout
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("replan: tick="))
+        .collect();
+    let mut used = 0;
+    for r in &replans {
+        let line = format!("tick={r}");
+        if number(&line, "ticks")? >= LATENCY_TICKS || number(&line, "insns")? > MAX_REPLAN_INSTR {
+            return Err(format!("a re-plan took too long: replan: {line}"));
+        }
+        used += usize::from(field(&line, "used") == Some("replanned"));
+    }
+    if used == 0 {
+        return Err("the re-planning replay played no re-planned step".into());
+    }
+    println!(
+        "re-planning replay: {used} of {} steps re-planned in the tick's idle time, \
+         each within {LATENCY_TICKS} ticks; no overrun; commands the host's",
+        replans.len()
     );
     Ok(())
 }

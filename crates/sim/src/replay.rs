@@ -6,8 +6,9 @@
 //! [`record_gaits`] records what the main job and the fault campaign
 //! exercise: two steps of each gait with the flash tables and the simulated
 //! pilot, and a walk whose stance knee's encoder jumps in mid-swing, so the
-//! supervisor's safe hold is timed too. No sensor noise: a record holds one
-//! sample of each reading.
+//! supervisor's safe hold is timed too; [`record_replanning`], a run with
+//! the idle-time re-planner on. No sensor noise: a record holds one sample
+//! of each reading.
 
 use exogait_device::DeviceConfig;
 use exogait_device::tick_record::{self, TickRecord};
@@ -90,6 +91,43 @@ pub fn record_bundle_step(
         gait,
         ticks: run.rig.recorded.unwrap_or_default(),
     })
+}
+
+/// The lean of the pilot [`record_replanning`] records: 2° forward over
+/// the table's start, rad (within the table's start tolerance, so that
+/// the same pilot can step without re-planning).
+pub const REPLANNING_LEAN_RAD: f64 = 0.034_906_585;
+
+/// Records `steps` stair-descent steps of a pilot leaning
+/// [`REPLANNING_LEAN_RAD`] forward with the board's idle-time re-planner
+/// on (`sim::replanning`): the run the QEMU image replays with its own
+/// re-planner in the tick's idle time, preempted by the tick. Its commands
+/// equal the host's only if each of its answers reaches the sequencer
+/// within the latency, as the host's did. Also returns the host's re-plans.
+pub fn record_replanning(
+    device: &DeviceConfig,
+    steps: usize,
+) -> Result<(Recording, Vec<crate::replanning::ReplanRecord>), RigError> {
+    let table = gait_core::flash_tables::stair_down()
+        .map_err(|_| RigError::Config("the flash stair-descent table is refused"))?;
+    let pilot = crate::pilot::PilotConfig {
+        habit_lean_rad: REPLANNING_LEAN_RAD,
+        ..strong_pilot()
+    };
+    let slot = gait_control::replan::ReplanSlot::new();
+    let max_s = 6.0 + steps as f64 * (f64::from(table.duration_s()) + 2.0);
+    let (_, rig) = crate::compare::play(device, table, pilot, steps, max_s, |rig| {
+        rig.replan_with(&slot);
+        rig.record_ticks();
+    })?;
+    let replans = rig.replans().to_vec();
+    Ok((
+        Recording {
+            gait: Gait::StairDown,
+            ticks: rig.recorded.unwrap_or_default(),
+        },
+        replans,
+    ))
 }
 
 /// The recordings as a tick-record file.

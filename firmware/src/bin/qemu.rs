@@ -25,6 +25,8 @@
 mod bundle;
 #[path = "qemu/calibration.rs"]
 mod calibration;
+#[path = "qemu/preempted.rs"]
+mod preempted;
 #[path = "qemu/replan.rs"]
 mod replan;
 
@@ -219,6 +221,7 @@ fn run() -> usize {
             // Before the replay: `cargo xtask profile` counts from the
             // replay's start on.
             failed += replan::check(out, &mut ctr);
+            failed += preempted::check(out);
             failed += replay_bench(out, &mut ctr);
             failed += calibration::check(out);
             failed += bundle::check(out, &mut ctr);
@@ -489,24 +492,7 @@ fn replay_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
             0
         }
         Ok(r) => {
-            for (name, p) in tick_replay::PHASES.iter().zip(r.phases) {
-                if p.ticks > 0 {
-                    out.put(
-                        line("tick: phase=")
-                            .str(name)
-                            .str(" avg=")
-                            .u64(p.average())
-                            .str(" worst=")
-                            .u32(p.worst)
-                            .str(" ticks=")
-                            .u32(p.ticks)
-                            .str(" worst_at=")
-                            .u32(p.worst_at.0)
-                            .str(":")
-                            .u32(p.worst_at.1),
-                    );
-                }
-            }
+            print_phases(out, "tick: phase=", &r);
             out.put(
                 line("tick: replayed runs=")
                     .u32(r.segments)
@@ -540,6 +526,29 @@ fn replay_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
                 }
             }));
             1
+        }
+    }
+}
+
+/// Prints a replay's phases, one line each starting with `prefix`:
+/// `<prefix><name> avg=<n> worst=<n> ticks=<n> worst_at=<run>:<tick>`.
+fn print_phases(out: &mut Out, prefix: &str, r: &tick_replay::Replay) {
+    for (name, p) in tick_replay::PHASES.iter().zip(r.phases) {
+        if p.ticks > 0 {
+            out.put(
+                line(prefix)
+                    .str(name)
+                    .str(" avg=")
+                    .u64(p.average())
+                    .str(" worst=")
+                    .u32(p.worst)
+                    .str(" ticks=")
+                    .u32(p.ticks)
+                    .str(" worst_at=")
+                    .u32(p.worst_at.0)
+                    .str(":")
+                    .u32(p.worst_at.1),
+            );
         }
     }
 }
