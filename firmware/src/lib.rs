@@ -1,7 +1,8 @@
 //! Board-independent pieces of the firmware: the configuration both boards
 //! run the controller with ([`board_config`]), the motor board's clock tree
 //! and timers computed when compiling ([`clock_tree`]), the power-on self-test
-//! ([`selftest`]) and the in-memory peripherals of the QEMU control-tick
+//! ([`selftest`]), the idle-time re-planner both boards schedule under the
+//! tick ([`idle_replan`]), and the in-memory peripherals of the QEMU control-tick
 //! benchmark ([`qemu_rig`]), its replay of ticks recorded in the simulator
 //! ([`tick_replay`]) and the text it prints ([`text`]).
 //!
@@ -14,6 +15,7 @@
 pub mod board_config;
 pub mod clock_tree;
 pub mod flash_sectors;
+pub mod idle_replan;
 #[cfg(not(feature = "board-stm32f405"))]
 pub mod qemu_bundle;
 pub mod qemu_rig;

@@ -33,7 +33,8 @@ pub fn run_qemu(tc: &Toolchain, loads: &[(PathBuf, u32)]) -> Result<String> {
         .args(["-machine", "mps2-an386", "-cpu", "cortex-m4", "-nographic"])
         .args(["-monitor", "none", "-serial", "none"])
         .args(["-semihosting-config", "enable=on,target=native"])
-        // One instruction per virtual nanosecond: SysTick counts instructions.
+        // One instruction per virtual nanosecond: SysTick counts
+        // instructions; a WFI skips to the next timer event, not real time.
         .args(["-icount", "shift=0,sleep=off"])
         .arg("-kernel")
         .arg(&elf);

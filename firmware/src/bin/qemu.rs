@@ -8,9 +8,10 @@
 //! runs [`CONTROL_TICKS`] ticks and fails the run if the controller reports
 //! any fault or does not enable its motors.
 //!
-//! Instruction counts: run QEMU with `-icount shift=0` so every instruction
-//! advances the virtual clock by 1 ns; SysTick on the core clock (25 MHz on
-//! this machine) then ticks once per 40 instructions.
+//! Instruction counts: run QEMU with `-icount shift=0,sleep=off` so every
+//! instruction advances the virtual clock by 1 ns (and a `WFI` skips to the
+//! next timer event); SysTick on the core clock (25 MHz on this machine)
+//! then ticks once per 40 instructions.
 //!
 //! Output: semihosting writes of lines built with `firmware::text::Line`,
 //! not `core::fmt` (whose float and `Debug` formatting carry panic paths and

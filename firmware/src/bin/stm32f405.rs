@@ -6,8 +6,9 @@
 //! driven low before anything else, the power-on self-test must pass before
 //! the control loop may start, every driver is built and every motor
 //! disabled through the drivers, and only then do the independent watchdog
-//! and the 1 kHz tick start. A panic resets the board into a hold of the
-//! posture it finds (fault 0x0603, see `panic`).
+//! and the 1 kHz tick start. The tick runs in TIM2's interrupt and thread
+//! mode re-plans steps in its idle time (`schedule`). A panic resets the
+//! board into a hold of the posture it finds (fault 0x0603, see `panic`).
 //!
 //! # Pin map (motor board rev A, LQFP64)
 //!
@@ -48,6 +49,8 @@ mod clocks;
 mod pwm;
 #[path = "stm32f405/rtt_log.rs"]
 mod rtt_log;
+#[path = "stm32f405/schedule.rs"]
+mod schedule;
 #[path = "stm32f405/spi.rs"]
 mod spi;
 #[path = "stm32f405/tick.rs"]
@@ -64,13 +67,13 @@ use embedded_hal::digital::{ErrorType, OutputPin};
 use embedded_hal::spi::{Mode, Phase, Polarity};
 use embedded_hal_bus::spi::{AtomicDevice, ExclusiveDevice};
 use embedded_hal_bus::util::AtomicCell;
-use exogait_device::boot::{self, Gaits};
+use exogait_device::boot::{self, Gaits, TableSlots};
+use exogait_device::replan::REPLAN;
 use firmware::board_config::{self, BoardIo, TICK_HZ};
 use firmware::clock_tree::{ADC_SPI_BR, ENCODER_SPI_BR};
+use firmware::idle_replan::IdleReplanner;
 use firmware::{flash_sectors, selftest};
-use gait_control::controller::TickReport;
-use gait_control::faults::{FaultSet, Reaction};
-use stm32f4xx_hal::gpio::{ErasedPin, Output};
+use stm32f4xx_hal::gpio::{ErasedPin, Input, Output};
 use stm32f4xx_hal::{pac, prelude::*, watchdog::IndependentWatchdog};
 
 /// Motor-enable pins on GPIOB (see the pin map above).
@@ -193,7 +196,15 @@ fn main() -> ! {
         gpioa.pa6.into_alternate::<5>(),
         gpioa.pa7.into_alternate::<5>(),
     );
-    let encoder_bus = AtomicCell::new(spi::Bus::spi1(dp.SPI1, &dp.RCC, mode_1, ENCODER_SPI_BR));
+    // 'static, as everything the tick's interrupt holds.
+    let encoder_bus: Option<&'static mut AtomicCell<spi::Bus>> = cortex_m::singleton!(
+        : AtomicCell<spi::Bus> =
+            AtomicCell::new(spi::Bus::spi1(dp.SPI1, &dp.RCC, mode_1, ENCODER_SPI_BR))
+    );
+    let Some(encoder_bus) = encoder_bus else {
+        halt("encoder bus already taken");
+    };
+    let encoder_bus: &'static AtomicCell<spi::Bus> = encoder_bus;
     let _adc_bus_pins = (
         gpiob.pb10.into_alternate::<5>(),
         gpioc.pc2.into_alternate::<5>(),
@@ -201,7 +212,7 @@ fn main() -> ! {
     );
     let adc_bus = spi::Bus::spi2(dp.SPI2, &dp.RCC, mode_0, ADC_SPI_BR);
     let cs = |pin: ErasedPin<Output>| ChipSelect::<ENCODER_CS_CYCLES>(pin);
-    let encoder = |pin| match AtomicDevice::new(&encoder_bus, cs(pin), CycleDelay) {
+    let encoder = |pin| match AtomicDevice::new(encoder_bus, cs(pin), CycleDelay) {
         Ok(d) => d,
         Err(e) => match e {},
     };
@@ -302,13 +313,17 @@ fn main() -> ! {
             e.reason()
         ),
     }
-    let mut slots = [None; gait_core::bundle::MAX_GAITS];
+    let slots: Option<&'static mut TableSlots<'static>> =
+        cortex_m::singleton!(: TableSlots<'static> = [None; gait_core::bundle::MAX_GAITS]);
+    let Some(slots) = slots else {
+        halt("table slots already taken");
+    };
     let (cfg, mut controller) = match boot::build(
         &device,
         &gaits,
         &calibration,
         board_config::flash_tables(),
-        &mut slots,
+        slots,
     ) {
         Ok(x) => x,
         Err(e) => {
@@ -316,7 +331,7 @@ fn main() -> ! {
             halt("bad controller configuration: motors stay disabled");
         }
     };
-    let mut hw = match board_config::hardware(&cfg, io) {
+    let hw = match board_config::hardware(&cfg, io) {
         Ok(hw) => hw,
         Err(e) => {
             defmt::error!("board configuration refused: {}", e);
@@ -329,116 +344,34 @@ fn main() -> ! {
         controller.report_restart_after_panic();
     }
 
-    // 6. The 1 kHz loop under an independent watchdog. The DWT cycle counter
-    //    measures each tick's work for the log.
+    // 6. The re-planner, when the board re-plans, over the controller's
+    //    own tables (a request names one by its slot).
+    let tables = *controller.sequencer().tables();
+    let replanner = board_config::REPLANNING.then(|| {
+        controller.set_replanner(&schedule::SLOT, REPLAN);
+        IdleReplanner::new(&schedule::SLOT, cfg, tables)
+    });
+
+    // 7. The 1 kHz tick in TIM2's interrupt under an independent watchdog;
+    //    the re-planner in thread mode.
     cp.DCB.enable_trace();
     cp.DWT.enable_cycle_counter();
     let mut dog = IndependentWatchdog::new(dp.IWDG);
     dog.start(WATCHDOG_MS.millis());
-    let mut tick = tick::Tick::start(dp.TIM2, &dp.RCC);
-    let mut log = LoopLog::new();
-    let mut first = true;
-    loop {
-        // The update flag already set when we come to wait means the
-        // previous tick's work ran past the period boundary: a missed
-        // deadline (the supervisor decides what a run of them means).
-        let overran = tick.elapsed() && !first;
-        if !overran {
-            while !tick.elapsed() {}
-        }
-        first = false;
-        let start = DWT::cycle_count();
-        let report = controller.tick(&mut hw, overran);
-        dog.feed();
-        let cycles = DWT::cycle_count().wrapping_sub(start);
-        log.after_tick(&report, &controller, cycles, overran);
-    }
+    let tick = tick::Tick::start(dp.TIM2, &dp.RCC);
+    schedule::run(schedule::Board::new(controller, hw, tick, dog), replanner)
 }
 
-/// What the loop reports over defmt: new faults and reactions at once,
-/// each finished step's crutch load, and once a second a status line with
-/// the forces and the worst tick.
-struct LoopLog {
-    faults: FaultSet,
-    reaction: Reaction,
-    worst_cycles: u32,
-    overruns: u32,
-    last_step: Option<u32>,
-}
-
-impl LoopLog {
-    fn new() -> Self {
-        Self {
-            faults: FaultSet::EMPTY,
-            reaction: Reaction::None,
-            worst_cycles: 0,
-            overruns: 0,
-            last_step: None,
-        }
-    }
-
-    fn after_tick(
-        &mut self,
-        r: &TickReport,
-        controller: &gait_control::controller::Controller<'_>,
-        cycles: u32,
-        overran: bool,
-    ) {
-        self.worst_cycles = self.worst_cycles.max(cycles);
-        self.overruns = self.overruns.saturating_add(u32::from(overran));
-        if r.faults != self.faults {
-            for code in r.faults.iter() {
-                if !self.faults.contains(code) {
-                    defmt::error!(
-                        "tick {=u32}: fault {=u16} {=str}",
-                        r.tick,
-                        code.code(),
-                        code.name()
-                    );
-                }
-            }
-            self.faults = r.faults;
-        }
-        if r.reaction != self.reaction {
-            defmt::warn!(
-                "tick {=u32}: reaction {} (motors enabled {=bool})",
-                r.tick,
-                r.reaction,
-                r.motors_enabled
-            );
-            self.reaction = r.reaction;
-        }
-        for step in controller.crutch_load().log() {
-            if self.last_step.is_none_or(|s| step.step > s) {
-                defmt::info!(
-                    "step {=u32}: crutch impulse {=f32} N·s, peaks L {=f32} R {=f32} N, {=f32} s",
-                    step.step,
-                    step.impulse_ns,
-                    step.left_peak_n,
-                    step.right_peak_n,
-                    step.duration_s
-                );
-                self.last_step = Some(step.step);
-            }
-        }
-        if r.tick.is_multiple_of(TICK_HZ) {
-            let [left_foot, right_foot, left_crutch, right_crutch] = r.forces_n;
-            defmt::info!(
-                "t {=u32} s: {} feet {=f32} {=f32} N, crutches {=f32} {=f32} N, worst tick {=u32}/{=u32} cycles, overruns {=u32}",
-                r.tick / TICK_HZ,
-                r.phase,
-                left_foot,
-                right_foot,
-                left_crutch,
-                right_crutch,
-                self.worst_cycles,
-                CYCLES_PER_TICK,
-                self.overruns
-            );
-            self.worst_cycles = 0;
-        }
-    }
-}
+/// The controller's drivers over this board's peripherals.
+type BoardHardware = gait_control::controller::Hardware<
+    AtomicDevice<'static, spi::Bus, ChipSelect<ENCODER_CS_CYCLES>, CycleDelay>,
+    ExclusiveDevice<spi::Bus, ChipSelect<ADC_CS_CYCLES>, CycleDelay>,
+    pwm::Channel,
+    ErasedPin<Output>,
+    ErasedPin<Output>,
+    ErasedPin<Input>,
+    ErasedPin<Output>,
+>;
 
 /// Stops for good with the motors disabled; the watchdog is not fed, so if it
 /// was started the board resets into the same safe boot.

@@ -1,8 +1,9 @@
-//! The re-planner in the tick's idle time, as the motor board runs it: the
-//! 1 kHz control tick in a timer interrupt, which preempts everything else,
-//! and the re-planner in thread mode, which runs whenever the tick does not
-//! and sleeps (WFI) when nothing is asked. The two share only the
-//! [`ReplanSlot`] (atomics): the tick never waits and takes no lock.
+//! The re-planner in the tick's idle time, scheduled as on the motor board
+//! (`firmware::idle_replan`): the 1 kHz control tick in a timer interrupt,
+//! which preempts everything else, and the re-planner in thread mode, which
+//! runs whenever the tick does not and sleeps (WFI) when nothing is asked.
+//! The two share only the [`ReplanSlot`] (atomics): the tick never waits
+//! and takes no lock.
 //!
 //! The run replayed is a stair descent of a pilot leaning 2° forward,
 //! recorded on the host with the simulator's model of this re-planner
@@ -26,14 +27,15 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use cortex_m::interrupt::Mutex;
 use cortex_m::peripheral::{NVIC, SYST};
 use cortex_m_rt::exception;
-use exogait_device::replan::{REPLAN, evals_within, replan};
+use exogait_device::replan::REPLAN;
 use exogait_device::tick_record::{RECORD_LEN, Segment, TickRecord, segments};
 use exogait_device::{DeviceConfig, build_controller};
+use firmware::idle_replan::IdleReplanner;
 use firmware::qemu_rig::RigHardware;
 use firmware::tick_replay::{REPLANNING_RECORDS, Replay};
 use firmware::{board_config, qemu_rig};
 use gait_control::controller::Controller;
-use gait_control::replan::{REPLAN_CAPACITY, ReplanOutcome, ReplanSlot};
+use gait_control::replan::{ReplanOutcome, ReplanSlot};
 
 use crate::{INSTR_PER_TICK, Out, SYST_MAX, line, print_phases};
 
@@ -233,31 +235,19 @@ pub(crate) fn check(out: &mut Out) -> usize {
     // atomics and the `TICKING` mutex.
     unsafe { NVIC::unmask(timer0::Irq) };
 
-    let mut buffer = [[0.0f32; 5]; REPLAN_CAPACITY];
+    let mut replanner = IdleReplanner::new(&SLOT, device, tables);
     let mut seen: [Option<Seen>; MAX_REPLANS] = [None; MAX_REPLANS];
     let mut count = 0;
     while !DONE.load(Ordering::Acquire) {
-        let Some((request, ticket)) = SLOT.take_request() else {
+        let asked_tick = TICKS.load(Ordering::Acquire);
+        let in_ticks = TICK_INSTRUCTIONS.load(Ordering::Acquire);
+        let start = SYST::get_current();
+        let Some(answer) = replanner.serve() else {
             // An interrupt between the check and here ends the sleep at
             // the next tick at the latest.
             cortex_m::asm::wfi();
             continue;
         };
-        let asked_tick = TICKS.load(Ordering::Acquire);
-        let in_ticks = TICK_INSTRUCTIONS.load(Ordering::Acquire);
-        let start = SYST::get_current();
-        let len = tables
-            .slot(usize::from(request.slot))
-            .map_or(0, |t| t.len());
-        let answer = replan(
-            &device,
-            &tables,
-            &request,
-            &mut buffer,
-            evals_within(REPLAN.latency_ticks, len),
-        );
-        let samples = buffer.get(..answer.samples).unwrap_or(&[]);
-        let _ = SLOT.publish(ticket, answer.outcome, samples);
         let elapsed = since(start);
         let ticked = TICK_INSTRUCTIONS
             .load(Ordering::Acquire)

@@ -43,6 +43,11 @@ pub struct Bus {
     regs: &'static RegisterBlock,
 }
 
+// SAFETY: a bus is its peripheral's only user (the PAC's SPI1 or SPI2,
+// which are `Send`, was handed over to build it): moving it to the tick's
+// interrupt moves that sole access with it.
+unsafe impl Send for Bus {}
+
 impl Bus {
     /// SPI1 (APB2), the encoders' bus: clock on and the peripheral reset
     /// (RM0090 §7.3.14 / §7.3.6), then [`Bus::start`].

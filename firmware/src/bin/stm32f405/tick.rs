@@ -1,7 +1,7 @@
 //! The 1 kHz control tick on TIM2 through the PAC, as stm32f4xx-hal's
 //! `CounterHz::start(1 kHz)` set it (without its run-time prescaler search):
 //! PSC and ARR from `firmware::clock_tree::TICK_TIMER`, computed when
-//! compiling.
+//! compiling. Its update interrupt (TIM2, IRQ 28) runs the tick.
 
 use firmware::clock_tree::TICK_TIMER;
 use stm32f4xx_hal::pac::{RCC, TIM2};
@@ -15,7 +15,8 @@ impl Tick {
     /// Clock on and the timer reset (RM0090 §7.3.13 / §7.3.5); PSC and ARR
     /// (§18.4.11–12, "General-purpose timers (TIM2 to TIM5)"), loaded by an
     /// update event with URS set so that it raises no update flag (§18.4.1,
-    /// §18.4.6); the counter started (CEN).
+    /// §18.4.6); the update interrupt enabled (DIER UIE, §18.4.4); the
+    /// counter started (CEN).
     pub fn start(tim: TIM2, rcc: &RCC) -> Self {
         rcc.apb1enr().modify(|_, w| w.tim2en().set_bit());
         let _ = rcc.apb1enr().read();
@@ -27,8 +28,15 @@ impl Tick {
         tim.egr().write(|w| w.ug().set_bit());
         tim.cr1().modify(|_, w| w.urs().clear_bit());
         tim.sr().write(|w| w.uif().clear_bit());
+        tim.dier().modify(|_, w| w.uie().set_bit());
         tim.cr1().modify(|_, w| w.cen().set_bit());
         Self { tim }
+    }
+
+    /// Whether a period ended since the last [`Tick::elapsed`] (SR UIF),
+    /// leaving the flag as it is.
+    pub fn pending(&self) -> bool {
+        self.tim.sr().read().uif().bit_is_set()
     }
 
     /// Whether a period ended since the last call (the update flag, SR

@@ -1,0 +1,205 @@
+//! The motor board's two priorities (`firmware::idle_replan`): TIM2's
+//! update interrupt runs the control tick every 1 ms, and thread mode runs
+//! the step re-planner when the sequencer asked for one (with
+//! `board_config::REPLANNING`), else sleeps (WFI). The interrupt preempts
+//! thread mode; they share only the re-plan slot's atomics, so the tick
+//! never waits for the re-planner.
+//!
+//! The watchdog is fed by the tick: a tick that stops coming resets the
+//! board, whatever thread mode is doing.
+
+use core::cell::RefCell;
+
+use cortex_m::interrupt::Mutex;
+use cortex_m::peripheral::{DWT, NVIC};
+use cortex_m_rt::exception;
+use firmware::board_config::{self, TICK_HZ};
+use firmware::idle_replan::IdleReplanner;
+use gait_control::controller::{Controller, TickReport};
+use gait_control::faults::{FaultSet, Reaction};
+use gait_control::replan::ReplanSlot;
+use stm32f4xx_hal::pac;
+use stm32f4xx_hal::watchdog::IndependentWatchdog;
+
+use crate::tick::Tick;
+use crate::{BoardHardware, CYCLES_PER_TICK};
+
+/// The slot the sequencer and the idle-time re-planner share.
+pub static SLOT: ReplanSlot = ReplanSlot::new();
+
+/// What the tick's interrupt works on: placed once by [`run`], before the
+/// interrupt is unmasked; thread mode never touches it again.
+static BOARD: Mutex<RefCell<Option<Board>>> = Mutex::new(RefCell::new(None));
+
+/// The controller, its drivers, the tick's timer and watchdog, the log.
+pub struct Board {
+    controller: Controller<'static>,
+    hw: BoardHardware,
+    tick: Tick,
+    dog: IndependentWatchdog,
+    log: LoopLog,
+    /// The last tick ran past its period: this one tells the supervisor.
+    overran: bool,
+}
+
+impl Board {
+    pub fn new(
+        controller: Controller<'static>,
+        hw: BoardHardware,
+        tick: Tick,
+        dog: IndependentWatchdog,
+    ) -> Self {
+        Self {
+            controller,
+            hw,
+            tick,
+            dog,
+            log: LoopLog::new(),
+            overran: false,
+        }
+    }
+
+    /// One control tick, in the timer's interrupt. The DWT cycle counter
+    /// measures its work for the log.
+    fn tick(&mut self) {
+        // This period's update: cleared, the tick begins.
+        let _ = self.tick.elapsed();
+        let start = DWT::cycle_count();
+        let report = self.controller.tick(&mut self.hw, self.overran);
+        self.dog.feed();
+        let cycles = DWT::cycle_count().wrapping_sub(start);
+        self.log
+            .after_tick(&report, &self.controller, cycles, self.overran);
+        // The next period's update already here: this tick (and its log)
+        // ran past the deadline, and its interrupt is pending. The
+        // supervisor decides what a run of them means.
+        self.overran = self.tick.pending();
+    }
+}
+
+/// Every interrupt without a handler of its own comes here (cortex-m-rt's
+/// vector table without a device crate); only TIM2's is unmasked.
+#[exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    if irqn == pac::Interrupt::TIM2 as i16 {
+        cortex_m::interrupt::free(|cs| {
+            if let Ok(mut board) = BOARD.borrow(cs).try_borrow_mut()
+                && let Some(board) = board.as_mut()
+            {
+                board.tick();
+            }
+        });
+    }
+}
+
+/// Hands `board` to the tick's interrupt and unmasks it; then runs the
+/// re-planner (if any) whenever a request waits, and sleeps otherwise.
+pub fn run(board: Board, mut replanner: Option<IdleReplanner<'static>>) -> ! {
+    let placed = cortex_m::interrupt::free(|cs| {
+        BOARD
+            .borrow(cs)
+            .try_borrow_mut()
+            .map(|mut b| *b = Some(board))
+            .is_ok()
+    });
+    if !placed {
+        crate::halt("the tick's state is in use: motors stay disabled");
+    }
+    // SAFETY: the handler shares state with thread mode only through the
+    // `BOARD` mutex (no longer used here) and the slot's atomics.
+    unsafe { NVIC::unmask(pac::Interrupt::TIM2) };
+    loop {
+        let served =
+            board_config::REPLANNING && replanner.as_mut().is_some_and(|r| r.serve().is_some());
+        if !served {
+            // A request made between the check and here waits for the next
+            // tick's interrupt to end the sleep: 1 ms of the 200 ms latency.
+            cortex_m::asm::wfi();
+        }
+    }
+}
+
+/// What the tick reports over defmt: new faults and reactions at once,
+/// each finished step's crutch load, and once a second a status line with
+/// the forces and the worst tick.
+struct LoopLog {
+    faults: FaultSet,
+    reaction: Reaction,
+    worst_cycles: u32,
+    overruns: u32,
+    last_step: Option<u32>,
+}
+
+impl LoopLog {
+    fn new() -> Self {
+        Self {
+            faults: FaultSet::EMPTY,
+            reaction: Reaction::None,
+            worst_cycles: 0,
+            overruns: 0,
+            last_step: None,
+        }
+    }
+
+    fn after_tick(
+        &mut self,
+        r: &TickReport,
+        controller: &Controller<'_>,
+        cycles: u32,
+        overran: bool,
+    ) {
+        self.worst_cycles = self.worst_cycles.max(cycles);
+        self.overruns = self.overruns.saturating_add(u32::from(overran));
+        if r.faults != self.faults {
+            for code in r.faults.iter() {
+                if !self.faults.contains(code) {
+                    defmt::error!(
+                        "tick {=u32}: fault {=u16} {=str}",
+                        r.tick,
+                        code.code(),
+                        code.name()
+                    );
+                }
+            }
+            self.faults = r.faults;
+        }
+        if r.reaction != self.reaction {
+            defmt::warn!(
+                "tick {=u32}: reaction {} (motors enabled {=bool})",
+                r.tick,
+                r.reaction,
+                r.motors_enabled
+            );
+            self.reaction = r.reaction;
+        }
+        for step in controller.crutch_load().log() {
+            if self.last_step.is_none_or(|s| step.step > s) {
+                defmt::info!(
+                    "step {=u32}: crutch impulse {=f32} N·s, peaks L {=f32} R {=f32} N, {=f32} s",
+                    step.step,
+                    step.impulse_ns,
+                    step.left_peak_n,
+                    step.right_peak_n,
+                    step.duration_s
+                );
+                self.last_step = Some(step.step);
+            }
+        }
+        if r.tick.is_multiple_of(TICK_HZ) {
+            let [left_foot, right_foot, left_crutch, right_crutch] = r.forces_n;
+            defmt::info!(
+                "t {=u32} s: {} feet {=f32} {=f32} N, crutches {=f32} {=f32} N, worst tick {=u32}/{=u32} cycles, overruns {=u32}",
+                r.tick / TICK_HZ,
+                r.phase,
+                left_foot,
+                right_foot,
+                left_crutch,
+                right_crutch,
+                self.worst_cycles,
+                CYCLES_PER_TICK,
+                self.overruns
+            );
+            self.worst_cycles = 0;
+        }
+    }
+}
