@@ -42,19 +42,6 @@ impl Line {
         self.buf.get(..self.len).unwrap_or(&[])
     }
 
-    /// Characters so far (bytes: the text is ASCII apart from `&str`s
-    /// passed in).
-    #[must_use]
-    pub const fn len(&self) -> usize {
-        self.len
-    }
-
-    /// Whether nothing was written.
-    #[must_use]
-    pub const fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
     fn byte(&mut self, b: u8) {
         if let Some(slot) = self.buf.get_mut(self.len) {
             *slot = b;

@@ -81,6 +81,14 @@ fn line(s: &str) -> Line {
     l
 }
 
+/// A new line starting with `s`, marked `FAIL ` first when `failed`
+/// (xtask looks for the mark).
+fn checked(failed: bool, s: &str) -> Line {
+    let mut l = line(if failed { "FAIL " } else { "" });
+    l.str(s);
+    l
+}
+
 /// What a configuration error is, by name (the index where it has one).
 fn device_error(l: &mut Line, e: &DeviceError) {
     let (name, index) = match e {

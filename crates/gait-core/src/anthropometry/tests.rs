@@ -24,25 +24,17 @@ fn reproduces_table_iii_lengths_and_masses() -> Result<(), AnthropometryError> {
     let ours = model.links();
     let paper = BodyModel::<f64>::paper_table_iii();
     let theirs = paper.links();
+    // Length, centre of mass, mass, inertia: ours against Table III's.
+    let figures = |l: &Link<f64>| [l.length_m, l.com_m, l.mass_kg, l.inertia_kgm2];
     for i in 0..LINKS {
-        let (a, b) = (ours[i], theirs[i]);
-        std::println!(
-            "link {}: l {:.4} vs {:.3} ({:+.1} %), d {:.4} vs {:.3} ({:+.1} %), \
-             m {:.3} vs {:.2} ({:+.1} %), I {:.4} vs {:.3} ({:+.1} %)",
-            i + 1,
-            a.length_m,
-            b.length_m,
-            100.0 * rel(a.length_m, b.length_m),
-            a.com_m,
-            b.com_m,
-            100.0 * rel(a.com_m, b.com_m),
-            a.mass_kg,
-            b.mass_kg,
-            100.0 * rel(a.mass_kg, b.mass_kg),
-            a.inertia_kgm2,
-            b.inertia_kgm2,
-            100.0 * rel(a.inertia_kgm2, b.inertia_kgm2),
-        );
+        let columns: std::vec::Vec<std::string::String> = ["l", "d", "m", "I"]
+            .iter()
+            .zip(figures(&ours[i]).iter().zip(figures(&theirs[i])))
+            .map(|(name, (&a, b))| {
+                std::format!("{name} {a:.4} vs {b:.3} ({:+.1} %)", 100.0 * rel(a, b))
+            })
+            .collect();
+        std::println!("link {}: {}", i + 1, columns.join(", "));
     }
     // Leg lengths within 10 %.
     for i in [0, 1, 3, 4] {

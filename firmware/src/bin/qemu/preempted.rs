@@ -37,7 +37,7 @@ use firmware::{board_config, qemu_rig};
 use gait_control::controller::Controller;
 use gait_control::replan::{ReplanOutcome, ReplanSlot};
 
-use crate::{INSTR_PER_TICK, Out, SYST_MAX, line, print_phases};
+use crate::{INSTR_PER_TICK, Out, SYST_MAX, checked, line, print_phases};
 
 /// One tick of the 168 MHz core in counts of the 25 MHz timer clock under
 /// `-icount shift=0` (1 ns an instruction): 168,000 instructions.
@@ -313,20 +313,16 @@ fn report<'a>(out: &mut Out, done: &Ticking, seen: impl Iterator<Item = &'a Seen
         let over = s.instructions > MAX_REPLAN_INSTRUCTIONS;
         failed += usize::from(over);
         out.put(
-            line(if over {
-                "FAIL replan: tick="
-            } else {
-                "replan: tick="
-            })
-            .u32(s.asked_tick)
-            .str(" insns=")
-            .u32(s.instructions)
-            .str(" evals=")
-            .u32(u32::from(s.evals))
-            .str(" ticks=")
-            .u32(s.ticks)
-            .str(" used=")
-            .str(used),
+            checked(over, "replan: tick=")
+                .u32(s.asked_tick)
+                .str(" insns=")
+                .u32(s.instructions)
+                .str(" evals=")
+                .u32(u32::from(s.evals))
+                .str(" ticks=")
+                .u32(s.ticks)
+                .str(" used=")
+                .str(used),
         );
     }
     let r = &done.replay;
@@ -334,18 +330,14 @@ fn report<'a>(out: &mut Out, done: &Ticking, seen: impl Iterator<Item = &'a Seen
     let bad = r.differing_ticks > 0 || done.overruns > 0;
     failed += usize::from(bad);
     out.put(
-        line(if bad {
-            "FAIL tick: replanning replayed ticks="
-        } else {
-            "tick: replanning replayed ticks="
-        })
-        .u32(r.ticks)
-        .str(" max_command_diff_nm=")
-        .exp(r.max_command_diff_nm)
-        .str(" differing_ticks=")
-        .u32(r.differing_ticks)
-        .str(" overruns=")
-        .u32(done.overruns),
+        checked(bad, "tick: replanning replayed ticks=")
+            .u32(r.ticks)
+            .str(" max_command_diff_nm=")
+            .exp(r.max_command_diff_nm)
+            .str(" differing_ticks=")
+            .u32(r.differing_ticks)
+            .str(" overruns=")
+            .u32(done.overruns),
     );
     failed
 }

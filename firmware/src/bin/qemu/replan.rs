@@ -14,7 +14,7 @@ use firmware::board_config;
 use gait_control::posture::{Side, joints_from_phi};
 use gait_control::replan::{REPLAN_CAPACITY, ReplanOutcome, ReplanRequest};
 
-use crate::{InstrCounter, Out, line};
+use crate::{InstrCounter, Out, checked, line};
 
 /// 0.5 s of the 168 MHz core.
 const MAX_INSTRUCTIONS: u64 = 84_000_000;
@@ -54,20 +54,16 @@ pub(crate) fn check(out: &mut Out, ctr: &mut InstrCounter) -> usize {
         let over = per_sample > INSTRUCTIONS_PER_SAMPLE || u64::from(insns) > MAX_INSTRUCTIONS;
         failed += usize::from(over);
         out.put(
-            line(if over {
-                "FAIL replan: gait="
-            } else {
-                "replan: gait="
-            })
-            .str(name)
-            .str(" insns=")
-            .u32(insns)
-            .str(" evals=")
-            .u32(u32::from(answer.evals))
-            .str(" used=")
-            .str(used)
-            .str(" per_sample=")
-            .u64(per_sample),
+            checked(over, "replan: gait=")
+                .str(name)
+                .str(" insns=")
+                .u32(insns)
+                .str(" evals=")
+                .u32(u32::from(answer.evals))
+                .str(" used=")
+                .str(used)
+                .str(" per_sample=")
+                .u64(per_sample),
         );
     }
     failed
