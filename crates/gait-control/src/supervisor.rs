@@ -422,16 +422,21 @@ impl Supervisor {
     /// Logs a fault whose reaction the sequencer has already carried out in
     /// the tick that found it ([`Reaction::PlayTable`]: the re-planner's
     /// 0x0606 and 0x0607). It is not latched: it orders nothing, blocks no
-    /// step and needs no reset; each occurrence is one post-mortem record.
-    /// A code of any other reaction is latched as a found fault.
+    /// step and needs no reset. Its first occurrence since power-up or a
+    /// reset is one post-mortem record, as a latched fault's is (a run of
+    /// late answers must not push older records out of the log). A code of
+    /// any other reaction is latched as a found fault.
     pub fn log_played_table(&mut self, tick: u32, code: FaultCode) {
         if code.reaction() == Reaction::PlayTable {
-            self.latch.log.push(FaultRecord {
-                tick,
-                code,
-                channel: NO_CHANNEL,
-                value: 0.0,
-            });
+            if !self.latch.logged_none.contains(code) {
+                self.latch.logged_none.insert(code);
+                self.latch.log.push(FaultRecord {
+                    tick,
+                    code,
+                    channel: NO_CHANNEL,
+                    value: 0.0,
+                });
+            }
         } else {
             let mut t = Tick {
                 tick,

@@ -94,6 +94,18 @@ impl Ticking {
     }
 }
 
+/// The ticks so far, their instructions so far and SysTick, read together
+/// (no tick between them).
+fn clocks() -> (u32, u32, u32) {
+    cortex_m::interrupt::free(|_| {
+        (
+            TICKS.load(Ordering::Acquire),
+            TICK_INSTRUCTIONS.load(Ordering::Acquire),
+            SYST::get_current(),
+        )
+    })
+}
+
 /// Instructions since SysTick read `start` (it counts down, free-running).
 fn since(start: u32) -> u32 {
     let ticks = start.wrapping_sub(SYST::get_current()) & SYST_MAX;
@@ -123,14 +135,16 @@ mod timer0 {
         }
     }
 
-    /// Counts down from `period` and interrupts at each wrap.
+    /// Interrupts every `period` counts (it counts RELOAD down to 0, so
+    /// RELOAD + 1 counts a period).
     pub fn start(period: u32) {
+        let reload = period.saturating_sub(1);
         // SAFETY: the timer's own registers, which nothing else in this
         // image touches; 32-bit aligned MMIO.
         unsafe {
             CTRL.write_volatile(0);
-            RELOAD.write_volatile(period);
-            VALUE.write_volatile(period);
+            RELOAD.write_volatile(reload);
+            VALUE.write_volatile(reload);
             INT.write_volatile(1);
             CTRL.write_volatile(ENABLE | IRQ_ENABLE);
         }
@@ -239,25 +253,22 @@ pub(crate) fn check(out: &mut Out) -> usize {
     let mut seen: [Option<Seen>; MAX_REPLANS] = [None; MAX_REPLANS];
     let mut count = 0;
     while !DONE.load(Ordering::Acquire) {
-        let asked_tick = TICKS.load(Ordering::Acquire);
-        let in_ticks = TICK_INSTRUCTIONS.load(Ordering::Acquire);
-        let start = SYST::get_current();
+        let (asked_tick, in_ticks, start) = clocks();
         let Some(answer) = replanner.serve() else {
             // An interrupt between the check and here ends the sleep at
             // the next tick at the latest.
             cortex_m::asm::wfi();
             continue;
         };
-        let elapsed = since(start);
-        let ticked = TICK_INSTRUCTIONS
-            .load(Ordering::Acquire)
-            .wrapping_sub(in_ticks);
+        let (now_tick, out_ticks, end) = clocks();
+        let elapsed = (start.wrapping_sub(end) & SYST_MAX).saturating_mul(INSTR_PER_TICK);
+        let ticked = out_ticks.wrapping_sub(in_ticks);
         if let Some(s) = seen.get_mut(count) {
             *s = Some(Seen {
                 asked_tick,
                 instructions: elapsed.saturating_sub(ticked),
                 evals: answer.evals,
-                ticks: TICKS.load(Ordering::Acquire).wrapping_sub(asked_tick),
+                ticks: now_tick.wrapping_sub(asked_tick),
                 outcome: answer.outcome,
             });
         }

@@ -16,7 +16,7 @@ use cortex_m_rt::exception;
 use firmware::board_config::{self, TICK_HZ};
 use firmware::idle_replan::IdleReplanner;
 use gait_control::controller::{Controller, TickReport};
-use gait_control::faults::{FaultSet, Reaction};
+use gait_control::faults::{FaultCode, FaultSet, Reaction};
 use gait_control::replan::ReplanSlot;
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
@@ -82,13 +82,22 @@ impl Board {
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
     if irqn == pac::Interrupt::TIM2 as i16 {
-        cortex_m::interrupt::free(|cs| {
+        let ticked = cortex_m::interrupt::free(|cs| {
             if let Ok(mut board) = BOARD.borrow(cs).try_borrow_mut()
                 && let Some(board) = board.as_mut()
             {
                 board.tick();
+                true
+            } else {
+                false
             }
         });
+        if !ticked {
+            // No state to tick with (unreachable: `run` places it before
+            // unmasking): no more ticks, so the watchdog, fed only by the
+            // tick, resets the board into its safe boot.
+            NVIC::mask(pac::Interrupt::TIM2);
+        }
     }
 }
 
@@ -128,6 +137,8 @@ struct LoopLog {
     worst_cycles: u32,
     overruns: u32,
     last_step: Option<u32>,
+    /// The newest post-mortem record reported.
+    last_record: Option<(u32, FaultCode)>,
 }
 
 impl LoopLog {
@@ -138,6 +149,7 @@ impl LoopLog {
             worst_cycles: 0,
             overruns: 0,
             last_step: None,
+            last_record: None,
         }
     }
 
@@ -171,6 +183,26 @@ impl LoopLog {
                 r.motors_enabled
             );
             self.reaction = r.reaction;
+        }
+        // 0x0606/0x0607 never latch: reported from the post-mortem log,
+        // which records the first of each since a reset.
+        let newest = controller
+            .supervisor()
+            .log()
+            .last()
+            .map(|rec| (rec.tick, rec.code));
+        if newest != self.last_record {
+            if let Some((tick, code)) = newest
+                && code.reaction() == Reaction::PlayTable
+            {
+                defmt::warn!(
+                    "tick {=u32}: fault {=u16} {=str}: the step plays its table",
+                    tick,
+                    code.code(),
+                    code.name()
+                );
+            }
+            self.last_record = newest;
         }
         for step in controller.crutch_load().log() {
             if self.last_step.is_none_or(|s| step.step > s) {
