@@ -2,7 +2,8 @@
 //! run the controller with ([`board_config`]), the motor board's clock tree
 //! and timers computed when compiling ([`clock_tree`]), the power-on self-test
 //! ([`selftest`]), the idle-time re-planner both boards schedule under the
-//! tick ([`idle_replan`]), and the in-memory peripherals of the QEMU control-tick
+//! tick ([`idle_replan`]) and the tick's state its interrupt owns
+//! ([`tick_state`]), and the in-memory peripherals of the QEMU control-tick
 //! benchmark ([`qemu_rig`]), its replay of ticks recorded in the simulator
 //! ([`tick_replay`]) and the text it prints ([`text`]).
 //!
@@ -22,6 +23,7 @@ pub mod qemu_rig;
 pub mod selftest;
 pub mod text;
 pub mod tick_replay;
+pub mod tick_state;
 
 /// The controller's state stays under 4 KiB: a field past that offset from
 /// its base needs an extra instruction to address on the Cortex-M4 (a

@@ -21,10 +21,8 @@
 //! them. Fails when a re-plan takes more than 0.5 s of the core, a tick
 //! overruns its period, or a command differs from the host's.
 
-use core::cell::RefCell;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
-use cortex_m::interrupt::Mutex;
 use cortex_m::peripheral::{NVIC, SYST};
 use cortex_m_rt::exception;
 use exogait_device::replan::REPLAN;
@@ -33,6 +31,7 @@ use exogait_device::{DeviceConfig, build_controller};
 use firmware::idle_replan::IdleReplanner;
 use firmware::qemu_rig::RigHardware;
 use firmware::tick_replay::{REPLANNING_RECORDS, Replay};
+use firmware::tick_state::TickState;
 use firmware::{board_config, qemu_rig};
 use gait_control::controller::Controller;
 use gait_control::replan::{ReplanOutcome, ReplanSlot};
@@ -51,7 +50,7 @@ const MAX_REPLANS: usize = 8;
 static SLOT: ReplanSlot = ReplanSlot::new();
 /// What the tick works on; the interrupt takes it, and the thread only
 /// before the timer starts and after it stops.
-static TICKING: Mutex<RefCell<Option<Ticking>>> = Mutex::new(RefCell::new(None));
+static TICKING: TickState<Ticking> = TickState::new();
 /// Timer interrupts so far.
 static TICKS: AtomicU32 = AtomicU32::new(0);
 /// Instructions spent in the timer interrupt so far (taken out of the
@@ -185,17 +184,13 @@ unsafe fn DefaultHandler(irqn: i16) {
 fn on_tick() {
     let start = SYST::get_current();
     timer0::clear();
-    cortex_m::interrupt::free(|cs| {
-        if let Ok(mut t) = TICKING.borrow(cs).try_borrow_mut()
-            && let Some(t) = t.as_mut()
-        {
-            if !t.tick() {
-                DONE.store(true, Ordering::Release);
-            }
-            // The next period ended before this tick did.
-            if timer0::pending() {
-                t.overruns += 1;
-            }
+    let _ = TICKING.with(|t| {
+        if !t.tick() {
+            DONE.store(true, Ordering::Release);
+        }
+        // The next period ended before this tick did.
+        if timer0::pending() {
+            t.overruns += 1;
         }
     });
     TICKS.fetch_add(1, Ordering::AcqRel);
@@ -233,14 +228,7 @@ pub(crate) fn check(out: &mut Out) -> usize {
         ));
         return 1;
     };
-    let placed = cortex_m::interrupt::free(|cs| {
-        TICKING
-            .borrow(cs)
-            .try_borrow_mut()
-            .map(|mut t| *t = Some(ticking))
-            .is_ok()
-    });
-    if !placed {
+    if !TICKING.place(ticking) {
         out.put(&mut line("FAIL replanning: the tick's state is in use"));
         return 1;
     }
@@ -276,14 +264,7 @@ pub(crate) fn check(out: &mut Out) -> usize {
     }
     NVIC::mask(timer0::Irq);
     timer0::stop();
-    let done = cortex_m::interrupt::free(|cs| {
-        TICKING
-            .borrow(cs)
-            .try_borrow_mut()
-            .ok()
-            .and_then(|mut t| t.take())
-    });
-    let Some(done) = done else {
+    let Some(done) = TICKING.take() else {
         out.put(&mut line("FAIL replanning: the tick's state is gone"));
         return 1;
     };

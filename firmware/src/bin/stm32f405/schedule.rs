@@ -8,13 +8,11 @@
 //! The watchdog is fed by the tick: a tick that stops coming resets the
 //! board, whatever thread mode is doing.
 
-use core::cell::RefCell;
-
-use cortex_m::interrupt::Mutex;
 use cortex_m::peripheral::{DWT, NVIC};
 use cortex_m_rt::exception;
 use firmware::board_config::{self, TICK_HZ};
 use firmware::idle_replan::IdleReplanner;
+use firmware::tick_state::TickState;
 use gait_control::controller::{Controller, TickReport};
 use gait_control::faults::{FaultCode, FaultSet, Reaction};
 use gait_control::replan::ReplanSlot;
@@ -29,7 +27,7 @@ pub static SLOT: ReplanSlot = ReplanSlot::new();
 
 /// What the tick's interrupt works on: placed once by [`run`], before the
 /// interrupt is unmasked; thread mode never touches it again.
-static BOARD: Mutex<RefCell<Option<Board>>> = Mutex::new(RefCell::new(None));
+static BOARD: TickState<Board> = TickState::new();
 
 /// The controller, its drivers, the tick's timer and watchdog, the log.
 pub struct Board {
@@ -81,37 +79,18 @@ impl Board {
 /// vector table without a device crate); only TIM2's is unmasked.
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
-    if irqn == pac::Interrupt::TIM2 as i16 {
-        let ticked = cortex_m::interrupt::free(|cs| {
-            if let Ok(mut board) = BOARD.borrow(cs).try_borrow_mut()
-                && let Some(board) = board.as_mut()
-            {
-                board.tick();
-                true
-            } else {
-                false
-            }
-        });
-        if !ticked {
-            // No state to tick with (unreachable: `run` places it before
-            // unmasking): no more ticks, so the watchdog, fed only by the
-            // tick, resets the board into its safe boot.
-            NVIC::mask(pac::Interrupt::TIM2);
-        }
+    // No state to tick with (unreachable: `run` places it before
+    // unmasking): no more ticks, so the watchdog, fed only by the tick,
+    // resets the board into its safe boot.
+    if irqn == pac::Interrupt::TIM2 as i16 && BOARD.with(Board::tick).is_none() {
+        NVIC::mask(pac::Interrupt::TIM2);
     }
 }
 
 /// Hands `board` to the tick's interrupt and unmasks it; then runs the
 /// re-planner (if any) whenever a request waits, and sleeps otherwise.
 pub fn run(board: Board, mut replanner: Option<IdleReplanner<'static>>) -> ! {
-    let placed = cortex_m::interrupt::free(|cs| {
-        BOARD
-            .borrow(cs)
-            .try_borrow_mut()
-            .map(|mut b| *b = Some(board))
-            .is_ok()
-    });
-    if !placed {
+    if !BOARD.place(board) {
         crate::halt("the tick's state is in use: motors stay disabled");
     }
     // SAFETY: the handler shares state with thread mode only through the
