@@ -11,7 +11,7 @@
 use crate::ring_log::RingLog;
 
 /// Steps kept in the log.
-pub const LOG_STEPS: usize = 16;
+pub const LOG_STEPS: usize = 12;
 
 /// One step's crutch load.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -15,6 +15,7 @@
 //! | `0x04xx` | motor outputs |
 //! | `0x05xx` | operator inputs (e-stop, buttons) |
 //! | `0x06xx` | the controller itself (timing, values it computed, flash data, the re-planner) |
+//! | `0x07xx` | the pilot |
 
 mod set;
 
@@ -513,10 +514,35 @@ fault_table! {
         detection_bound: "the re-plan latency (the answer is read then)",
         reset_allowed_when: "not latched: logged, the next step is re-planned afresh",
     },
+    /// A planned ankle's shank tips forward of its plan ever faster: the
+    /// pilot no longer balances the body over the foot through the
+    /// crutches (stopped, or leans past what they hold). In a swing the
+    /// step lands first, ahead, where the body goes: two feet down hold
+    /// it on their own.
+    PilotFallingForward = 0x0701 {
+        name: "pilot falling forward",
+        reaction: Reaction::SafeHold,
+        detection_bound: "30 ticks moving away at 0.25 rad/s from 0.1 rad ahead of the plan \
+            (0.05 in a swing) with the crutches idle, 0.2 (0.25) pushing",
+        reset_allowed_when: "the ankle is back near its plan or stops moving away",
+        in_swing: InSwing::LandFirst,
+    },
+    /// A planned ankle's shank tips back from its plan ever faster: as
+    /// 0x0701, backwards. In a swing the foot is set down where it is
+    /// (behind the stance foot early in the step, where the body goes);
+    /// late in the swing the step lands.
+    PilotFallingBack = 0x0702 {
+        name: "pilot falling back",
+        reaction: Reaction::SafeHold,
+        detection_bound: "30 ticks moving away at 0.25 rad/s from 0.1 rad behind the plan \
+            (0.05 in a swing) with the crutches idle, 0.2 (0.25) pushing",
+        reset_allowed_when: "the ankle is back near its plan or stops moving away",
+        in_swing: InSwing::HoldNow,
+    },
 }
 
-// A `FaultSet` has one bit per code in a `u32`.
-const _: () = assert!(FaultCode::COUNT <= u32::BITS as usize);
+// A `FaultSet` has one bit per code in a `u64`.
+const _: () = assert!(FaultCode::COUNT <= u64::BITS as usize);
 
 impl FaultCode {
     /// The stable numeric code.
@@ -531,7 +557,7 @@ impl FaultCode {
         Self::ALL.iter().copied().find(|f| f.code() == code)
     }
 
-    pub(crate) const fn bit(self) -> u32 {
+    pub(crate) const fn bit(self) -> u64 {
         1 << self.index()
     }
 }

@@ -11,7 +11,10 @@ use crate::drivers::mcp3208::{Channel, ForceChannels};
 use crate::drivers::motor::MotorConfig;
 use crate::position_loop::JointGains;
 use crate::sequencer::SequencerConfig;
-use crate::supervisor::{AngleRange, Debounce, DriveCurrentCheck, ResponseCheck, SupervisorConfig};
+use crate::supervisor::{
+    AngleRange, BalanceCheck, Debounce, DriveCurrentCheck, ErrorBounds, ResponseCheck,
+    SupervisorConfig,
+};
 
 impl_fingerprint_enum!(Direction, ActiveLevel, Channel);
 
@@ -115,7 +118,20 @@ impl_fingerprint!(SupervisorConfig {
     deadline_miss_count,
     deadline_window_ticks,
     response,
+    balance,
     drive_current,
+});
+impl_fingerprint!(BalanceCheck {
+    idle,
+    pushed,
+    crutch_rise_n,
+    rate_rad_s,
+    rate_filter,
+    ticks,
+});
+impl_fingerprint!(ErrorBounds {
+    feet_down_rad,
+    swing_rad,
 });
 impl_fingerprint!(DriveCurrentCheck {
     band_nm,

@@ -26,12 +26,14 @@ use crate::faults::{FaultCode, FaultSet, Reaction};
 
 pub use crate::layout::{ANKLES, FORCES, JOINTS, Side};
 
+mod balance;
 mod checks;
 mod config;
 mod drive_current;
 mod response;
 mod tracks;
 
+pub use balance::{BalanceCheck, ErrorBounds};
 pub use config::{
     AngleRange, ConfigError, Debounce, EnvelopeMargins, ResetRefused, SupervisorConfig,
 };
@@ -134,7 +136,8 @@ pub struct SupervisorInput {
     pub button_input_fault: bool,
     /// The dorsiflexion the gait plans for each ankle this tick, rad: the
     /// stance ankle's φ1 during a swing; NaN where nothing is planned (the
-    /// swing ankle, standing). For the unplanned heel-off rule (0x0105).
+    /// swing ankle, standing). For the unplanned heel-off rule (0x0105)
+    /// and the pilot's balance (0x0701).
     pub ankle_plan_rad: [f32; ANKLES],
     /// The leg in the air (`None` while both feet are down): its joints
     /// move only their own links (0x0404's swing inertias).
@@ -222,6 +225,8 @@ pub struct Supervisor {
     /// An ankle found stuck: control takes none of its frames until its
     /// counts move again.
     ankle_stuck: [bool; ANKLES],
+    /// Each ankle's error from its plan, for 0x0701.
+    balance: [balance::BalanceTrack; ANKLES],
     forces: [ForceTrack; FORCES],
     drive_currents: [drive_current::DriveCurrentTrack; JOINTS],
     previous_reference_rad: Option<[f32; JOINTS]>,
@@ -313,6 +318,7 @@ impl Supervisor {
             stuck_in_air_ticks: [0; ANKLES],
             plan_since_moved: [f32::NAN; ANKLES],
             ankle_stuck: [false; ANKLES],
+            balance: [balance::BalanceTrack::default(); ANKLES],
             forces: [ForceTrack::default(); FORCES],
             drive_currents: Default::default(),
             previous_reference_rad: None,

@@ -6,7 +6,7 @@ use super::{FaultCode, InSwing, Reaction};
 /// A set of fault codes (one bit per code).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct FaultSet(u32);
+pub struct FaultSet(u64);
 
 impl FaultSet {
     /// The empty set.
@@ -60,7 +60,7 @@ impl FaultSet {
 
     /// The raw bits (bit *i* is `FaultCode::ALL[i]`), for compact logs.
     #[must_use]
-    pub const fn bits(&self) -> u32 {
+    pub const fn bits(&self) -> u64 {
         self.0
     }
 
@@ -107,18 +107,18 @@ impl FaultSet {
 /// The faults whose safe hold holds a swing at once and sets its foot
 /// down, and those that hold it in the air, as [`FaultSet`] bits (worked
 /// out from the table when compiling: one AND a tick).
-const HOLD_NOW_IN_SWING: u32 = in_swing_mask(&FaultCode::ALL, InSwing::HoldNow);
-const HOLD_IN_AIR_IN_SWING: u32 = in_swing_mask(&FaultCode::ALL, InSwing::HoldInAir);
+const HOLD_NOW_IN_SWING: u64 = in_swing_mask(&FaultCode::ALL, InSwing::HoldNow);
+const HOLD_IN_AIR_IN_SWING: u64 = in_swing_mask(&FaultCode::ALL, InSwing::HoldInAir);
 
 /// The [`FaultSet`] bits of the faults of each reaction
 /// ([`FaultSet::reaction`]).
-const REACTION_DISABLE_MOTORS: u32 = reaction_mask(&FaultCode::ALL, Reaction::DisableMotors);
-const REACTION_SAFE_HOLD: u32 = reaction_mask(&FaultCode::ALL, Reaction::SafeHold);
-const REACTION_FINISH_STEP: u32 = reaction_mask(&FaultCode::ALL, Reaction::FinishStepThenHold);
-const REACTION_PLAY_TABLE: u32 = reaction_mask(&FaultCode::ALL, Reaction::PlayTable);
+const REACTION_DISABLE_MOTORS: u64 = reaction_mask(&FaultCode::ALL, Reaction::DisableMotors);
+const REACTION_SAFE_HOLD: u64 = reaction_mask(&FaultCode::ALL, Reaction::SafeHold);
+const REACTION_FINISH_STEP: u64 = reaction_mask(&FaultCode::ALL, Reaction::FinishStepThenHold);
+const REACTION_PLAY_TABLE: u64 = reaction_mask(&FaultCode::ALL, Reaction::PlayTable);
 
 /// The [`FaultSet`] bits of the codes in `codes` whose reaction is `which`.
-const fn reaction_mask(codes: &[FaultCode], which: Reaction) -> u32 {
+const fn reaction_mask(codes: &[FaultCode], which: Reaction) -> u64 {
     match codes {
         [c, rest @ ..] => {
             let here = c.reaction() as u8 == which as u8;
@@ -130,7 +130,7 @@ const fn reaction_mask(codes: &[FaultCode], which: Reaction) -> u32 {
 
 /// The [`FaultSet`] bits of the safe-hold faults in `codes` whose swing
 /// reaction is `which`.
-const fn in_swing_mask(codes: &[FaultCode], which: InSwing) -> u32 {
+const fn in_swing_mask(codes: &[FaultCode], which: InSwing) -> u64 {
     match codes {
         [c, rest @ ..] => {
             let here =

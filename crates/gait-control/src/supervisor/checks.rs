@@ -4,6 +4,17 @@
 
 use super::*;
 
+/// Both crutches' load, N; NaN unless both sensors read.
+fn crutch_sum_n(input: &SupervisorInput) -> f32 {
+    crate::layout::force::CRUTCHES
+        .iter()
+        .map(|&c| match input.forces.get(c) {
+            Some(f) if f.status == ForceStatus::Ok => f.newtons,
+            _ => f32::NAN,
+        })
+        .sum()
+}
+
 /// `|x| ≤ limit`; false for NaN, so `!within(..)` trips on NaN.
 fn within(x: f32, limit: f32) -> bool {
     x.abs() <= limit
@@ -236,6 +247,8 @@ impl Supervisor {
 
     pub(super) fn check_ankles(&mut self, input: &SupervisorInput, t: &mut Tick) {
         let cfg = &self.cfg;
+        // Both ankles' balance check reads the crutches: summed once.
+        let crutches = crutch_sum_n(input);
         for i in 0..ANKLES {
             let ch = i as u8;
             let (Some(sense), Some(range), Some(track)) = (
@@ -281,6 +294,33 @@ impl Supervisor {
                     if *n >= cfg.heel_off_ticks {
                         self.latch
                             .raise(t, FaultCode::UnplannedHeelOff, ch, angle_rad);
+                    }
+                }
+                // The pilot losing balance: the error from the plan
+                // growing away from it. Not on the stop: with the heel up
+                // the encoder no longer sees the shank. With both feet
+                // down, only a foot planned flat (a trailing foot's plan
+                // past the stop is its shank's angle, heel up).
+                let swing = input.swing_leg.is_some();
+                let watched = if swing {
+                    plan.is_finite()
+                } else {
+                    plan <= cfg.heel_off_rad
+                };
+                if let Some(track) = self.balance.get_mut(i) {
+                    if watched && !on_stop {
+                        if let Some(e) =
+                            track.update(&cfg.balance, angle_rad, plan, swing, crutches, cfg.dt_s)
+                        {
+                            let code = if e > 0.0 {
+                                FaultCode::PilotFallingForward
+                            } else {
+                                FaultCode::PilotFallingBack
+                            };
+                            self.latch.raise(t, code, ch, e);
+                        }
+                    } else {
+                        track.restart();
                     }
                 }
                 // Only a toe pushed up by the ground holds an ankle on its

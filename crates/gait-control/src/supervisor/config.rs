@@ -150,6 +150,8 @@ pub struct SupervisorConfig {
     pub deadline_window_ticks: u32,
     /// The drives' torque residual (0x0404).
     pub response: ResponseCheck,
+    /// The balance check (0x0701).
+    pub balance: BalanceCheck,
     /// The drives' currents against their commands (0x0405, 0x0406).
     pub drive_current: DriveCurrentCheck,
 }
@@ -236,6 +238,7 @@ impl SupervisorConfig {
             deadline_miss_count: 3,
             deadline_window_ticks: 1000,
             response: ResponseCheck::DEFAULT,
+            balance: BalanceCheck::DEFAULT,
             drive_current: DriveCurrentCheck::DEFAULT,
         }
     }
@@ -261,6 +264,7 @@ impl SupervisorConfig {
         if !(positive.iter().all(|v| v.is_finite() && *v > 0.0)
             && velocities_ok
             && self.response.is_valid()
+            && self.balance.is_valid()
             && self.drive_current.is_valid())
             || self.velocity_filter_alpha > 1.0
         {

@@ -7,7 +7,7 @@ use gait_control::sequencer::Phase;
 use sim::inject::Injection;
 use sim::scenario::{flash_tables, instant_pilot, run_tables_with, strong_pilot};
 
-use super::stands_clear_of_the_stops;
+use super::{run_faulted, stands_clear_of_the_stops};
 
 #[test]
 fn the_simulated_pilot_reacts_to_a_hold_late_and_slowly() {
@@ -79,4 +79,33 @@ fn the_pilot_does_not_shove_the_body_when_the_set_down_foot_lands() {
             ("encoder-error-flag:left-knee@2.97", 7_735),
         ],
     );
+}
+
+#[test]
+fn a_pilot_who_stops_balancing_on_the_stairs_is_found_by_the_shank_and_kept_up() {
+    // The pilot stops balancing on a stair ascent, early in the first
+    // swing (1.0 s) or in the weight transfer after it (3.5 s): the
+    // stance shank tips back from its plan with the crutches idle, 0x0702
+    // is the first fault, the swing foot is set down and the hold keeps
+    // the pilot up. The same runs without the check fall.
+    use gait_control::faults::FaultCode;
+    let device = DeviceConfig::exogait().unwrap();
+    let mut unchecked = device;
+    unchecked.supervisor.balance.ticks = u32::MAX;
+    for (fault, found_within_s) in [
+        ("pilot-stops-balancing@1.0", 1.2),
+        ("pilot-stops-balancing@3.5", 1.5),
+    ] {
+        let at_s: f64 = fault.rsplit('@').next().unwrap().parse().unwrap();
+        let run = run_faulted(&device, Gait::StairUp, 10.0, 2, None, &[fault]);
+        let o = sim::outcome::outcome(&run.rig, run.ended_by.as_ref());
+        let first = o.faults.first().unwrap();
+        assert_eq!(first.code, FaultCode::PilotFallingBack, "{fault}: {o:?}");
+        assert!(first.detected_s - at_s < found_within_s, "{fault}: {o:?}");
+        assert!(o.fell.is_none(), "{fault}: {o:?}");
+
+        let run = run_faulted(&unchecked, Gait::StairUp, 10.0, 2, None, &[fault]);
+        let o = sim::outcome::outcome(&run.rig, run.ended_by.as_ref());
+        assert!(o.fell.is_some(), "{fault} without the check: {o:?}");
+    }
 }

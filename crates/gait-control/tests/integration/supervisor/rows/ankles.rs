@@ -39,7 +39,9 @@ fn row_unplanned_heel_off() {
         first + cfg.heel_off_ticks - 1,
     );
     // Planned (a descent's stance heel lifts on schedule), nothing planned
-    // (NaN: standing, the swing ankle), or off the stop: nothing.
+    // (NaN: standing, the swing ankle), or off the stop: no heel-off (an
+    // ankle that rolls 0.2 rad off its plan in 10 ms is the pilot's
+    // balance, 0x0701/0x0702).
     for (reading, plan) in [
         (stop, stop + 0.2),
         (stop, stop - 3.0 * DEG),
@@ -51,7 +53,8 @@ fn row_unplanned_heel_off() {
             input.ankle_plan_rad[0] = plan;
         });
         assert!(
-            v.iter().all(|x| x.reaction == Reaction::None),
+            v.iter()
+                .all(|x| !x.latched.contains(FaultCode::UnplannedHeelOff)),
             "reading {reading}, plan {plan}"
         );
     }
@@ -187,8 +190,11 @@ fn a_stance_ankle_that_does_not_turn_with_the_plan_is_a_lost_ankle_encoder() {
     let quiet = |v: &[Verdict]| v.iter().all(|x| x.reaction == Reaction::None);
     assert!(quiet(&right_stance_in_a_swing(rate, |_, p| p).1));
     assert!(quiet(&right_stance_in_a_swing(rate, |_, p| p - 0.1).1));
+    // (Still while the plan turns it, with the crutches idle, is the
+    // pilot falling back, 0x0702: not a lost encoder.)
     let noisy = |k: u32, _| STAND_ANKLES[1] + RAD_PER_COUNT * (k % 2) as f32;
-    assert!(quiet(&right_stance_in_a_swing(rate, noisy).1));
+    let v = right_stance_in_a_swing(rate, noisy).1;
+    assert_eq!(detected_at(&v, FaultCode::AnkleEncoder), None);
     assert!(quiet(
         &right_stance_in_a_swing(0.0, |_, _| STAND_ANKLES[1]).1
     ));
@@ -206,6 +212,101 @@ fn a_stance_ankle_that_does_not_turn_with_the_plan_is_a_lost_ankle_encoder() {
     );
     let (_, v) = inject(200, |k, input| {
         input.ankle_plan_rad = [f32::NAN, STAND_ANKLES[1] + rate * k as f32];
+    });
+    assert_eq!(detected_at(&v, FaultCode::AnkleEncoder), None);
+}
+
+/// The left ankle moving away from its plan (the standing angle) at
+/// `rate` rad a tick, in a right swing when `swing`, the crutches' sum
+/// `push_n` above the standing rig's from the second tick on (NaN: a
+/// crutch sensor that cannot tell); its verdicts.
+fn left_shank_leaving_its_plan(rate: f32, swing: bool, push_n: f32) -> Vec<Verdict> {
+    use gait_control::layout::force::LEFT_CRUTCH;
+    inject(900, |k, input| {
+        input.ankles[0] = encoder(STAND_ANKLES[0] + rate * k as f32);
+        input.ankle_plan_rad[0] = STAND_ANKLES[0];
+        if swing {
+            input.swing_leg = Some(gait_control::layout::Side::Right);
+        }
+        if k > 1 {
+            input.forces[LEFT_CRUTCH].newtons += push_n;
+        }
+    })
+    .1
+}
+
+#[test]
+fn row_pilot_falling() {
+    // The shank turning away from the plan at 0.5 rad/s (a pilot who no
+    // longer balances the body over the foot) with the crutches carrying
+    // no more than the least since the plan began: from the first frame
+    // more than 0.1 rad off (0.05 rad in a swing), 30 frames moving away
+    // trip it, forward 0x0701 (in a swing the step lands first), back
+    // 0x0702 (the foot is set down).
+    use gait_control::faults::InSwing;
+    let cfg = SupervisorConfig::paper().balance;
+    let rate = 0.5e-3;
+    let off =
+        |k: u32, rate: f32| encoder(STAND_ANKLES[0] + rate * k as f32).angle_rad - STAND_ANKLES[0];
+    let first_beyond = |bound: f32, rate: f32| (1..).find(|&k| off(k, rate).abs() > bound).unwrap();
+    let at = |bound: f32, rate: f32| first_beyond(bound, rate) + cfg.ticks - 1;
+    for (swing, bound) in [(false, cfg.idle.feet_down_rad), (true, cfg.idle.swing_rad)] {
+        let v = left_shank_leaving_its_plan(rate, swing, 0.0);
+        assert_row(
+            &v,
+            FaultCode::PilotFallingForward,
+            Reaction::SafeHold,
+            at(bound, rate),
+        );
+        // (Back by 0.1 rad the standing shank is past its plantarflexion
+        // range too: 0x0104 comes with it.)
+        let v = left_shank_leaving_its_plan(-rate, swing, 0.0);
+        assert_eq!(
+            detected_at(&v, FaultCode::PilotFallingBack),
+            Some(at(bound, -rate))
+        );
+    }
+    assert_eq!(FaultCode::PilotFallingBack.reaction(), Reaction::SafeHold);
+    assert_eq!(
+        FaultCode::PilotFallingForward.in_swing(),
+        InSwing::LandFirst
+    );
+    assert_eq!(FaultCode::PilotFallingBack.in_swing(), InSwing::HoldNow);
+    // A pilot pushing on the crutches (40 N over the least since the plan
+    // began) may let the shank lag or overshoot: 0.2 rad with both feet
+    // down, 0.25 in a swing. A crutch sensor that cannot tell never
+    // lowers the bound.
+    let pushing = cfg.crutch_rise_n + 1.0;
+    for (push, swing, bound) in [
+        (pushing, false, cfg.pushed.feet_down_rad),
+        (pushing, true, cfg.pushed.swing_rad),
+        (f32::NAN, true, cfg.pushed.swing_rad),
+    ] {
+        let v = left_shank_leaving_its_plan(rate, swing, push);
+        assert_eq!(
+            detected_at(&v, FaultCode::PilotFallingForward),
+            Some(at(bound, rate)),
+            "push {push} N, swing {swing}"
+        );
+    }
+    // A pilot bringing the shank back, or a shank drifting off slower
+    // than 0.25 rad/s and held there: nothing.
+    let quiet = |v: &[Verdict]| v.iter().all(|x| x.reaction == Reaction::None);
+    assert!(quiet(&left_shank_leaving_its_plan(0.2e-3, false, 0.0)));
+    // Out at 0.2 rad/s to 0.14 rad, then back at 0.5 rad/s.
+    let (_, v) = inject(1100, |k, input| {
+        let k = k as f32;
+        let off = (0.2e-3 * k).min(0.14 - 0.5e-3 * (k - 700.0));
+        input.ankles[0] = encoder(STAND_ANKLES[0] + off.max(0.0));
+        input.ankle_plan_rad[0] = STAND_ANKLES[0];
+    });
+    assert!(quiet(&v));
+    // A plan that steps (a swing's table takes over from the standing
+    // angle, the stance swaps at a landing) is not the shank moving: the
+    // count starts again from the new plan.
+    let (_, v) = inject(900, |k, input| {
+        input.ankles[0] = encoder(STAND_ANKLES[0]);
+        input.ankle_plan_rad[0] = STAND_ANKLES[0] - if k > 100 { 0.15 } else { 0.0 };
     });
     assert!(quiet(&v));
 }

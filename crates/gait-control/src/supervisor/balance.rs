@@ -1,0 +1,185 @@
+//! A pilot losing balance (0x0701 forward, 0x0702 back), seen at the
+//! ankles and the crutches: the device cannot actuate the ankles, so the
+//! stance shank follows its plan only while the pilot balances it through
+//! the crutches. A pilot who balances corrects an error (it shrinks again)
+//! and pushes on the crutches to do it; one who has stopped, or leans past
+//! what the crutches can hold, lets the body turn about the foot, and the
+//! error grows ever faster, as an inverted pendulum's does.
+//!
+//! The check follows each planned ankle's error e = φ1 − plan and its
+//! low-passed rate ė, and counts the accepted frames on which the error is
+//! beyond a bound and still growing away from the plan (e·ė > 0, |ė| above
+//! its own bound). The bound is tighter while the crutches carry no more
+//! than the least since the plan began: nobody is pushing the shank back,
+//! so a small error already means nobody is balancing (the swing's 0.05
+//! rad finds a pilot who has stopped before a stair ascent's first swing
+//! 0.65–0.75 s into it, early enough to set the foot down). A rejected
+//! frame neither counts nor resets; a tick
+//! without a plan (NaN), or whose plan steps by more than
+//! [`PLAN_STEP_RAD`] (a swing's table taking over, the stance swapping at
+//! a landing), restarts the count and the rate.
+
+/// The most a plan moves in one tick and is still the same motion, rad (a
+/// table turns the shank at up to about 1 rad/s: 0.001 a tick).
+pub(super) const PLAN_STEP_RAD: f32 = 0.01;
+
+/// |φ1 − plan| beyond which a frame can count, rad, with both feet down
+/// and in a swing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ErrorBounds {
+    /// Both feet down.
+    pub feet_down_rad: f32,
+    /// In a swing, for the stance shank.
+    pub swing_rad: f32,
+}
+
+/// Settings of the balance check.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BalanceCheck {
+    /// The bounds while the crutches carry no more than the least they
+    /// have carried since the plan began (`crutch_rise_n` more at most):
+    /// the shank is off its plan and nobody pushes to bring it back,
+    /// which a balancing pilot always does.
+    pub idle: ErrorBounds,
+    /// The bounds while the pilot pushes: a stance shank lags a plan that
+    /// turns it fast, by up to 0.13 rad late in a healthy walk's swing,
+    /// and overshoots a transfer's aim by up to 0.12 rad at a fast
+    /// clinical pace (`exogait tables`, 1.90 m, 0.35 m/s).
+    pub pushed: ErrorBounds,
+    /// The rise of the crutches' sum over that least value that shows a
+    /// pilot pushing, N.
+    pub crutch_rise_n: f32,
+    /// |ė| (growing away from the plan) beyond which a frame can count,
+    /// rad/s.
+    pub rate_rad_s: f32,
+    /// The rate's first-order filter gain per frame (0–1].
+    pub rate_filter: f32,
+    /// Consecutive counting frames that make the fault.
+    pub ticks: u32,
+}
+
+impl BalanceCheck {
+    /// With the crutches idle 0.1 rad (5.7°) off the plan, 0.05 rad in a
+    /// swing; pushing 0.2 and 0.25 rad; moving away at 0.25 rad/s for
+    /// 30 ms: beyond the healthy runs' tracking of the stance shank
+    /// (the campaign's and the clinical families'), and reached within a
+    /// few hundred milliseconds of a pilot who stops balancing
+    /// (`docs/safety.md`).
+    pub const DEFAULT: Self = Self {
+        idle: ErrorBounds {
+            feet_down_rad: 0.1,
+            swing_rad: 0.05,
+        },
+        pushed: ErrorBounds {
+            feet_down_rad: 0.2,
+            swing_rad: 0.25,
+        },
+        crutch_rise_n: 40.0,
+        rate_rad_s: 0.25,
+        rate_filter: 0.05,
+        ticks: 30,
+    };
+
+    /// Whether every value is finite and in range.
+    pub(super) fn is_valid(&self) -> bool {
+        [
+            self.idle.feet_down_rad,
+            self.idle.swing_rad,
+            self.pushed.feet_down_rad,
+            self.pushed.swing_rad,
+            self.crutch_rise_n,
+            self.rate_rad_s,
+        ]
+        .iter()
+        .all(|v| v.is_finite() && *v > 0.0)
+            && self.rate_filter > 0.0
+            && self.rate_filter <= 1.0
+            && self.ticks > 0
+    }
+}
+
+/// One ankle's error and its rate.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct BalanceTrack {
+    /// The last accepted frame's error, rad (NaN: none since the plan
+    /// began).
+    error_rad: f32,
+    /// Its plan, rad.
+    plan_rad: f32,
+    /// The error's filtered rate, rad/s.
+    rate_rad_s: f32,
+    /// The least crutches' sum since the plan began, N (NaN: unknown).
+    crutches_least_n: f32,
+    /// Consecutive counting frames.
+    ticks: u32,
+}
+
+impl Default for BalanceTrack {
+    fn default() -> Self {
+        Self {
+            error_rad: f32::NAN,
+            plan_rad: f32::NAN,
+            rate_rad_s: 0.0,
+            crutches_least_n: f32::NAN,
+            ticks: 0,
+        }
+    }
+}
+
+impl BalanceTrack {
+    /// No plan this tick: start again.
+    pub(super) fn restart(&mut self) {
+        *self = Self::default();
+    }
+
+    /// An accepted frame's `angle_rad` against `plan_rad` (finite), `dt_s`
+    /// after the last tick, with the crutches' sum `crutches_n` (NaN when
+    /// a crutch sensor cannot tell); returns the error once the fault's
+    /// condition has held for `cfg.ticks` frames.
+    pub(super) fn update(
+        &mut self,
+        cfg: &BalanceCheck,
+        angle_rad: f32,
+        plan_rad: f32,
+        swing: bool,
+        crutches_n: f32,
+        dt_s: f32,
+    ) -> Option<f32> {
+        // A step in the plan, or the first plan (NaN): start again.
+        let same_motion = (plan_rad - self.plan_rad).abs() <= PLAN_STEP_RAD;
+        if !same_motion {
+            self.restart();
+        }
+        // A first value that is NaN (a crutch sensor that cannot tell)
+        // stays until the plan restarts: unknown crutches never lower
+        // the bound.
+        self.crutches_least_n = if self.error_rad.is_nan() || crutches_n < self.crutches_least_n {
+            crutches_n
+        } else {
+            self.crutches_least_n
+        };
+        self.plan_rad = plan_rad;
+        let e = angle_rad - plan_rad;
+        if self.error_rad.is_finite() {
+            let raw = (e - self.error_rad) / dt_s;
+            self.rate_rad_s += cfg.rate_filter * (raw - self.rate_rad_s);
+        }
+        self.error_rad = e;
+        let growing = e * self.rate_rad_s > 0.0 && self.rate_rad_s.abs() > cfg.rate_rad_s;
+        let idle = crutches_n < self.crutches_least_n + cfg.crutch_rise_n;
+        let bounds = if idle { &cfg.idle } else { &cfg.pushed };
+        let bound = if swing {
+            bounds.swing_rad
+        } else {
+            bounds.feet_down_rad
+        };
+        self.ticks = if e.abs() > bound && growing {
+            self.ticks.saturating_add(1)
+        } else {
+            0
+        };
+        (self.ticks >= cfg.ticks).then_some(e)
+    }
+}
