@@ -137,7 +137,7 @@ pub struct SupervisorInput {
     /// The dorsiflexion the gait plans for each ankle this tick, rad: the
     /// stance ankle's φ1 during a swing; NaN where nothing is planned (the
     /// swing ankle, standing). For the unplanned heel-off rule (0x0105)
-    /// and the pilot's balance (0x0701).
+    /// and the pilot's balance (0x0701, 0x0702).
     pub ankle_plan_rad: [f32; ANKLES],
     /// The leg in the air (`None` while both feet are down): its joints
     /// move only their own links (0x0404's swing inertias).
@@ -225,7 +225,7 @@ pub struct Supervisor {
     /// An ankle found stuck: control takes none of its frames until its
     /// counts move again.
     ankle_stuck: [bool; ANKLES],
-    /// Each ankle's error from its plan, for 0x0701.
+    /// Each ankle's error from its plan, for 0x0701 and 0x0702.
     balance: [balance::BalanceTrack; ANKLES],
     forces: [ForceTrack; FORCES],
     drive_currents: [drive_current::DriveCurrentTrack; JOINTS],

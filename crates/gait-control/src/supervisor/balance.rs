@@ -100,11 +100,27 @@ impl BalanceCheck {
     }
 }
 
+/// One accepted ankle frame, as the balance check takes it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct BalanceSample {
+    /// The frame's angle, rad.
+    pub(super) angle_rad: f32,
+    /// The plan, rad (finite).
+    pub(super) plan_rad: f32,
+    /// A swing is under way.
+    pub(super) swing: bool,
+    /// Both crutches' load, N (NaN when a crutch sensor cannot tell).
+    pub(super) crutches_n: f32,
+    /// Ticks since the previous accepted frame; `None` for a frame that
+    /// seeds the track (the first, or one after a long gap).
+    pub(super) elapsed_ticks: Option<u32>,
+}
+
 /// One ankle's error and its rate.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct BalanceTrack {
     /// The last accepted frame's error, rad (NaN: none since the plan
-    /// began).
+    /// began or the track was seeded).
     error_rad: f32,
     /// Its plan, rad.
     plan_rad: f32,
@@ -112,6 +128,8 @@ pub(super) struct BalanceTrack {
     rate_rad_s: f32,
     /// The least crutches' sum since the plan began, N (NaN: unknown).
     crutches_least_n: f32,
+    /// |error| on the counting frame [`growth_from`] of the count, rad.
+    grown_from_rad: f32,
     /// Consecutive counting frames.
     ticks: u32,
 }
@@ -123,6 +141,7 @@ impl Default for BalanceTrack {
             plan_rad: f32::NAN,
             rate_rad_s: 0.0,
             crutches_least_n: f32::NAN,
+            grown_from_rad: 0.0,
             ticks: 0,
         }
     }
@@ -134,52 +153,72 @@ impl BalanceTrack {
         *self = Self::default();
     }
 
-    /// An accepted frame's `angle_rad` against `plan_rad` (finite), `dt_s`
-    /// after the last tick, with the crutches' sum `crutches_n` (NaN when
-    /// a crutch sensor cannot tell); returns the error once the fault's
-    /// condition has held for `cfg.ticks` frames.
+    /// An accepted frame, `dt_s` a tick; returns the error once the
+    /// fault's condition has held for `cfg.ticks` frames and the error
+    /// has grown over the last two thirds of them by at least half what
+    /// the rate bound implies (a filtered rate remembers a quick change
+    /// for tens of frames: an error that jumped and then stood still does
+    /// not count; the growth, 0.0025 rad by default, is above a few
+    /// counts of noise).
     pub(super) fn update(
         &mut self,
         cfg: &BalanceCheck,
-        angle_rad: f32,
-        plan_rad: f32,
-        swing: bool,
-        crutches_n: f32,
+        sample: &BalanceSample,
         dt_s: f32,
     ) -> Option<f32> {
         // A step in the plan, or the first plan (NaN): start again.
-        let same_motion = (plan_rad - self.plan_rad).abs() <= PLAN_STEP_RAD;
+        let same_motion = (sample.plan_rad - self.plan_rad).abs() <= PLAN_STEP_RAD;
         if !same_motion {
             self.restart();
         }
         // A first value that is NaN (a crutch sensor that cannot tell)
         // stays until the plan restarts: unknown crutches never lower
         // the bound.
-        self.crutches_least_n = if self.error_rad.is_nan() || crutches_n < self.crutches_least_n {
-            crutches_n
-        } else {
-            self.crutches_least_n
-        };
-        self.plan_rad = plan_rad;
-        let e = angle_rad - plan_rad;
-        if self.error_rad.is_finite() {
-            let raw = (e - self.error_rad) / dt_s;
-            self.rate_rad_s += cfg.rate_filter * (raw - self.rate_rad_s);
+        let crutches_n = sample.crutches_n;
+        if self.plan_rad.is_nan() || crutches_n < self.crutches_least_n {
+            self.crutches_least_n = crutches_n;
+        }
+        self.plan_rad = sample.plan_rad;
+        let e = sample.angle_rad - sample.plan_rad;
+        match sample.elapsed_ticks {
+            // A seed after a gap: no rate across it.
+            None => {
+                self.rate_rad_s = 0.0;
+                self.ticks = 0;
+            }
+            Some(n) if self.error_rad.is_finite() => {
+                let raw = (e - self.error_rad) / (n.max(1) as f32 * dt_s);
+                self.rate_rad_s += cfg.rate_filter * (raw - self.rate_rad_s);
+            }
+            Some(_) => {}
         }
         self.error_rad = e;
         let growing = e * self.rate_rad_s > 0.0 && self.rate_rad_s.abs() > cfg.rate_rad_s;
         let idle = crutches_n < self.crutches_least_n + cfg.crutch_rise_n;
         let bounds = if idle { &cfg.idle } else { &cfg.pushed };
-        let bound = if swing {
+        let bound = if sample.swing {
             bounds.swing_rad
         } else {
             bounds.feet_down_rad
         };
-        self.ticks = if e.abs() > bound && growing {
-            self.ticks.saturating_add(1)
+        let from = growth_from(cfg.ticks);
+        if e.abs() > bound && growing {
+            self.ticks = self.ticks.saturating_add(1);
+            if self.ticks == from {
+                self.grown_from_rad = e.abs();
+            }
         } else {
-            0
-        };
-        (self.ticks >= cfg.ticks).then_some(e)
+            self.ticks = 0;
+        }
+        let least_growth = 0.5 * cfg.rate_rad_s * cfg.ticks.saturating_sub(from) as f32 * dt_s;
+        let grown = e.abs() - self.grown_from_rad >= least_growth;
+        (self.ticks >= cfg.ticks && grown).then_some(e)
     }
+}
+
+/// The counting frame from which the error must have grown: a third of
+/// the way into the count (at least the first).
+const fn growth_from(ticks: u32) -> u32 {
+    let third = ticks / 3;
+    if third == 0 { 1 } else { third }
 }

@@ -4,15 +4,15 @@
 
 use super::*;
 
-/// Both crutches' load, N; NaN unless both sensors read.
+/// Both crutches' load, N; NaN unless both sensors read. (Written out:
+/// an iterator's `sum` is an out-of-line call in `core` on the M4.)
 fn crutch_sum_n(input: &SupervisorInput) -> f32 {
-    crate::layout::force::CRUTCHES
-        .iter()
-        .map(|&c| match input.forces.get(c) {
-            Some(f) if f.status == ForceStatus::Ok => f.newtons,
-            _ => f32::NAN,
-        })
-        .sum()
+    use crate::layout::force::{LEFT_CRUTCH, RIGHT_CRUTCH};
+    let read = |c: usize| match input.forces.get(c) {
+        Some(f) if f.status == ForceStatus::Ok => f.newtons,
+        _ => f32::NAN,
+    };
+    read(LEFT_CRUTCH) + read(RIGHT_CRUTCH)
 }
 
 /// `|x| ≤ limit`; false for NaN, so `!within(..)` trips on NaN.
@@ -302,16 +302,17 @@ impl Supervisor {
                 // down, only a foot planned flat (a trailing foot's plan
                 // past the stop is its shank's angle, heel up).
                 let swing = input.swing_leg.is_some();
-                let watched = if swing {
-                    plan.is_finite()
-                } else {
-                    plan <= cfg.heel_off_rad
-                };
+                let watched = plan.is_finite() && (swing || plan <= cfg.heel_off_rad);
                 if let Some(track) = self.balance.get_mut(i) {
                     if watched && !on_stop {
-                        if let Some(e) =
-                            track.update(&cfg.balance, angle_rad, plan, swing, crutches, cfg.dt_s)
-                        {
+                        let sample = balance::BalanceSample {
+                            angle_rad,
+                            plan_rad: plan,
+                            swing,
+                            crutches_n: crutches,
+                            elapsed_ticks: delta.map(|(_, n)| n),
+                        };
+                        if let Some(e) = track.update(&cfg.balance, &sample, cfg.dt_s) {
                             let code = if e > 0.0 {
                                 FaultCode::PilotFallingForward
                             } else {

@@ -150,7 +150,7 @@ pub struct SupervisorConfig {
     pub deadline_window_ticks: u32,
     /// The drives' torque residual (0x0404).
     pub response: ResponseCheck,
-    /// The balance check (0x0701).
+    /// The balance check (0x0701, 0x0702).
     pub balance: BalanceCheck,
     /// The drives' currents against their commands (0x0405, 0x0406).
     pub drive_current: DriveCurrentCheck,

@@ -83,26 +83,43 @@ fn the_pilot_does_not_shove_the_body_when_the_set_down_foot_lands() {
 
 #[test]
 fn a_pilot_who_stops_balancing_on_the_stairs_is_found_by_the_shank_and_kept_up() {
-    // The pilot stops balancing on a stair ascent, early in the first
-    // swing (1.0 s) or in the weight transfer after it (3.5 s): the
-    // stance shank tips back from its plan with the crutches idle, 0x0702
-    // is the first fault, the swing foot is set down and the hold keeps
-    // the pilot up. The same runs without the check fall.
+    // The pilot stops balancing on a stair ascent: early in the first
+    // swing (1.0 s) or in the weight transfer after it (3.5 s), the stance
+    // shank tips back from its plan with the crutches idle, 0x0702 is the
+    // first fault and the swing foot is set down; late in the first swing
+    // (2.5 s) the body tips forward, 0x0701, and the step lands first.
+    // The hold keeps the pilot up; the same runs without the check fall.
     use gait_control::faults::FaultCode;
     let device = DeviceConfig::exogait().unwrap();
     let mut unchecked = device;
     unchecked.supervisor.balance.ticks = u32::MAX;
-    for (fault, found_within_s) in [
-        ("pilot-stops-balancing@1.0", 1.2),
-        ("pilot-stops-balancing@3.5", 1.5),
+    for (fault, code, found_within_s) in [
+        (
+            "pilot-stops-balancing@1.0",
+            FaultCode::PilotFallingBack,
+            1.2,
+        ),
+        (
+            "pilot-stops-balancing@3.5",
+            FaultCode::PilotFallingBack,
+            1.5,
+        ),
+        (
+            "pilot-stops-balancing@2.5",
+            FaultCode::PilotFallingForward,
+            1.2,
+        ),
     ] {
         let at_s: f64 = fault.rsplit('@').next().unwrap().parse().unwrap();
         let run = run_faulted(&device, Gait::StairUp, 10.0, 2, None, &[fault]);
         let o = sim::outcome::outcome(&run.rig, run.ended_by.as_ref());
         let first = o.faults.first().unwrap();
-        assert_eq!(first.code, FaultCode::PilotFallingBack, "{fault}: {o:?}");
+        assert_eq!(first.code, code, "{fault}: {o:?}");
         assert!(first.detected_s - at_s < found_within_s, "{fault}: {o:?}");
         assert!(o.fell.is_none(), "{fault}: {o:?}");
+        if code == FaultCode::PilotFallingForward {
+            assert!(o.landings >= 1, "{fault}: the step lands first: {o:?}");
+        }
 
         let run = run_faulted(&unchecked, Gait::StairUp, 10.0, 2, None, &[fault]);
         let o = sim::outcome::outcome(&run.rig, run.ended_by.as_ref());
