@@ -126,3 +126,38 @@ fn a_pilot_who_stops_balancing_on_the_stairs_is_found_by_the_shank_and_kept_up()
         assert!(o.fell.is_some(), "{fault} without the check: {o:?}");
     }
 }
+
+#[test]
+fn a_fast_clinical_walk_of_a_tall_heavy_patient_does_not_trip_the_balance_check() {
+    // The 1.90 m, 95 kg patient's walk at 0.35 m/s, slowed by 0.4 s (the
+    // attempt that clears it: the pace as asked asks the stance hip for
+    // more than its drive), overshoots each transfer's aim by up to
+    // 0.12 rad, pushing on the crutches: cleared at that attempt, with
+    // no fault in its closed loop (a check that tripped on it would leave
+    // the patient a slower gait).
+    use exogait_device::fitting::{Measures, fit};
+    use gait_opt::family::{ATTEMPTS, Outcome, WALK_HANDOVER_S, design, walk_plan};
+    let device = DeviceConfig::exogait().unwrap();
+    let patient = fit(
+        &device,
+        &Measures {
+            height_m: 1.90,
+            mass_kg: 95.0,
+            thigh_m: None,
+            shank_m: None,
+            foot_m: None,
+        },
+    )
+    .unwrap();
+    let fitted = device.fitted(&patient.model).unwrap();
+    let links = fitted.body.links();
+    let plan = walk_plan(0.35, links[0].length_m + links[1].length_m, WALK_HANDOVER_S);
+    let Outcome::Cleared(gait) = design(&plan, &fitted, gait_opt::family::DEFAULT_EVALS) else {
+        panic!("walk-0.35 left out");
+    };
+    let slowed = gait.plan.step_time_s - plan.step_time_s;
+    assert!(
+        (slowed - ATTEMPTS[1].0).abs() < 0.011,
+        "slowed by {slowed} s"
+    );
+}
