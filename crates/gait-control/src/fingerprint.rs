@@ -125,6 +125,7 @@ impl_fingerprint!(BalanceCheck {
     idle,
     pushed,
     crutch_rise_n,
+    crutch_forget_n_per_s,
     rate_rad_s,
     rate_filter,
     ticks,

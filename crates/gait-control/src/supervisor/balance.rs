@@ -10,7 +10,9 @@
 //! low-passed rate ė, and counts the accepted frames on which the error is
 //! beyond a bound and still growing away from the plan (e·ė > 0, |ė| above
 //! its own bound). The bound is tighter while the crutches carry no more
-//! than the least since the plan began: nobody is pushing the shank back,
+//! than the least they have carried lately (a minimum that forgets at
+//! 20 N/s, so it follows the pilot's resting lean, not the push of a
+//! step): nobody is pushing the shank back,
 //! so a small error already means nobody is balancing (the swing's 0.05
 //! rad finds a pilot who has stopped before a stair ascent's first swing
 //! 0.65–0.75 s into it, early enough to set the foot down). A rejected
@@ -39,7 +41,7 @@ pub struct ErrorBounds {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BalanceCheck {
     /// The bounds while the crutches carry no more than the least they
-    /// have carried since the plan began (`crutch_rise_n` more at most):
+    /// have carried lately (`crutch_rise_n` more at most):
     /// the shank is off its plan and nobody pushes to bring it back,
     /// which a balancing pilot always does.
     pub idle: ErrorBounds,
@@ -51,6 +53,9 @@ pub struct BalanceCheck {
     /// The rise of the crutches' sum over that least value that shows a
     /// pilot pushing, N.
     pub crutch_rise_n: f32,
+    /// How fast the least value forgets, N/s: it follows a pilot's
+    /// resting load as it changes over many steps, not the push of one.
+    pub crutch_forget_n_per_s: f32,
     /// |ė| (growing away from the plan) beyond which a frame can count,
     /// rad/s.
     pub rate_rad_s: f32,
@@ -77,6 +82,7 @@ impl BalanceCheck {
             swing_rad: 0.25,
         },
         crutch_rise_n: 40.0,
+        crutch_forget_n_per_s: 20.0,
         rate_rad_s: 0.25,
         rate_filter: 0.05,
         ticks: 30,
@@ -90,6 +96,7 @@ impl BalanceCheck {
             self.pushed.feet_down_rad,
             self.pushed.swing_rad,
             self.crutch_rise_n,
+            self.crutch_forget_n_per_s,
             self.rate_rad_s,
         ]
         .iter()
@@ -126,7 +133,9 @@ pub(super) struct BalanceTrack {
     plan_rad: f32,
     /// The error's filtered rate, rad/s.
     rate_rad_s: f32,
-    /// The least crutches' sum since the plan began, N (NaN: unknown).
+    /// The least crutches' sum lately, N, rising at the forgetting rate
+    /// (NaN: none read yet). Kept across restarts: a swing's plan begins
+    /// with the pilot already pushing.
     crutches_least_n: f32,
     /// |error| on the counting frame [`growth_from`] of the count, rad.
     grown_from_rad: f32,
@@ -148,9 +157,12 @@ impl Default for BalanceTrack {
 }
 
 impl BalanceTrack {
-    /// No plan this tick: start again.
+    /// No plan this tick: start again (the crutches' least value kept).
     pub(super) fn restart(&mut self) {
-        *self = Self::default();
+        *self = Self {
+            crutches_least_n: self.crutches_least_n,
+            ..Self::default()
+        };
     }
 
     /// An accepted frame, `dt_s` a tick; returns the error once the
@@ -171,12 +183,16 @@ impl BalanceTrack {
         if !same_motion {
             self.restart();
         }
-        // A first value that is NaN (a crutch sensor that cannot tell)
-        // stays until the plan restarts: unknown crutches never lower
+        // Unknown crutches (NaN) neither move the least value nor lower
         // the bound.
         let crutches_n = sample.crutches_n;
-        if self.plan_rad.is_nan() || crutches_n < self.crutches_least_n {
-            self.crutches_least_n = crutches_n;
+        let forgotten = self.crutches_least_n + cfg.crutch_forget_n_per_s * dt_s;
+        if crutches_n.is_finite() {
+            self.crutches_least_n = if forgotten < crutches_n {
+                forgotten
+            } else {
+                crutches_n
+            };
         }
         self.plan_rad = sample.plan_rad;
         let e = sample.angle_rad - sample.plan_rad;

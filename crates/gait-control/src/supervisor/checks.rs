@@ -300,14 +300,16 @@ impl Supervisor {
                 // growing away from it. Not on the stop: with the heel up
                 // the encoder no longer sees the shank. With both feet
                 // down, only a foot planned flat (a trailing foot's plan
-                // past the stop is its shank's angle, heel up).
+                // past the stop is its shank's angle, heel up); in a
+                // swing, a plan past the stop is the stop for the reading,
+                // which cannot go further.
                 let swing = input.swing_leg.is_some();
                 let watched = plan.is_finite() && (swing || plan <= cfg.heel_off_rad);
                 if let Some(track) = self.balance.get_mut(i) {
                     if watched && !on_stop {
                         let sample = balance::BalanceSample {
                             angle_rad,
-                            plan_rad: plan,
+                            plan_rad: plan.min(cfg.heel_off_rad),
                             swing,
                             crutches_n: crutches,
                             elapsed_ticks: delta.map(|(_, n)| n),

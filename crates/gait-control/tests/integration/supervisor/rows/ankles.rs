@@ -243,7 +243,7 @@ fn left_shank_leaving_its_plan(rate: f32, swing: bool, push_n: f32) -> Vec<Verdi
 fn row_pilot_falling() {
     // The shank turning away from the plan at 0.5 rad/s (a pilot who no
     // longer balances the body over the foot) with the crutches carrying
-    // no more than the least since the plan began: from the first frame
+    // no more than the least they carried lately: from the first frame
     // more than 0.1 rad off (0.05 rad in a swing), 30 frames moving away
     // trip it, forward 0x0701 (in a swing the step lands first), back
     // 0x0702 (the foot is set down).
@@ -276,11 +276,11 @@ fn row_pilot_falling() {
         InSwing::LandFirst
     );
     assert_eq!(FaultCode::PilotFallingBack.in_swing(), InSwing::HoldNow);
-    // A pilot pushing on the crutches (40 N over the least since the plan
-    // began) may let the shank lag or overshoot: 0.2 rad with both feet
-    // down, 0.25 in a swing. A crutch sensor that cannot tell never
-    // lowers the bound.
-    let pushing = cfg.crutch_rise_n + 1.0;
+    // A pilot pushing on the crutches (more than 40 N over the least they
+    // carried lately: 80 N, as the least forgets at 20 N/s meanwhile) may
+    // let the shank lag or overshoot: 0.2 rad with both feet down, 0.25
+    // in a swing. A crutch sensor that cannot tell never lowers the bound.
+    let pushing = 2.0 * cfg.crutch_rise_n;
     for (push, swing, bound) in [
         (pushing, false, cfg.pushed.feet_down_rad),
         (pushing, true, cfg.pushed.swing_rad),
@@ -318,18 +318,25 @@ fn row_pilot_falling() {
 #[test]
 fn a_pilot_who_unloads_the_crutches_mid_swing_is_found_at_the_tighter_bound() {
     // A swing's stance shank lagging its plan at 0.5 rad/s while the pilot
-    // pushes 200 N more than at the swing's start (the bound 0.25 rad),
-    // who then lets go of the crutches at tick 150 (0.075 rad off): from
-    // then on the bound is 0.05 rad, and 30 frames later it is the pilot
-    // falling back. Pushing all along, it is found only past 0.25 rad.
+    // pushes 200 N more than standing (the bound 0.25 rad), who then lets
+    // go of the crutches at tick 150 (0.075 rad off): from then on the
+    // bound is 0.05 rad, and 30 frames later it is the pilot falling back.
+    // Pushing all along, from before the swing's plan began (the least
+    // value outlives the plan), it is found only past 0.25 rad.
     use gait_control::layout::force::LEFT_CRUTCH;
     let cfg = SupervisorConfig::paper().balance;
     let rate = 0.5e-3;
     let run = |let_go: u32| {
         inject(900, move |k, input| {
-            input.ankles[0] = encoder(STAND_ANKLES[0] - rate * k as f32);
-            input.ankle_plan_rad[0] = STAND_ANKLES[0];
-            input.swing_leg = Some(gait_control::layout::Side::Right);
+            // Standing on the start posture's plan until tick 20, then the
+            // swing's (a step of 0.02 rad: the track restarts).
+            let swing = k >= 20;
+            let plan = STAND_ANKLES[0] + if swing { 0.02 } else { 0.0 };
+            input.ankles[0] = encoder(plan - rate * k.saturating_sub(20) as f32);
+            input.ankle_plan_rad[0] = plan;
+            if swing {
+                input.swing_leg = Some(gait_control::layout::Side::Right);
+            }
             if (10..let_go).contains(&k) {
                 input.forces[LEFT_CRUTCH].newtons += 200.0;
             }
@@ -341,8 +348,9 @@ fn a_pilot_who_unloads_the_crutches_mid_swing_is_found_at_the_tighter_bound() {
         Some(150 + cfg.ticks - 1)
     );
     let pushing = detected_at(&run(u32::MAX), FaultCode::PilotFallingBack).unwrap();
-    let off = |k: u32| STAND_ANKLES[0] - encoder(STAND_ANKLES[0] - rate * k as f32).angle_rad;
-    let beyond = (1..).find(|&k| off(k) > cfg.pushed.swing_rad).unwrap();
+    let plan = STAND_ANKLES[0] + 0.02;
+    let off = |k: u32| plan - encoder(plan - rate * k as f32).angle_rad;
+    let beyond = 20 + (1..).find(|&k| off(k) > cfg.pushed.swing_rad).unwrap();
     assert_eq!(pushing, beyond + cfg.ticks - 1);
 }
 
