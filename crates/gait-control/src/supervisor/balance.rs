@@ -12,14 +12,13 @@
 //! its own bound). The bound is tighter while the crutches carry no more
 //! than the least they have carried lately (a minimum that forgets at
 //! 20 N/s, so it follows the pilot's resting lean, not the push of a
-//! step): nobody is pushing the shank back,
-//! so a small error already means nobody is balancing (the swing's 0.05
-//! rad finds a pilot who has stopped before a stair ascent's first swing
-//! 0.65–0.75 s into it, early enough to set the foot down). A rejected
-//! frame neither counts nor resets; a tick
-//! without a plan (NaN), or whose plan steps by more than
-//! [`PLAN_STEP_RAD`] (a swing's table taking over, the stance swapping at
-//! a landing), restarts the count and the rate.
+//! step): nobody is pushing the shank back, so a small error already
+//! means nobody is balancing (the swing's 0.05 rad finds a pilot who has
+//! stopped before a stair ascent's first swing 0.65–0.75 s into it,
+//! early enough to set the foot down). A rejected frame neither counts
+//! nor resets; a tick without a plan (NaN), or whose plan steps by more
+//! than [`PLAN_STEP_RAD`] (a swing's table taking over, the stance
+//! swapping at a landing), restarts the count and the rate.
 
 /// The most a plan moves in one tick and is still the same motion, rad (a
 /// table turns the shank at up to about 1 rad/s: 0.001 a tick).

@@ -4,8 +4,7 @@
 
 use super::*;
 
-/// Both crutches' load, N; NaN unless both sensors read. (Written out:
-/// an iterator's `sum` is an out-of-line call in `core` on the M4.)
+/// Both crutches' load, N; NaN unless both sensors read.
 fn crutch_sum_n(input: &SupervisorInput) -> f32 {
     use crate::layout::force::{LEFT_CRUTCH, RIGHT_CRUTCH};
     let read = |c: usize| match input.forces.get(c) {
