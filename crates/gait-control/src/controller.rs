@@ -466,7 +466,7 @@ impl<'t> Controller<'t> {
             chain_closed: s.chain_closed,
             drive_current: Some(s.drive_current),
         };
-        let mut verdict = self.supervisor.check(&input);
+        let mut verdict = self.supervisor.check_frames(&input, &s.frames);
         let estop_hold = self.stop_for_estop(&mut verdict, status);
         if verdict.reaction == Reaction::None && !estop_hold {
             // Nothing to order (most ticks): no fault latched re-holds a

@@ -24,12 +24,13 @@ use crate::ring_log::RingLog;
 use crate::drivers::as5048a::{DATA_MASK, wrapped_delta};
 use crate::faults::{FaultCode, FaultSet, Reaction};
 
-pub use crate::layout::{ANKLES, FORCES, JOINTS, Side};
+pub use crate::layout::{ANKLES, ENCODERS, FORCES, JOINTS, Side};
 
 mod balance;
 mod checks;
 mod config;
 mod drive_current;
+mod frames;
 mod response;
 mod tracks;
 
@@ -38,8 +39,9 @@ pub use config::{
     AngleRange, ConfigError, Debounce, EnvelopeMargins, ResetRefused, SupervisorConfig,
 };
 pub use drive_current::{DriveCurrentCheck, DriveCurrentSense};
+pub use frames::EncoderFrame;
 pub use response::ResponseCheck;
-use tracks::{Class, EncoderTrack, ForceTrack, Frame, JointTrack};
+use tracks::{Class, EncoderTrack, ForceTrack, JointTrack};
 /// Records kept in the post-mortem log (the newest ones).
 pub const LOG_LEN: usize = 32;
 /// Channel of a [`FaultRecord`] for faults that belong to no channel.
@@ -250,49 +252,6 @@ struct Tick {
 }
 
 impl Supervisor {
-    /// Whether the next check will take `sense` as encoder `channel`'s
-    /// reading (joints in joint order, then the ankles): the same rules,
-    /// nothing changed. The controller uses only the frames this takes, so
-    /// a frame the supervisor drops (a jump) never reaches control, nor do
-    /// an ankle's found stuck (0x0207) until its counts move.
-    pub fn accepts_encoder(&self, channel: usize, sense: &EncoderSense) -> bool {
-        let cfg = &self.cfg;
-        let (track, max_jump) = match channel.checked_sub(JOINTS) {
-            None => (
-                self.joints.get(channel).map(|j| &j.encoder),
-                cfg.max_jump_counts_per_tick,
-            ),
-            Some(a) if self.ankle_stuck.get(a).copied().unwrap_or(true) => return false,
-            Some(a) => (self.ankles.get(a), cfg.max_ankle_jump_counts_per_tick),
-        };
-        track.is_some_and(|t| {
-            let sense = &t.seen(sense, self.encoder_offsets);
-            matches!(
-                t.classify(sense, cfg.encoder_debounce, max_jump),
-                Class::Seed | Class::Good { .. }
-            )
-        })
-    }
-
-    /// The angle control takes from encoder `channel`'s accepted frame
-    /// `angle_rad`: the reading without the offset of a persistent jump
-    /// (0x0205), which the supervisor keeps until power-off (a reset does
-    /// not move the encoder back). Needed only while
-    /// [`Supervisor::encoder_offsets`].
-    pub fn encoder_angle(&self, channel: usize, angle_rad: f32) -> f32 {
-        let track = match channel.checked_sub(JOINTS) {
-            None => self.joints.get(channel).map(|j| &j.encoder),
-            Some(a) => self.ankles.get(a),
-        };
-        track.map_or(f32::NAN, |t| t.angle_without_offset(angle_rad))
-    }
-
-    /// Whether any encoder reads offset since a persistent jump (nearly
-    /// never): only then are frames corrected, here and in control.
-    pub const fn encoder_offsets(&self) -> bool {
-        self.encoder_offsets
-    }
-
     /// Checks `cfg` and starts with nothing latched.
     pub fn new(cfg: SupervisorConfig) -> Result<Self, ConfigError> {
         cfg.validate()?;
@@ -456,6 +415,26 @@ impl Supervisor {
     /// The per-tick check: updates every detector with `input`, latches
     /// what tripped, and returns the reaction over all latched faults.
     pub fn check(&mut self, input: &SupervisorInput) -> Verdict {
+        let [j0, j1, j2, j3] = &input.joints;
+        let [left, right] = &input.ankles;
+        let frames = [j0, j1, j2, j3, left, right];
+        let mut n = 0;
+        let frames = frames.map(|sense| {
+            n += 1;
+            self.take_encoder(n - 1, sense)
+        });
+        self.check_frames(input, &frames)
+    }
+
+    /// [`Supervisor::check`] with this tick's encoder frames already
+    /// taken ([`Supervisor::take_encoder`], joints then ankles, from the
+    /// senses in `input`).
+    #[inline(always)]
+    pub fn check_frames(
+        &mut self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+    ) -> Verdict {
         self.calls = self.calls.wrapping_add(1);
         let mut t = Tick {
             tick: input.tick,
@@ -465,8 +444,8 @@ impl Supervisor {
         self.check_operator_inputs(input, &mut t);
         self.check_deadline(input, &mut t);
         self.check_motors(input, &mut t);
-        self.check_joints(input, &mut t);
-        self.check_ankles(input, &mut t);
+        self.check_joints(input, frames, &mut t);
+        self.check_ankles(input, frames, &mut t);
         self.check_forces(input, &mut t);
         self.check_drive_current(input, &mut t);
         self.previous_reference_rad = Some(input.joint_reference_rad);

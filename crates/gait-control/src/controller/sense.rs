@@ -10,7 +10,9 @@ use crate::drivers::buttons::Sample;
 use crate::layout::{encoder, force};
 use crate::posture::JOINTS;
 use crate::sequencer::Sensed;
-use crate::supervisor::{DriveCurrentSense, EncoderSense, EncoderStatus, ForceSense, ForceStatus};
+use crate::supervisor::{
+    DriveCurrentSense, EncoderFrame, EncoderSense, EncoderStatus, ForceSense, ForceStatus,
+};
 
 use super::{Controller, ENCODERS, FORCES, Hardware};
 
@@ -18,6 +20,8 @@ use super::{Controller, ENCODERS, FORCES, Hardware};
 pub(super) struct Senses {
     /// Each encoder's frame as the supervisor checks it.
     pub encoders: [EncoderSense; ENCODERS],
+    /// The supervisor's classification of each (its check goes on from it).
+    pub frames: [EncoderFrame; ENCODERS],
     /// Each force sensor's sample as the supervisor checks it.
     pub forces: [ForceSense; FORCES],
     /// This tick's drive-current sample.
@@ -64,7 +68,7 @@ impl Controller<'_> {
     {
         let lost = self.supervisor.angle_lost_joints();
         let alpha = self.rate_alpha();
-        let (encoders, taken) = self.read_encoders(hw, &lost, alpha);
+        let (encoders, frames) = self.read_encoders(hw, &lost, alpha);
         let forces = self.read_forces(hw);
         let drive_current = self.read_drive_current(hw);
         let forces_n = forces.map(|f| f.newtons);
@@ -82,13 +86,14 @@ impl Controller<'_> {
             crutches_n: force::CRUTCHES.map(|i| forces_n.get(i).copied().unwrap_or(f32::NAN)),
             // This tick's readings (NaN unless the frame was taken): a held
             // last-good value must not count as "ready".
-            ankles_rad: encoder::OF_ANKLES.map(|i| match (self.last_angle.get(i), taken.get(i)) {
-                (Some(&a), Some(true)) => a,
+            ankles_rad: encoder::OF_ANKLES.map(|i| match (self.last_angle.get(i), frames.get(i)) {
+                (Some(&a), Some(f)) if f.usable() => a,
                 _ => f32::NAN,
             }),
         };
         Senses {
             encoders,
+            frames,
             forces,
             drive_current,
             mode,
@@ -112,7 +117,7 @@ impl Controller<'_> {
 
     /// Each encoder's frame as the supervisor will check it, and whether
     /// control takes it: only the frames the supervisor takes
-    /// ([`crate::supervisor::Supervisor::accepts_encoder`]) move the
+    /// ([`crate::supervisor::Supervisor::take_encoder`]) move the
     /// angles and rates control uses; otherwise the last taken one holds.
     /// Nor do those of an encoder the supervisor has found `lost` (a
     /// frozen one's frames are valid). `alpha` is the rates' low-pass
@@ -122,19 +127,19 @@ impl Controller<'_> {
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
         lost: &[bool; JOINTS],
         alpha: f32,
-    ) -> ([EncoderSense; ENCODERS], [bool; ENCODERS])
+    ) -> ([EncoderSense; ENCODERS], [EncoderFrame; ENCODERS])
     where
         ENC: SpiDevice<u8>,
     {
         let mut out = [BAD_ENCODER; ENCODERS];
-        let mut taken = [false; ENCODERS];
+        let mut frames = [EncoderFrame::NONE; ENCODERS];
         let dt = self.cfg.dt_s;
         let offsets = self.supervisor.encoder_offsets();
-        for (i, ((enc, o), took)) in hw
+        for (i, ((enc, o), frame)) in hw
             .encoders
             .iter_mut()
             .zip(out.iter_mut())
-            .zip(taken.iter_mut())
+            .zip(frames.iter_mut())
             .enumerate()
         {
             let result = enc.read_angle();
@@ -151,12 +156,13 @@ impl Controller<'_> {
                     angle_rad: f32::NAN,
                 },
             };
-            *took = self.supervisor.accepts_encoder(i, o);
+            *frame = self.supervisor.take_encoder(i, o);
+            let took = frame.usable();
             if let Some(n) = self.untaken.get_mut(i) {
-                *n = if *took { 0 } else { n.saturating_add(1) };
+                *n = if took { 0 } else { n.saturating_add(1) };
             }
             let trusted = !lost.get(i).copied().unwrap_or(false);
-            if let (Ok(r), true) = (&result, *took && trusted) {
+            if let (Ok(r), true) = (&result, took && trusted) {
                 let angle = if offsets {
                     self.supervisor.encoder_angle(i, r.angle_rad)
                 } else {
@@ -178,7 +184,7 @@ impl Controller<'_> {
                 }
             }
         }
-        (out, taken)
+        (out, frames)
     }
 
     fn read_forces<ENC, ADC, PWM, DIR, EN, IN, OUT>(

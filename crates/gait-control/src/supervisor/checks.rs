@@ -101,12 +101,20 @@ impl Supervisor {
         }
     }
 
-    pub(super) fn check_joints(&mut self, input: &SupervisorInput, t: &mut Tick) {
+    pub(super) fn check_joints(
+        &mut self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+        t: &mut Tick,
+    ) {
         let cfg = &self.cfg;
         for i in 0..JOINTS {
             let ch = i as u8;
-            let (Some(sense), Some(&reference), Some(range), Some(&vmax), Some(motor)) = (
-                input.joints.get(i),
+            let Some(taken) = frames.get(i) else {
+                continue;
+            };
+            let invalid = taken.invalid();
+            let (Some(&reference), Some(range), Some(&vmax), Some(motor)) = (
                 input.joint_reference_rad.get(i),
                 cfg.joint_range.get(i),
                 cfg.velocity_limit_rad_s.get(i),
@@ -130,22 +138,12 @@ impl Supervisor {
             let Some(track) = self.joints.get_mut(i) else {
                 continue;
             };
-            let sense = &track.encoder.seen(sense, self.encoder_offsets);
-            let (frame, invalid) =
-                track
-                    .encoder
-                    .update(sense, cfg.encoder_debounce, cfg.max_jump_counts_per_tick);
             // Raised in this order (the log's order within a tick).
             let latch = &mut self.latch;
             if let Some(v) = invalid {
                 latch.raise(t, FaultCode::EncoderInvalidValue, ch, v);
             }
-            if let Frame::Accepted {
-                angle_rad,
-                delta,
-                previous_angle_rad,
-            } = frame
-            {
+            if let Some((angle_rad, delta, previous_angle_rad)) = taken.accepted() {
                 if !range.contains(angle_rad) {
                     latch.raise(t, FaultCode::JointPositionLimit, ch, angle_rad);
                 }
@@ -244,25 +242,25 @@ impl Supervisor {
         }
     }
 
-    pub(super) fn check_ankles(&mut self, input: &SupervisorInput, t: &mut Tick) {
+    pub(super) fn check_ankles(
+        &mut self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+        t: &mut Tick,
+    ) {
         let cfg = &self.cfg;
         // Both ankles' balance check reads the crutches: summed once.
         let crutches = crutch_sum_n(input);
         for i in 0..ANKLES {
             let ch = i as u8;
-            let (Some(sense), Some(range), Some(track)) = (
-                input.ankles.get(i),
-                cfg.ankle_range.get(i),
-                self.ankles.get_mut(i),
-            ) else {
+            let Some(taken) = frames.get(JOINTS + i) else {
                 continue;
             };
-            let sense = &track.seen(sense, self.encoder_offsets);
-            let (frame, invalid) = track.update(
-                sense,
-                cfg.encoder_debounce,
-                cfg.max_ankle_jump_counts_per_tick,
-            );
+            let invalid = taken.invalid();
+            let (Some(range), Some(track)) = (cfg.ankle_range.get(i), self.ankles.get_mut(i))
+            else {
+                continue;
+            };
             let tripped = track.tripped(cfg.encoder_debounce);
             if let Some(v) = invalid {
                 self.latch.raise(t, FaultCode::AnkleEncoder, ch, v);
@@ -270,10 +268,7 @@ impl Supervisor {
             if let Some((_, n)) = tripped {
                 self.latch.raise(t, FaultCode::AnkleEncoder, ch, n as f32);
             }
-            if let Frame::Accepted {
-                angle_rad, delta, ..
-            } = frame
-            {
+            if let Some((angle_rad, delta, _)) = taken.accepted() {
                 if !range.contains(angle_rad) {
                     self.latch
                         .raise(t, FaultCode::AnklePositionLimit, ch, angle_rad);

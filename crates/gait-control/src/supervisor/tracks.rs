@@ -97,20 +97,6 @@ pub(super) struct EncoderTrack {
 
 /// What this tick's encoder frame turned out to be.
 #[derive(Debug, Clone, Copy)]
-pub(super) enum Frame {
-    /// Accepted; `delta_counts` and the elapsed ticks since the previous
-    /// accepted sample, if there was one.
-    Accepted {
-        angle_rad: f32,
-        delta: Option<(i16, u32)>,
-        previous_angle_rad: f32,
-    },
-    /// Not used this tick.
-    Rejected,
-}
-
-/// How the next frame of an encoder would be taken ([`EncoderTrack::classify`]).
-#[derive(Debug, Clone, Copy)]
 pub(super) enum Class {
     /// A bad frame (bus, parity, error flag, or an impossible value: then
     /// the value, for the immediate fault).
@@ -176,7 +162,7 @@ impl EncoderTrack {
         sense: &EncoderSense,
         debounce: Debounce,
         max_jump: u16,
-    ) -> (Frame, Option<f32>) {
+    ) -> EncoderFrame {
         let class = self.classify(sense, debounce, max_jump);
         self.since_last = self.since_last.saturating_add(1);
         let current = Accepted {
@@ -187,19 +173,12 @@ impl EncoderTrack {
             Class::Bad(code, invalid) => {
                 self.window.push(true, debounce.window_ticks);
                 self.last_bad = Some(code);
-                (Frame::Rejected, invalid)
+                invalid.map_or(EncoderFrame::NONE, EncoderFrame::invalid_value)
             }
             Class::Seed => {
                 self.window.push(false, debounce.window_ticks);
                 self.accept(current);
-                (
-                    Frame::Accepted {
-                        angle_rad: current.angle_rad,
-                        delta: None,
-                        previous_angle_rad: current.angle_rad,
-                    },
-                    None,
-                )
+                EncoderFrame::seed(current.angle_rad)
             }
             Class::Jump => {
                 self.window.push(true, debounce.window_ticks);
@@ -223,7 +202,7 @@ impl EncoderTrack {
                     }
                     self.consecutive_jumps = 0;
                 }
-                (Frame::Rejected, None)
+                EncoderFrame::NONE
             }
             Class::Good {
                 delta,
@@ -232,14 +211,7 @@ impl EncoderTrack {
             } => {
                 self.window.push(false, debounce.window_ticks);
                 self.accept(current);
-                (
-                    Frame::Accepted {
-                        angle_rad: current.angle_rad,
-                        delta: Some((delta, elapsed)),
-                        previous_angle_rad: previous.angle_rad,
-                    },
-                    None,
-                )
+                EncoderFrame::moved(current.angle_rad, previous.angle_rad, delta, elapsed)
             }
         }
     }

@@ -272,3 +272,59 @@ fn row_encoder_invalid_value() {
     let (_, v) = inject(3, |_, input| input.joints[2].angle_rad = 4.0);
     assert_row(&v, FaultCode::EncoderInvalidValue, Reaction::SafeHold, 1);
 }
+
+#[test]
+fn frames_taken_before_the_check_decide_as_the_check_alone() {
+    // The controller classifies each frame once, before it acts
+    // (`take_encoder`), and the check goes on from it (`check_frames`).
+    // Over a run with bad frames, a seed, a persistent jump on the knee,
+    // an invalid value and a frozen ankle, that path gives the check's
+    // own verdicts and log, and a frame is usable exactly when
+    // `accepts_encoder` said so before it.
+    let mut alone = supervisor();
+    let mut taking = supervisor();
+    let base = STAND_JOINTS[1];
+    for tick in 0..900u32 {
+        let mut input = healthy_input(tick);
+        let truth = base + 0.0005 * tick as f32;
+        let shift = if (300..600).contains(&tick) { 2000 } else { 0 };
+        input.joints[1] = offset_frame(truth, shift, Direction::Positive);
+        input.joint_reference_rad[1] = offset_frame(truth, 0, Direction::Positive).angle_rad;
+        match tick {
+            50..=52 => input.joints[0].status = EncoderStatus::Parity,
+            120 => input.joints[2].raw_counts = 0xFFFF,
+            200..=260 => input.ankles[1].status = EncoderStatus::BusError,
+            700 => input.joints[3].angle_rad = f32::NAN,
+            _ => {}
+        }
+        let senses = [
+            input.joints[0],
+            input.joints[1],
+            input.joints[2],
+            input.joints[3],
+            input.ankles[0],
+            input.ankles[1],
+        ];
+        let accepted: Vec<bool> = (0..6)
+            .map(|i| taking.accepts_encoder(i, &senses[i]))
+            .collect();
+        let frames = core::array::from_fn(|i| taking.take_encoder(i, &senses[i]));
+        for (i, f) in frames.iter().enumerate() {
+            assert_eq!(f.usable(), accepted[i], "tick {tick} channel {i}");
+        }
+        let a = alone.check(&input);
+        let b = taking.check_frames(&input, &frames);
+        assert_eq!(a, b, "tick {tick}");
+    }
+    assert!(alone.latched().contains(FaultCode::EncoderJump));
+    assert!(!alone.latched().is_empty());
+    // Bit for bit: the invalid reading's value is NaN.
+    let record =
+        |r: &gait_control::supervisor::FaultRecord| (r.tick, r.code, r.channel, r.value.to_bits());
+    assert!(alone.log().map(record).eq(taking.log().map(record)));
+    assert!(
+        alone
+            .log()
+            .any(|r| r.code == FaultCode::EncoderInvalidValue)
+    );
+}
