@@ -99,11 +99,42 @@ fn replay_starts() {
     core::hint::black_box(());
 }
 
+/// Mark, in QEMU's execution log, each replayed tick and the phase it
+/// ended in: `cargo xtask profile` attributes what runs between a start
+/// and an end to that phase, and keeps each phase's costliest tick. Each
+/// returns its own number, or the compiler merges them into one function.
+mod marks {
+    #[inline(never)]
+    pub fn tick_starts() {
+        core::hint::black_box(1u8);
+    }
+    #[inline(never)]
+    pub fn tick_ended_standing() {
+        core::hint::black_box(2u8);
+    }
+    #[inline(never)]
+    pub fn tick_ended_waiting_ready() {
+        core::hint::black_box(3u8);
+    }
+    #[inline(never)]
+    pub fn tick_ended_swing() {
+        core::hint::black_box(4u8);
+    }
+    #[inline(never)]
+    pub fn tick_ended_transfer() {
+        core::hint::black_box(5u8);
+    }
+    #[inline(never)]
+    pub fn tick_ended_safe_hold() {
+        core::hint::black_box(6u8);
+    }
+}
+
 /// Replays [`TICK_RECORDS`] on `device`; `time` runs one tick and says how
 /// many instructions it took.
 pub fn replay(
     device: &DeviceConfig,
-    time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
+    mut time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
 ) -> Result<Replay, ReplayError> {
     replay_starts();
     replay_with(
@@ -113,7 +144,18 @@ pub fn replay(
             exogait_device::build_controller(device, board_config::flash_tables(), gait)
                 .map_err(|_| ReplayError::Config)
         },
-        time,
+        |tick| {
+            marks::tick_starts();
+            let (instr, report) = time(tick);
+            match phase_index(&report.phase) {
+                0 => marks::tick_ended_standing(),
+                1 => marks::tick_ended_waiting_ready(),
+                2 => marks::tick_ended_swing(),
+                3 => marks::tick_ended_transfer(),
+                _ => marks::tick_ended_safe_hold(),
+            }
+            (instr, report)
+        },
     )
 }
 

@@ -4,7 +4,9 @@
 //! from the firmware's `replay_starts` on, and attributes each executed
 //! instruction, through `arm-none-eabi-addr2line -i`, to the innermost
 //! project source line it was inlined from. The figures, per file and then
-//! for the costliest lines, are instructions per replayed tick.
+//! for the costliest lines, are instructions per replayed tick; then, per
+//! phase, the files of its costliest tick (the firmware marks where each
+//! replayed tick starts and the phase it ended in).
 
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read};
@@ -16,6 +18,14 @@ use crate::{Result, root};
 /// The firmware function whose first execution starts the count.
 const MARKER: &str = "replay_starts";
 
+/// Marks the firmware's replay runs before each tick (`tick_replay::marks`).
+const TICK_STARTS: &str = "tick_starts";
+/// Marks after a tick, followed by the phase it ended in.
+const TICK_ENDED: &str = "tick_ended_";
+
+/// A translation block: QEMU's host code pointer and its guest start.
+type Block = (u64, u32);
+
 /// Translation blocks: each block's instruction addresses and its runs
 /// from the marker on. A block is known by QEMU's host code pointer and its
 /// guest start: QEMU may translate the same guest address into blocks of
@@ -23,11 +33,24 @@ const MARKER: &str = "replay_starts";
 #[derive(Debug, Default, PartialEq)]
 pub struct ExecLog {
     /// Each block's instruction addresses.
-    pub blocks: HashMap<(u64, u32), Vec<u32>>,
+    pub blocks: HashMap<Block, Vec<u32>>,
     /// Runs of each block.
-    pub runs: HashMap<(u64, u32), u64>,
+    pub runs: HashMap<Block, u64>,
     /// The marker was executed.
     pub marked: bool,
+    /// The costliest marked tick of each phase (by the marker's name).
+    pub worst: HashMap<String, WorstTick>,
+}
+
+/// A phase's costliest tick: its instructions and its blocks' runs.
+#[derive(Debug, Default, PartialEq)]
+pub struct WorstTick {
+    /// Ticks marked with the phase.
+    pub ticks: u64,
+    /// The costliest one's instructions.
+    pub instructions: u64,
+    /// Its blocks' runs.
+    pub runs: HashMap<Block, u64>,
 }
 
 impl ExecLog {
@@ -38,6 +61,8 @@ impl ExecLog {
         let mut out = Self::default();
         let mut reading: Option<Vec<u32>> = None;
         let mut translated: Option<Vec<u32>> = None;
+        // The blocks of the marked tick running now.
+        let mut tick: Option<HashMap<Block, u64>> = None;
         for line in log.lines() {
             let line = line?;
             if line.starts_with("IN:") {
@@ -59,21 +84,59 @@ impl ExecLog {
                 if out.marked {
                     *out.runs.entry(key).or_insert(0) += 1;
                 }
+                if rest.contains(TICK_STARTS) {
+                    tick = Some(HashMap::new());
+                } else if let Some(phase) = marked_phase(rest) {
+                    if let Some(runs) = tick.take() {
+                        out.end_tick(phase, runs);
+                    }
+                } else if let Some(runs) = tick.as_mut() {
+                    *runs.entry(key).or_insert(0) += 1;
+                }
             }
         }
         Ok(out)
     }
 
+    /// A marked tick of `phase` ran the blocks `runs`: kept if it is the
+    /// phase's costliest so far.
+    fn end_tick(&mut self, phase: &str, runs: HashMap<Block, u64>) {
+        let instructions: u64 = runs
+            .iter()
+            .map(|(key, n)| n * self.blocks.get(key).map_or(0, |a| a.len() as u64))
+            .sum();
+        let worst = self.worst.entry(phase.to_string()).or_default();
+        worst.ticks += 1;
+        if instructions > worst.instructions {
+            worst.instructions = instructions;
+            worst.runs = runs;
+        }
+    }
+
     /// Instructions executed at each address.
     pub fn instructions(&self) -> HashMap<u32, u64> {
+        self.instructions_of(&self.runs)
+    }
+
+    /// Instructions executed at each address by the blocks' `runs`.
+    pub fn instructions_of(&self, runs: &HashMap<Block, u64>) -> HashMap<u32, u64> {
         let mut out = HashMap::new();
-        for (key, n) in &self.runs {
+        for (key, n) in runs {
             for a in self.blocks.get(key).into_iter().flatten() {
                 *out.entry(*a).or_insert(0) += n;
             }
         }
         out
     }
+}
+
+/// The phase a trace line's tick-end marker names ("…tick_ended_swing").
+fn marked_phase(trace: &str) -> Option<&str> {
+    let (_, after) = trace.split_once(TICK_ENDED)?;
+    let end = after
+        .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .unwrap_or(after.len());
+    after.get(..end).filter(|p| !p.is_empty())
 }
 
 /// A trace line's block: "0: 0x<host> [flags/<pc>/flags/flags] symbol".
@@ -217,7 +280,46 @@ pub fn profile(elf: &Path) -> Result {
     for ((f, line), n) in lines.into_iter().take(TOP_LINES) {
         println!("profile-line: {:>6} {f}:{line}", n / ticks);
     }
+    print_worst_ticks(&log, &sources);
     Ok(())
+}
+
+/// Files listed for each phase's costliest tick.
+const TOP_WORST_FILES: usize = 25;
+
+/// Per phase, its costliest marked tick by source file (and, for the
+/// costliest phase, by line): what the `tick:` lines' worst figures are made
+/// of (plus the few instructions of the replay's timer reads).
+fn print_worst_ticks(log: &ExecLog, sources: &HashMap<u32, Source>) {
+    let mut phases: Vec<(&String, &WorstTick)> = log.worst.iter().collect();
+    phases.sort_by(|a, b| b.1.instructions.cmp(&a.1.instructions).then(a.0.cmp(b.0)));
+    for (k, (phase, worst)) in phases.into_iter().enumerate() {
+        println!(
+            "profile-phase: {phase} ticks={} worst={}",
+            worst.ticks, worst.instructions
+        );
+        let mut by_file: HashMap<&str, u64> = HashMap::new();
+        let mut by_line: HashMap<(&str, u32), u64> = HashMap::new();
+        for (a, n) in log.instructions_of(&worst.runs) {
+            let (file, line) = sources
+                .get(&a)
+                .map_or((OTHER, 0), |s| (s.file.as_str(), s.line));
+            *by_file.entry(file).or_insert(0) += n;
+            *by_line.entry((file, line)).or_insert(0) += n;
+        }
+        let mut rows: Vec<(&str, u64)> = by_file.into_iter().collect();
+        rows.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+        for (f, n) in rows.into_iter().take(TOP_WORST_FILES) {
+            println!("profile-worst: {phase} {n:>6} {f}");
+        }
+        if k == 0 {
+            let mut lines: Vec<((&str, u32), u64)> = by_line.into_iter().collect();
+            lines.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+            for ((f, line), n) in lines.into_iter().take(TOP_LINES) {
+                println!("profile-worst-line: {phase} {n:>6} {f}:{line}");
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -269,6 +371,27 @@ Trace 0: 0x7f4bc4000100 [00800408/00000400/00000110/ff020200] Reset
         let ins = ExecLog::read(again.as_bytes()).unwrap().instructions();
         assert_eq!(ins.get(&0x2000), Some(&3));
         assert_eq!(ins.get(&0x2002), Some(&2));
+        // A marked tick: counted under its phase, markers left out; the
+        // costlier of two is kept.
+        let marked = LOG.to_string()
+            + "----------------\nIN: _RNvNtNtCs1_8firmware11tick_replay5marks11tick_starts\n\
+               0x00003000:  4770       bx       lr\n\n\
+               Trace 0: 0x7f4bc4000500 [00800408/00003000/00000110/ff020200] \
+               _RNvNtNtCs1_8firmware11tick_replay5marks11tick_starts\n\
+               Trace 0: 0x7f4bc4000300 [00800408/00002000/00000110/ff020200] tick\n\
+               ----------------\nIN: _RNvNtNtCs1_8firmware11tick_replay5marks16tick_ended_swing\n\
+               0x00003100:  4770       bx       lr\n\n\
+               Trace 0: 0x7f4bc4000600 [00800408/00003100/00000110/ff020200] \
+               _RNvNtNtCs1_8firmware11tick_replay5marks16tick_ended_swing\n\
+               Trace 0: 0x7f4bc4000100 [00800408/00000400/00000110/ff020200] Reset\n\
+               Trace 0: 0x7f4bc4000500 [00800408/00003000/00000110/ff020200] tick_starts\n\
+               Trace 0: 0x7f4bc4000100 [00800408/00000400/00000110/ff020200] Reset\n\
+               Trace 0: 0x7f4bc4000600 [00800408/00003100/00000110/ff020200] tick_ended_swing\n";
+        let log = ExecLog::read(marked.as_bytes()).unwrap();
+        let swing = &log.worst["swing"];
+        assert_eq!((swing.ticks, swing.instructions), (2, 3));
+        assert_eq!(swing.runs.len(), 1);
+        assert_eq!(log.worst.len(), 1);
         // No marker, nothing counted.
         let unmarked = LOG.replace("replay_starts", "something_else");
         let log = ExecLog::read(unmarked.as_bytes()).unwrap();

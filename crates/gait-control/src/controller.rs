@@ -164,6 +164,9 @@ pub struct Controller<'t> {
     /// stance ankle's lean is estimated instead of read.
     untaken: [u8; ENCODERS],
     rate: [f32; JOINTS],
+    /// The rates' first-order low-pass, α = dt / (RC + dt): worked out
+    /// once (some 50 instructions a tick on the M4).
+    rate_alpha: f32,
     /// A lost hip's or knee's angle from the closed chain.
     chain: chain::ChainEstimate,
     motor_sense: [MotorSense; JOINTS],
@@ -232,6 +235,10 @@ impl<'t> Controller<'t> {
             last_angle: [0.0; ENCODERS],
             untaken: [0; ENCODERS],
             rate: [0.0; JOINTS],
+            rate_alpha: {
+                let rc = 1.0 / (2.0 * core::f32::consts::PI * cfg.rate_filter_hz);
+                cfg.dt_s / (rc + cfg.dt_s)
+            },
             chain: chain::ChainEstimate::default(),
             motor_sense: [idle; JOINTS],
             motors_enabled: false,

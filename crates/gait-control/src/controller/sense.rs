@@ -67,7 +67,7 @@ impl Controller<'_> {
         IN: InputPin,
     {
         let lost = self.supervisor.angle_lost_joints();
-        let alpha = self.rate_alpha();
+        let alpha = self.rate_alpha;
         let (encoders, frames) = self.read_encoders(hw, &lost, alpha);
         let forces = self.read_forces(hw);
         let drive_current = self.read_drive_current(hw);
@@ -108,20 +108,13 @@ impl Controller<'_> {
         }
     }
 
-    /// The joint rates' first-order low-pass: α = dt / (RC + dt).
-    fn rate_alpha(&self) -> f32 {
-        let dt = self.cfg.dt_s;
-        let rc = 1.0 / (2.0 * core::f32::consts::PI * self.cfg.rate_filter_hz);
-        dt / (rc + dt)
-    }
-
     /// Each encoder's frame as the supervisor will check it, and whether
     /// control takes it: only the frames the supervisor takes
     /// ([`crate::supervisor::Supervisor::take_encoder`]) move the
     /// angles and rates control uses; otherwise the last taken one holds.
     /// Nor do those of an encoder the supervisor has found `lost` (a
     /// frozen one's frames are valid). `alpha` is the rates' low-pass
-    /// ([`Controller::rate_alpha`], worked out once a tick).
+    /// (`rate_alpha`).
     fn read_encoders<ENC, ADC, PWM, DIR, EN, IN, OUT>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,

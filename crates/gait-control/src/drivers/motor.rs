@@ -322,7 +322,11 @@ where
         // Soft start: 0 at the first tick after enable, full after the ramp.
         // (A zero-length ramp still gives one zero tick.)
         let ramp_ticks = c.soft_start_ticks.max(1);
-        let ramp = (self.ticks_since_enable as f32 / ramp_ticks as f32).min(1.0);
+        let ramp = if self.ticks_since_enable >= ramp_ticks {
+            1.0
+        } else {
+            (self.ticks_since_enable as f32 / ramp_ticks as f32).min(1.0)
+        };
         self.ticks_since_enable = self.ticks_since_enable.saturating_add(1);
         let derating = self.i2t_a2s > c.i2t_warning_a2s;
         let limit = (self.thermal_limit_nm() * ramp).min(c.torque_limit_nm);
