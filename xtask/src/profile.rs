@@ -285,7 +285,7 @@ pub fn profile(elf: &Path) -> Result {
 }
 
 /// Files listed for each phase's costliest tick.
-const TOP_WORST_FILES: usize = 25;
+const TOP_WORST_FILES: usize = 60;
 
 /// Per phase, its costliest marked tick by source file (and, for the
 /// costliest phase, by line): what the `tick:` lines' worst figures are made
