@@ -125,8 +125,8 @@ usage: cargo xtask <task>
             write a patient's bundle to the motor board's bundle sector
             (probe-rs; the image and the calibration are left as they are)
   profile   where the replayed ticks' instructions go on the target, per
-            source file and the costliest lines (QEMU's execution log;
-            about 3-5 minutes)
+            source file and the costliest lines, then each phase's
+            costliest tick by file (QEMU's execution log; about 3-5 minutes)
   size      flash/RAM use per board
   panics    proves both release images hold no panic: none reachable from the
             vector table's handlers, no panic code left at all (no allow-list)
