@@ -102,7 +102,8 @@ fn replay_starts() {
 /// Mark, in QEMU's execution log, each replayed tick and the phase it
 /// ended in: `cargo xtask profile` attributes what runs between a start
 /// and an end to that phase, and keeps each phase's costliest tick. Each
-/// returns its own number, or the compiler merges them into one function.
+/// hands `black_box` its own constant: identical bodies would be merged
+/// into one function, one symbol for all.
 mod marks {
     #[inline(never)]
     pub fn tick_starts() {
@@ -147,12 +148,12 @@ pub fn replay(
         |tick| {
             marks::tick_starts();
             let (instr, report) = time(tick);
-            match phase_index(&report.phase) {
-                0 => marks::tick_ended_standing(),
-                1 => marks::tick_ended_waiting_ready(),
-                2 => marks::tick_ended_swing(),
-                3 => marks::tick_ended_transfer(),
-                _ => marks::tick_ended_safe_hold(),
+            match report.phase {
+                Phase::Standing => marks::tick_ended_standing(),
+                Phase::WaitingReady { .. } => marks::tick_ended_waiting_ready(),
+                Phase::Swing { .. } => marks::tick_ended_swing(),
+                Phase::Transfer { .. } => marks::tick_ended_transfer(),
+                Phase::SafeHold { .. } => marks::tick_ended_safe_hold(),
             }
             (instr, report)
         },

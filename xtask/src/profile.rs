@@ -105,7 +105,7 @@ impl ExecLog {
             .iter()
             .map(|(key, n)| n * self.blocks.get(key).map_or(0, |a| a.len() as u64))
             .sum();
-        let worst = self.worst.entry(phase.to_string()).or_default();
+        let worst = self.worst.entry(phase_name(phase)).or_default();
         worst.ticks += 1;
         if instructions > worst.instructions {
             worst.instructions = instructions;
@@ -137,6 +137,11 @@ fn marked_phase(trace: &str) -> Option<&str> {
         .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
         .unwrap_or(after.len());
     after.get(..end).filter(|p| !p.is_empty())
+}
+
+/// A marker's phase as the `tick:` lines name it ("safe_hold" → "safe-hold").
+fn phase_name(marked: &str) -> String {
+    marked.replace('_', "-")
 }
 
 /// A trace line's block: "0: 0x<host> [flags/<pc>/flags/flags] symbol".
@@ -392,6 +397,8 @@ Trace 0: 0x7f4bc4000100 [00800408/00000400/00000110/ff020200] Reset
         assert_eq!((swing.ticks, swing.instructions), (2, 3));
         assert_eq!(swing.runs.len(), 1);
         assert_eq!(log.worst.len(), 1);
+        assert_eq!(marked_phase("x 20tick_ended_safe_hold"), Some("safe_hold"));
+        assert_eq!(phase_name("safe_hold"), "safe-hold");
         // No marker, nothing counted.
         let unmarked = LOG.replace("replay_starts", "something_else");
         let log = ExecLog::read(unmarked.as_bytes()).unwrap();

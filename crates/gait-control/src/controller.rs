@@ -164,8 +164,8 @@ pub struct Controller<'t> {
     /// stance ankle's lean is estimated instead of read.
     untaken: [u8; ENCODERS],
     rate: [f32; JOINTS],
-    /// The rates' first-order low-pass, α = dt / (RC + dt): worked out
-    /// once (some 50 instructions a tick on the M4).
+    /// The rates' first-order low-pass, α = dt / (RC + dt): it depends on
+    /// the configuration only, so it is worked out once.
     rate_alpha: f32,
     /// A lost hip's or knee's angle from the closed chain.
     chain: chain::ChainEstimate,

@@ -222,9 +222,9 @@ pub fn swap_legs<T: Real>(phi: &Phi<T>) -> Phi<T> {
 /// Wraps an angle to (−π, π].
 ///
 /// The remainder by 2π is taken by one subtraction for |x| < 4π (every
-/// joint angle): exact there (Sterbenz), so bit for bit the `%` it
-/// replaces, signed zero included. `%` on `f32` is libm's `fmodf`, a loop
-/// of some hundred instructions on the M4, four times a tick in a swing.
+/// joint angle): exact there (Sterbenz), so bit for bit what `%` gives,
+/// signed zero included; `%` itself only beyond. On `f32`, `%` is libm's
+/// `fmodf`, a bit-by-bit loop in software on the M4.
 pub fn wrap_pi<T: Real>(x: T) -> T {
     let two_pi = T::two_pi();
     let ax = x.abs();

@@ -9,8 +9,9 @@ use super::*;
 
 /// Encoder frame of one tick as the supervisor classified it: whether
 /// control may use it, and what the check goes on from. Twelve bytes: the
-/// tick keeps six between its stages, and a larger value is copied there
-/// with `memcpy` (some 1,000 instructions a tick on the M4).
+/// tick keeps six between its stages, and a form three times the size was
+/// copied there with `memcpy`, some 900 instructions a tick in the QEMU
+/// replay.
 #[derive(Clone, Copy, Debug)]
 pub struct EncoderFrame {
     /// Accepted: the angle (offset taken out); invalid: the reading.
@@ -128,11 +129,11 @@ impl EncoderFrame {
 }
 
 impl Supervisor {
-    /// Whether the next check will take `sense` as encoder `channel`'s
-    /// reading (joints in joint order, then the ankles): the same rules,
-    /// nothing changed. The controller uses only the frames this takes, so
-    /// a frame the supervisor drops (a jump) never reaches control, nor do
-    /// an ankle's found stuck (0x0207) until its counts move.
+    /// Whether [`Supervisor::take_encoder`] would find `sense` usable as
+    /// encoder `channel`'s frame of this tick (joints in joint order, then
+    /// the ankles), asked before it: the same rules, nothing changed. A
+    /// frame the supervisor drops (a jump) is not, nor are an ankle's found
+    /// stuck (0x0207) until its counts move.
     pub fn accepts_encoder(&self, channel: usize, sense: &EncoderSense) -> bool {
         let cfg = &self.cfg;
         let (track, max_jump) = match channel.checked_sub(JOINTS) {

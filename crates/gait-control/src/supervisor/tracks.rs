@@ -95,7 +95,8 @@ pub(super) struct EncoderTrack {
     pub(super) offset_rad: f32,
 }
 
-/// What this tick's encoder frame turned out to be.
+/// How a frame would be taken, before the track moves on
+/// ([`EncoderTrack::classify`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) enum Class {
     /// A bad frame (bus, parity, error flag, or an impossible value: then

@@ -284,16 +284,29 @@ fn frames_taken_before_the_check_decide_as_the_check_alone() {
     let mut alone = supervisor();
     let mut taking = supervisor();
     let base = STAND_JOINTS[1];
+    let mut stuck_frames = 0;
     for tick in 0..900u32 {
         let mut input = healthy_input(tick);
         let truth = base + 0.0005 * tick as f32;
         let shift = if (300..600).contains(&tick) { 2000 } else { 0 };
         input.joints[1] = offset_frame(truth, shift, Direction::Positive);
         input.joint_reference_rad[1] = offset_frame(truth, 0, Direction::Positive).angle_rad;
+        // The right ankle rolls onto its stop with the foot in the air and
+        // stays there (found stuck, 0x0207: classified, not usable), then
+        // moves off it again.
+        let stop = SupervisorConfig::paper().heel_off_rad;
         match tick {
             50..=52 => input.joints[0].status = EncoderStatus::Parity,
             120 => input.joints[2].raw_counts = 0xFFFF,
             200..=260 => input.ankles[1].status = EncoderStatus::BusError,
+            400..=599 => {
+                let roll = STAND_ANKLES[1] + 0.02 * (tick - 400) as f32;
+                input.ankles[1] = encoder(roll.min(stop));
+                input.airborne_leg = Some(gait_control::supervisor::Side::Right);
+            }
+            600..=650 => {
+                input.ankles[1] = encoder(stop - 2.0 * RAD_PER_COUNT * (tick - 599) as f32);
+            }
             700 => input.joints[3].angle_rad = f32::NAN,
             _ => {}
         }
@@ -312,12 +325,17 @@ fn frames_taken_before_the_check_decide_as_the_check_alone() {
         for (i, f) in frames.iter().enumerate() {
             assert_eq!(f.usable(), accepted[i], "tick {tick} channel {i}");
         }
+        if input.ankles[1].status == EncoderStatus::Ok && !frames[JOINTS + 1].usable() {
+            stuck_frames += 1;
+        }
         let a = alone.check(&input);
         let b = taking.check_frames(&input, &frames);
         assert_eq!(a, b, "tick {tick}");
     }
     assert!(alone.latched().contains(FaultCode::EncoderJump));
-    assert!(!alone.latched().is_empty());
+    assert!(alone.latched().contains(FaultCode::AnkleEncoder));
+    // Found stuck until its counts moved: ~100 frames on the stop.
+    assert!((50..200).contains(&stuck_frames), "{stuck_frames}");
     // Bit for bit: the invalid reading's value is NaN.
     let record =
         |r: &gait_control::supervisor::FaultRecord| (r.tick, r.code, r.channel, r.value.to_bits());
