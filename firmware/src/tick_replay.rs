@@ -105,30 +105,22 @@ fn replay_starts() {
 /// hands `black_box` its own constant: identical bodies would be merged
 /// into one function, one symbol for all.
 mod marks {
-    #[inline(never)]
-    pub fn tick_starts() {
-        core::hint::black_box(1u8);
+    macro_rules! marks {
+        ($($name:ident = $n:literal),*) => {$(
+            #[inline(never)]
+            pub fn $name() {
+                core::hint::black_box($n);
+            }
+        )*};
     }
-    #[inline(never)]
-    pub fn tick_ended_standing() {
-        core::hint::black_box(2u8);
-    }
-    #[inline(never)]
-    pub fn tick_ended_waiting_ready() {
-        core::hint::black_box(3u8);
-    }
-    #[inline(never)]
-    pub fn tick_ended_swing() {
-        core::hint::black_box(4u8);
-    }
-    #[inline(never)]
-    pub fn tick_ended_transfer() {
-        core::hint::black_box(5u8);
-    }
-    #[inline(never)]
-    pub fn tick_ended_safe_hold() {
-        core::hint::black_box(6u8);
-    }
+    marks!(
+        tick_starts = 1u8,
+        tick_ended_standing = 2u8,
+        tick_ended_waiting_ready = 3u8,
+        tick_ended_swing = 4u8,
+        tick_ended_transfer = 5u8,
+        tick_ended_safe_hold = 6u8
+    );
 }
 
 /// Replays [`TICK_RECORDS`] on `device`; `time` runs one tick and says how
