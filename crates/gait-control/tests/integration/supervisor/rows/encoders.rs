@@ -189,6 +189,24 @@ fn offset_frame(angle_rad: f32, offset: i32, direction: Direction) -> EncoderSen
     }
 }
 
+/// Tick `tick` of the knee bending on at 0.5 rad/s from standing, its
+/// encoder (mounted with `direction`) reading `shift` counts off: the
+/// healthy input with that frame and the true angle as the reference,
+/// and the frame and the true angle.
+fn bending_knee(
+    tick: u32,
+    shift: i32,
+    direction: Direction,
+) -> (SupervisorInput, EncoderSense, f32) {
+    let mut input = healthy_input(tick);
+    let truth = STAND_JOINTS[1] + 0.0005 * tick as f32;
+    let frame = offset_frame(truth, shift, direction);
+    let truth_rad = offset_frame(truth, 0, direction).angle_rad;
+    input.joints[1] = frame;
+    input.joint_reference_rad[1] = truth_rad;
+    (input, frame, truth_rad)
+}
+
 #[test]
 fn a_persistent_jump_is_taken_out_of_the_frames_after_it() {
     // The knee reads 2,000 counts (44°) off from the 20th tick on while it
@@ -200,15 +218,10 @@ fn a_persistent_jump_is_taken_out_of_the_frames_after_it() {
     for direction in [Direction::Positive, Direction::Negative] {
         for offset in [2000, -2000, 9000] {
             let mut sup = supervisor();
-            let base = STAND_JOINTS[1];
             let mut worst = 0.0f32;
             for tick in 0..600u32 {
-                let mut input = healthy_input(tick);
-                let truth = base + 0.0005 * tick as f32;
                 let shift = if tick >= 20 { offset } else { 0 };
-                let frame = offset_frame(truth, shift, direction);
-                input.joints[1] = frame;
-                input.joint_reference_rad[1] = offset_frame(truth, 0, direction).angle_rad;
+                let (input, frame, truth) = bending_knee(tick, shift, direction);
                 let taken = sup.accepts_encoder(1, &frame);
                 let v = sup.check(&input);
                 assert_eq!(
@@ -218,7 +231,6 @@ fn a_persistent_jump_is_taken_out_of_the_frames_after_it() {
                 );
                 if taken {
                     let seen = sup.encoder_angle(1, frame.angle_rad);
-                    let truth = offset_frame(truth, 0, direction).angle_rad;
                     worst = worst.max((seen - truth).abs());
                 }
                 let others = v.latched.iter().filter(|&c| c != FaultCode::EncoderJump);
@@ -283,14 +295,10 @@ fn frames_taken_before_the_check_decide_as_the_check_alone() {
     // `accepts_encoder` said so before it.
     let mut alone = supervisor();
     let mut taking = supervisor();
-    let base = STAND_JOINTS[1];
     let mut stuck_frames = 0;
     for tick in 0..900u32 {
-        let mut input = healthy_input(tick);
-        let truth = base + 0.0005 * tick as f32;
         let shift = if (300..600).contains(&tick) { 2000 } else { 0 };
-        input.joints[1] = offset_frame(truth, shift, Direction::Positive);
-        input.joint_reference_rad[1] = offset_frame(truth, 0, Direction::Positive).angle_rad;
+        let (mut input, _, _) = bending_knee(tick, shift, Direction::Positive);
         // The right ankle rolls onto its stop with the foot in the air and
         // stays there (found stuck, 0x0207: classified, not usable), then
         // moves off it again.
