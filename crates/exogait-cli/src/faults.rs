@@ -5,19 +5,21 @@
 //! detections, false trips; then healthy runs of each gait with the same
 //! noise and no fault, and theirs. Exit 0 only when both meet their goal
 //! (none of them; for the fault runs, no unnamed fall or stop), 1
-//! otherwise, 2 for unusable options.
+//! otherwise, 2 for unusable options. With `--bundle`, all of it on the
+//! device fitted to a patient, over every gait of the patient's family.
 
 use std::io::IsTerminal;
+use std::path::PathBuf;
 
 use crate::simulate::JOINT_NAMES;
 use clap::Args;
-use gait_control::operator::Gait;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use sim::campaign::{
-    HEALTHY_STEPS, HealthyTally, NamedCase, Tally, healthy_plan, healthy_tally, plan, play_all,
-    play_all_healthy, tally,
+    CampaignGaits, HEALTHY_STEPS, HealthyTally, NamedCase, Tally, healthy_plan_over, healthy_tally,
+    plan_over, play_all_healthy_on, play_all_on, tally,
 };
+use sim::scenario::strong_pilot;
 
 /// Options of `exogait faults`.
 #[derive(Debug, Args)]
@@ -33,6 +35,12 @@ pub struct FaultsArgs {
     /// trip.
     #[arg(long, default_value_t = 100)]
     pub healthy: usize,
+    /// A patient's bundle (`exogait tables`): the campaign and the healthy
+    /// runs on the device fitted to its patient, over every gait of the
+    /// bundle (each drawn as often as the others) instead of the device's
+    /// own three.
+    #[arg(long, value_name = "FILE.bundle")]
+    pub bundle: Option<PathBuf>,
     /// Print the tally as JSON, with every run that fell, crossed a stop,
     /// missed a detection or tripped falsely.
     #[arg(long)]
@@ -94,6 +102,8 @@ struct BadRunJson {
 #[derive(Debug, Serialize)]
 struct CampaignJson {
     seed: u64,
+    /// The bundle campaigned (`None`: the device's own gaits).
+    bundle: Option<String>,
     all: TallyJson,
     by_kind: Vec<(String, TallyJson)>,
     bad_runs: Vec<BadRunJson>,
@@ -126,7 +136,7 @@ impl From<&HealthyTally> for HealthyTallyJson {
 
 #[derive(Debug, Serialize)]
 struct BadHealthyRunJson {
-    gait: &'static str,
+    gait: String,
     noise_seed: u64,
     landings: usize,
     fell: Option<String>,
@@ -138,17 +148,8 @@ struct BadHealthyRunJson {
 #[derive(Debug, Serialize)]
 struct HealthyJson {
     all: HealthyTallyJson,
-    by_gait: Vec<(&'static str, HealthyTallyJson)>,
+    by_gait: Vec<(String, HealthyTallyJson)>,
     bad_runs: Vec<BadHealthyRunJson>,
-}
-
-/// The gait's name as `--gait` takes it.
-fn gait_name(g: Gait) -> &'static str {
-    match g {
-        Gait::Walk => "walk",
-        Gait::StairUp => "stair-up",
-        Gait::StairDown => "stair-down",
-    }
 }
 
 /// A progress bar over `n` runs on a terminal, hidden otherwise.
@@ -173,15 +174,48 @@ pub fn run(args: &FaultsArgs) -> u8 {
         );
         return 2;
     }
-    let device = match exogait_device::DeviceConfig::exogait() {
+    let bundle_file = match &args.bundle {
+        Some(path) => match crate::bundle_file::BundleFile::load(path) {
+            Ok(f) => Some(f),
+            Err(e) => {
+                eprintln!("exogait faults: {e}");
+                return 2;
+            }
+        },
+        None => None,
+    };
+    let device = match &bundle_file {
+        Some(f) => f.fitted_device(),
+        None => exogait_device::DeviceConfig::exogait().map_err(|e| format!("{e:?}")),
+    };
+    let device = match device {
         Ok(d) => d,
         Err(e) => {
-            eprintln!("exogait faults: device configuration: {e:?}");
+            eprintln!("exogait faults: device configuration: {e}");
             return 2;
         }
     };
-    let runs = plan(args.seed, args.runs);
-    let healthy_runs = healthy_plan(args.seed, args.healthy);
+    let bundle = match bundle_file
+        .as_ref()
+        .map(crate::bundle_file::BundleFile::bundle)
+    {
+        Some(Err(e)) => {
+            eprintln!("exogait faults: {e}");
+            return 2;
+        }
+        Some(Ok(b)) => Some(b),
+        None => None,
+    };
+    let gaits = match &bundle {
+        Some(b) => CampaignGaits::of_bundle(b),
+        None => CampaignGaits::built_in(),
+    };
+    if gaits.is_empty() {
+        eprintln!("exogait faults: the bundle holds no gait");
+        return 2;
+    }
+    let runs = plan_over(args.seed, args.runs, &gaits);
+    let healthy_runs = healthy_plan_over(args.seed, args.healthy, &gaits);
     let started = std::time::Instant::now();
     let total = runs.len() + healthy_runs.len();
     let bar = progress(total);
@@ -198,8 +232,8 @@ pub fn run(args: &FaultsArgs) -> u8 {
             );
         }
     };
-    let results = play_all(&runs, &device, &tick);
-    let healthy = play_all_healthy(&healthy_runs, &device, &tick);
+    let results = play_all_on(&runs, &device, strong_pilot(), &gaits, &tick);
+    let healthy = play_all_healthy_on(&healthy_runs, &device, &gaits, &tick);
     bar.finish_and_clear();
     eprintln!(
         "exogait faults: {total} runs in {:.1} s",
@@ -218,6 +252,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
     if args.json {
         let answer = CampaignJson {
             seed: args.seed,
+            bundle: args.bundle.as_ref().map(|p| p.display().to_string()),
             all: TallyJson::from(&all),
             by_kind: by_kind
                 .iter()
@@ -233,7 +268,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
                         || r.error.is_some()
                 })
                 .map(|r| BadRunJson {
-                    gait: gait_name(r.run.gait).to_string(),
+                    gait: gaits.name(r.run.slot).to_string(),
                     fault: r.run.fault.to_string(),
                     noise_seed: r.run.noise_seed,
                     fell: r.outcome.fell.clone(),
@@ -263,13 +298,13 @@ pub fn run(args: &FaultsArgs) -> u8 {
                 all: HealthyTallyJson::from(&all_healthy),
                 by_gait: by_gait
                     .iter()
-                    .map(|(g, t)| (gait_name(*g), HealthyTallyJson::from(t)))
+                    .map(|(g, t)| (gaits.name(*g).to_string(), HealthyTallyJson::from(t)))
                     .collect(),
                 bad_runs: healthy
                     .iter()
                     .filter(|r| r.bad())
                     .map(|r| BadHealthyRunJson {
-                        gait: gait_name(r.run.gait),
+                        gait: gaits.name(r.run.slot).to_string(),
                         noise_seed: r.run.noise_seed,
                         landings: r.outcome.landings,
                         fell: r.outcome.fell.clone(),
@@ -293,6 +328,18 @@ pub fn run(args: &FaultsArgs) -> u8 {
             }
         }
     } else {
+        if let Some(path) = &args.bundle {
+            println!(
+                "exogait faults: {} on its fitted device: {} gaits ({})",
+                path.display(),
+                gaits.len(),
+                gaits
+                    .iter()
+                    .map(|g| g.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
         if !runs.is_empty() {
             println!(
                 "exogait faults: {} runs, seed {}, one random fault each, sensor noise ±3/±10 counts",
@@ -345,7 +392,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
                 );
             };
             for (g, t) in &by_gait {
-                row(gait_name(*g), t);
+                row(gaits.name(*g), t);
             }
             row("all", &all_healthy);
             for r in healthy.iter().filter(|r| r.bad()) {
@@ -357,7 +404,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
                     .collect();
                 println!(
                     "  {} noise seed {}: {} landings, faults [{}]{}",
-                    gait_name(r.run.gait),
+                    gaits.name(r.run.slot),
                     r.run.noise_seed,
                     r.outcome.landings,
                     codes.join(", "),

@@ -34,6 +34,15 @@ pub const STAIR_CLEARANCE_M: f64 = 0.05;
 pub const WALK_CLEARANCE_M: f64 = 0.03;
 /// Steps a gait is played in the closed loop before it is cleared.
 pub const VERIFY_STEPS: usize = 4;
+
+/// How far inside Table I's stops every hip and knee must stay while a
+/// gait is verified in the closed loop, rad (0.5°). The plan may reach a
+/// straight knee (the supervisor's envelope reads a little past it), but
+/// the pilot's joints must not be driven past a stop: noise-free, the
+/// verifying run keeps this margin for the scatter of noisy runs (the
+/// campaign's healthy runs, `exogait faults --bundle`, land within 0.2° of
+/// it).
+pub const STOP_MARGIN_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
 /// Evaluations of each gait's clinical search.
 pub const DEFAULT_EVALS: usize = 6_000;
 
@@ -216,7 +225,7 @@ fn attempt(
         ));
     }
     let max_s = 4.0 + VERIFY_STEPS as f64 * (plan.step_time_s + 3.0);
-    let (run, _rig) = play_for(
+    let (run, rig) = play_for(
         device,
         table,
         strong_pilot(),
@@ -242,6 +251,20 @@ fn attempt(
                 .as_deref()
                 .map(|w| format!(" ({w})"))
                 .unwrap_or_default()
+        ));
+    }
+    let o = sim::outcome::outcome(&rig, None);
+    if o.worst_limit_margin_rad < STOP_MARGIN_RAD {
+        let side = ["left hip", "left knee", "right hip", "right knee"];
+        let stop = match o.limit_margins.get(o.worst_limit_joint) {
+            Some((_, true)) => "flexion",
+            _ => "extension",
+        };
+        return Err(format!(
+            "closed loop: the {} comes {:.2}° from its {stop} stop (Table I; {:.1}° asked); planned {joints}",
+            side.get(o.worst_limit_joint).copied().unwrap_or("?"),
+            o.worst_limit_margin_rad.to_degrees(),
+            STOP_MARGIN_RAD.to_degrees(),
         ));
     }
     // The table's clearance is the one the bundle records and the gate

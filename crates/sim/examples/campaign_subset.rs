@@ -44,6 +44,7 @@ fn listed(path: &str) -> Result<Vec<sim::campaign::CampaignRun>, String> {
             .map_err(|_| bad("noise seed is a whole number"))?;
         runs.push(sim::campaign::CampaignRun {
             gait,
+            slot: sim::campaign::built_in_slot(gait),
             fault,
             noise_seed,
         });

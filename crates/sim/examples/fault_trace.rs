@@ -27,6 +27,7 @@ fn main() {
     };
     let run = sim::campaign::CampaignRun {
         gait,
+        slot: sim::campaign::built_in_slot(gait),
         fault,
         noise_seed: seed,
     };

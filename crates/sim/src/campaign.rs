@@ -6,11 +6,15 @@
 //! seed gives the same runs. `exogait faults` and the campaign tests run
 //! them; docs/safety.md has the figures.
 //!
-//! In modules: the seeded plans (`plan`), a fault run's result and what
+//! A campaign plays the device's own gaits or every gait of a patient's
+//! bundle (`gaits`).
+//!
+//! In modules: the gaits played (`gaits`), the seeded plans (`plan`), a fault run's result and what
 //! it must detect (`run`), playing and judging it (`play`), healthy runs
 //! (`healthy`), the counts (`tally`), the falls named with their physical
 //! reason (`named`), and spreading runs over the cores (`parallel`).
 
+mod gaits;
 mod healthy;
 mod named;
 mod parallel;
@@ -19,9 +23,13 @@ mod play;
 mod run;
 mod tally;
 
-pub use healthy::{HEALTHY_STEPS, HealthyResult, HealthyRun, play_all_healthy, play_healthy};
+pub use gaits::{CampaignGait, CampaignGaits, built_in_slot};
+pub use healthy::{
+    HEALTHY_STEPS, HealthyResult, HealthyRun, play_all_healthy, play_all_healthy_on, play_healthy,
+    play_healthy_on,
+};
 pub use named::{NamedCase, explains_stop, named_case};
-pub use plan::{healthy_plan, plan};
-pub use play::{play, play_all, play_all_with_pilot, play_with_pilot};
+pub use plan::{healthy_plan, healthy_plan_over, plan, plan_over};
+pub use play::{play, play_all, play_all_on, play_all_with_pilot, play_on, play_with_pilot};
 pub use run::{CampaignRun, RunResult, must_be_detected};
 pub use tally::{HealthyTally, Tally, healthy_tally, tally};

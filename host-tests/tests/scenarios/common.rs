@@ -23,6 +23,7 @@ pub fn instant_pilot_run(gait: Gait, fault: &str, noise_seed: u64) -> RunResult 
 fn run_with_pilot(gait: Gait, fault: &str, noise_seed: u64, pilot: PilotConfig) -> RunResult {
     let run = CampaignRun {
         gait,
+        slot: sim::campaign::built_in_slot(gait),
         fault: fault.parse().unwrap(),
         noise_seed,
     };

@@ -178,6 +178,31 @@ fn a_family_is_designed_listed_played_and_guarded() {
         4
     );
 
+    // The fault campaign and the healthy runs play the patient's own gaits
+    // on the fitted device, each named as the bundle names it.
+    let f = exogait(&[
+        "faults",
+        "--bundle",
+        s(&b),
+        "--runs",
+        "6",
+        "--healthy",
+        "1",
+        "--json",
+    ]);
+    assert!(matches!(f.status, 0 | 1), "{}", f.stderr);
+    let v: Value = serde_json::from_str(&f.stdout).unwrap_or_else(|_| panic!("{}", f.stderr));
+    assert_eq!(v["bundle"], s(&b));
+    assert_eq!(v["all"]["runs"], 6);
+    let healthy: Vec<&str> = v["healthy"]["by_gait"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g[0].as_str().unwrap())
+        .collect();
+    assert_eq!(healthy, names);
+    assert_eq!(v["healthy"]["all"]["runs"], names.len());
+
     // A name the bundle does not hold, and every damaged bundle: exit 2.
     let r = exogait(&["simulate", "--bundle", s(&b), "--gait", "walk"]);
     assert_eq!(r.status, 2);
@@ -198,6 +223,7 @@ fn a_family_is_designed_listed_played_and_guarded() {
         for args in [
             vec!["bundle", s(&f)],
             vec!["simulate", "--bundle", s(&f), "--gait", "walk-0.35"],
+            vec!["faults", "--bundle", s(&f), "--runs", "1", "--healthy", "0"],
             vec!["compare", "--bundle", s(&f), "--gait", "walk-0.35"],
         ] {
             let r = exogait(&args);

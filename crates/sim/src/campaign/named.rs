@@ -177,6 +177,7 @@ mod tests {
     fn run(gait: Gait, kind: Kind, target: Option<Target>) -> CampaignRun {
         CampaignRun {
             gait,
+            slot: crate::campaign::built_in_slot(gait),
             fault: Injection {
                 kind,
                 target,

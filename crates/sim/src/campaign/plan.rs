@@ -5,7 +5,7 @@ use gait_control::operator::Gait;
 
 use crate::inject::{Injection, Kind, Target};
 
-use super::{CampaignRun, HealthyRun};
+use super::{CampaignGaits, CampaignRun, HealthyRun};
 
 /// A seeded xorshift generator (as [`crate::noise`]: a fixed sequence per
 /// seed across library versions).
@@ -35,15 +35,23 @@ impl Draw {
     }
 }
 
-/// The `runs` runs of campaign `seed`.
+/// The `runs` runs of campaign `seed` over the device's own gaits
+/// ([`CampaignGaits::built_in`]).
 pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
+    plan_over(seed, runs, &CampaignGaits::built_in())
+}
+
+/// The `runs` runs of campaign `seed` over `gaits`, each gait drawn as
+/// likely as the others (over the built-in three, the runs of [`plan`]).
+pub fn plan_over(seed: u64, runs: usize, gaits: &CampaignGaits<'_>) -> Vec<CampaignRun> {
     let mut d = Draw(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
     for _ in 0..8 {
         d.next();
     }
     (0..runs)
         .map(|_| {
-            let gait = [Gait::Walk, Gait::StairUp, Gait::StairDown][d.below(3)];
+            let slot = d.below(gaits.len());
+            let gait = gaits.get(slot).map_or(Gait::Walk, |g| g.gait);
             let joint = Target::Joint(d.below(4));
             let encoder = if d.below(3) == 0 {
                 Target::Ankle(d.below(2))
@@ -88,6 +96,7 @@ pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
             let at_s = (d.range(0.3, 5.0) * 1000.0).round() / 1000.0;
             CampaignRun {
                 gait,
+                slot,
                 fault: Injection { kind, target, at_s },
                 noise_seed: d.next() % 1_000_000,
             }
@@ -95,18 +104,27 @@ pub fn plan(seed: u64, runs: usize) -> Vec<CampaignRun> {
         .collect()
 }
 
-/// `per_gait` healthy runs of each gait, the noise seeds drawn from
-/// `seed` (the same seed gives the same runs; none is a fault run's).
+/// `per_gait` healthy runs of each of the device's own gaits, the noise
+/// seeds drawn from `seed` (the same seed gives the same runs; none is a
+/// fault run's).
 pub fn healthy_plan(seed: u64, per_gait: usize) -> Vec<HealthyRun> {
+    healthy_plan_over(seed, per_gait, &CampaignGaits::built_in())
+}
+
+/// `per_gait` healthy runs of each of `gaits`, in their order (over the
+/// built-in three, the runs of [`healthy_plan`]).
+pub fn healthy_plan_over(seed: u64, per_gait: usize, gaits: &CampaignGaits<'_>) -> Vec<HealthyRun> {
     let mut d = Draw(seed.wrapping_mul(0xD1B5_4A32_D192_ED03) | 1);
     for _ in 0..8 {
         d.next();
     }
-    [Gait::Walk, Gait::StairUp, Gait::StairDown]
-        .into_iter()
-        .flat_map(|gait| (0..per_gait).map(move |_| gait))
-        .map(|gait| HealthyRun {
+    gaits
+        .iter()
+        .enumerate()
+        .flat_map(|(slot, g)| (0..per_gait).map(move |_| (slot, g.gait)))
+        .map(|(slot, gait)| HealthyRun {
             gait,
+            slot,
             noise_seed: d.next() % 1_000_000,
         })
         .collect()
@@ -140,6 +158,46 @@ mod tests {
         ] {
             assert!(a.iter().any(|r| r.fault.kind.name() == name), "{name}");
         }
+    }
+
+    #[test]
+    fn a_campaign_over_a_bundle_draws_every_gait_by_its_slot() {
+        let built_in = CampaignGaits::built_in();
+        // Over the device's own gaits, the runs and slots of `plan`.
+        let own = plan_over(5, 300, &built_in);
+        assert_eq!(own, plan(5, 300));
+        for r in &own {
+            assert_eq!(built_in.get(r.slot).map(|g| g.gait), Some(r.gait));
+        }
+        // A family of five gaits (two walks, a descent twice): each slot
+        // drawn, and each run's movement the one of its slot.
+        let table = |g: Gait| built_in.get(super::super::built_in_slot(g)).cloned();
+        let family: Vec<_> = [
+            Gait::Walk,
+            Gait::Walk,
+            Gait::StairUp,
+            Gait::StairDown,
+            Gait::StairDown,
+        ]
+        .into_iter()
+        .filter_map(table)
+        .collect();
+        let five = CampaignGaits::of(family);
+        let runs = plan_over(5, 300, &five);
+        for slot in 0..5 {
+            let n = runs.iter().filter(|r| r.slot == slot).count();
+            assert!((30..=90).contains(&n), "slot {slot}: {n} of 300 runs");
+        }
+        for r in &runs {
+            assert_eq!(five.get(r.slot).map(|g| g.gait), Some(r.gait));
+        }
+        let healthy = healthy_plan_over(5, 4, &five);
+        assert_eq!(healthy.len(), 20);
+        for (k, r) in healthy.iter().enumerate() {
+            assert_eq!(r.slot, k / 4);
+            assert_eq!(five.get(r.slot).map(|g| g.gait), Some(r.gait));
+        }
+        assert_eq!(healthy_plan_over(5, 4, &built_in), healthy_plan(5, 4));
     }
 
     #[test]

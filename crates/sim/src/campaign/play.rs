@@ -7,10 +7,10 @@ use gait_control::sequencer::Phase;
 
 use crate::outcome::{Outcome, outcome};
 use crate::pilot::PilotConfig;
-use crate::scenario::{flash_tables, run_tables_with, strong_pilot};
+use crate::scenario::{run_tables_with, strong_pilot};
 
 use super::parallel::on_every_core;
-use super::{CampaignRun, RunResult};
+use super::{CampaignGaits, CampaignRun, RunResult};
 
 /// Plays one run: two steps asked, the run ends 4 s after the fault.
 pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
@@ -21,12 +21,35 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
 /// [`strong_pilot`]): how the figures depend on what only the simulation
 /// has, e.g. the pilot's reaction to a hold (`docs/safety.md`).
 pub fn play_with_pilot(run: &CampaignRun, device: &DeviceConfig, pilot: PilotConfig) -> RunResult {
+    play_on(run, device, pilot, &CampaignGaits::built_in())
+}
+
+/// [`play_with_pilot`] of a run over `gaits`.
+pub fn play_on(
+    run: &CampaignRun,
+    device: &DeviceConfig,
+    pilot: PilotConfig,
+    gaits: &CampaignGaits<'_>,
+) -> RunResult {
     let fault = run.fault;
     let seed = run.noise_seed;
+    let Some(g) = gaits.get(run.slot) else {
+        return no_table(run.slot, |outcome, error| RunResult {
+            run: *run,
+            outcome,
+            false_trip: false,
+            detected: false,
+            error,
+            struck_in: None,
+            stance_after_strike: [false; 2],
+            stance_before_stop: [false; 2],
+            carrying_at_strike: [false; 2],
+        });
+    };
     let played = run_tables_with(
         device,
-        flash_tables(),
-        run.gait,
+        g.tables,
+        g.gait,
         pilot,
         fault.at_s + 4.0,
         2,
@@ -115,6 +138,15 @@ pub(super) fn judged(
     }
 }
 
+/// The result `make` builds for a run whose slot holds no gait: no
+/// outcome, and that as its error.
+pub(super) fn no_table<R>(slot: usize, make: impl FnOnce(Outcome, Option<String>) -> R) -> R {
+    make(
+        no_outcome(),
+        Some(format!("the campaign has no gait in slot {slot}")),
+    )
+}
+
 /// The outcome of a run that could not start.
 pub(super) fn no_outcome() -> Outcome {
     Outcome {
@@ -150,7 +182,18 @@ pub fn play_all_with_pilot(
     pilot: PilotConfig,
     done: &(dyn Fn() + Sync),
 ) -> Vec<RunResult> {
-    on_every_core(runs, |r| play_with_pilot(r, device, pilot), done)
+    play_all_on(runs, device, pilot, &CampaignGaits::built_in(), done)
+}
+
+/// [`play_on`] over `runs` on the machine's cores.
+pub fn play_all_on(
+    runs: &[CampaignRun],
+    device: &DeviceConfig,
+    pilot: PilotConfig,
+    gaits: &CampaignGaits<'_>,
+    done: &(dyn Fn() + Sync),
+) -> Vec<RunResult> {
+    on_every_core(runs, |r| play_on(r, device, pilot, gaits), done)
 }
 
 #[cfg(test)]

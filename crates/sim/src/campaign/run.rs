@@ -13,8 +13,12 @@ use super::{NamedCase, explains_stop, named_case};
 /// One planned run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CampaignRun {
-    /// The gait.
+    /// The gait's movement.
     pub gait: Gait,
+    /// The gait itself: its slot in the campaign's gaits
+    /// ([`super::CampaignGaits`]; the built-in ones: 0 walking, 1 stair
+    /// ascent, 2 stair descent).
+    pub slot: usize,
     /// The fault.
     pub fault: Injection,
     /// Seed of the sensor noise (±3 encoder, ±10 ADC counts).
@@ -186,6 +190,7 @@ mod tests {
         RunResult {
             run: CampaignRun {
                 gait: Gait::StairDown,
+                slot: 2,
                 fault: "estop@2".parse().unwrap_or_else(|e| panic!("{e}")),
                 noise_seed: 1,
             },

@@ -1,8 +1,6 @@
 //! Counts over a campaign's results, per fault kind or per gait, and in
 //! all.
 
-use gait_control::operator::Gait;
-
 use super::{HealthyResult, RunResult};
 
 /// Counts over a campaign, per kind and in all.
@@ -100,8 +98,8 @@ impl HealthyTally {
     }
 }
 
-/// The tally of healthy `results` per gait, in the order gaits first
-/// appear, and over all.
-pub fn healthy_tally(results: &[HealthyResult]) -> (Vec<(Gait, HealthyTally)>, HealthyTally) {
-    grouped(results, |r| r.run.gait, HealthyTally::add)
+/// The tally of healthy `results` per gait (by slot in the campaign's
+/// gaits), in the order gaits first appear, and over all.
+pub fn healthy_tally(results: &[HealthyResult]) -> (Vec<(usize, HealthyTally)>, HealthyTally) {
+    grouped(results, |r| r.run.slot, HealthyTally::add)
 }

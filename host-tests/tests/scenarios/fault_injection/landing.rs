@@ -153,6 +153,7 @@ fn late_in_a_descent_s_swing_a_hold_lands_the_step_first() {
     set_down.controller.sequencer.lands_after = [1.0; 3];
     let run = sim::campaign::CampaignRun {
         gait: Gait::StairDown,
+        slot: sim::campaign::built_in_slot(Gait::StairDown),
         fault: "motor-weak=0.4486806780323994:left-hip@3.32"
             .parse()
             .unwrap(),
