@@ -17,7 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use sim::campaign::{
     CampaignGaits, HEALTHY_STEPS, HealthyTally, NamedCase, Tally, healthy_plan_over, healthy_tally,
-    plan_over, play_all_healthy_on, play_all_on, tally,
+    plan_over, play_all_healthy_on, play_all_on, tally, tally_by_gait,
 };
 use sim::scenario::strong_pilot;
 
@@ -106,6 +106,8 @@ struct CampaignJson {
     bundle: Option<String>,
     all: TallyJson,
     by_kind: Vec<(String, TallyJson)>,
+    /// The fault runs per gait.
+    by_gait: Vec<(String, TallyJson)>,
     bad_runs: Vec<BadRunJson>,
     healthy: HealthyJson,
 }
@@ -248,6 +250,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
         return 2;
     }
     let (by_kind, all) = tally(&results);
+    let faults_by_gait = tally_by_gait(&results);
     let (by_gait, all_healthy) = healthy_tally(&healthy);
     if args.json {
         let answer = CampaignJson {
@@ -257,6 +260,10 @@ pub fn run(args: &FaultsArgs) -> u8 {
             by_kind: by_kind
                 .iter()
                 .map(|(k, t)| ((*k).to_string(), TallyJson::from(t)))
+                .collect(),
+            by_gait: faults_by_gait
+                .iter()
+                .map(|(g, t)| (gaits.name(*g).to_string(), TallyJson::from(t)))
                 .collect(),
             bad_runs: results
                 .iter()
@@ -375,6 +382,10 @@ pub fn run(args: &FaultsArgs) -> u8 {
                 row(k, t);
             }
             row("all", &all);
+            println!("the same runs per gait:");
+            for (g, t) in &faults_by_gait {
+                row(gaits.name(*g), t);
+            }
         }
         if !healthy_runs.is_empty() {
             println!(

@@ -36,13 +36,12 @@ pub const WALK_CLEARANCE_M: f64 = 0.03;
 pub const VERIFY_STEPS: usize = 4;
 
 /// How far inside Table I's stops every hip and knee must stay while a
-/// gait is verified in the closed loop, rad (0.5°). The plan may reach a
-/// straight knee (the supervisor's envelope reads a little past it), but
-/// the pilot's joints must not be driven past a stop: noise-free, the
-/// verifying run keeps this margin for the scatter of noisy runs (the
-/// campaign's healthy runs, `exogait faults --bundle`, land within 0.2° of
-/// it).
+/// gait is verified in the closed loop, rad (0.5°). The pilot's joints must
+/// not be driven past a stop; the verifying run is noise-free, and this
+/// margin covers the scatter of noisy runs about it (0.1–0.2° in the
+/// healthy runs of `exogait faults --bundle`).
 pub const STOP_MARGIN_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
+
 /// Evaluations of each gait's clinical search.
 pub const DEFAULT_EVALS: usize = 6_000;
 

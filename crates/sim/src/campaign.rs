@@ -32,4 +32,4 @@ pub use named::{NamedCase, explains_stop, named_case};
 pub use plan::{healthy_plan, healthy_plan_over, plan, plan_over};
 pub use play::{play, play_all, play_all_on, play_all_with_pilot, play_on, play_with_pilot};
 pub use run::{CampaignRun, RunResult, must_be_detected};
-pub use tally::{HealthyTally, Tally, healthy_tally, tally};
+pub use tally::{HealthyTally, Tally, healthy_tally, tally, tally_by_gait};

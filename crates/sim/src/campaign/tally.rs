@@ -45,6 +45,14 @@ pub fn tally(results: &[RunResult]) -> (Vec<(&'static str, Tally)>, Tally) {
     grouped(results, |r| r.run.fault.kind.name(), Tally::add)
 }
 
+/// The tally of `results` per gait (its slot in the campaign's gaits),
+/// in slot order: which of a patient's gaits a fault drops the pilot from.
+pub fn tally_by_gait(results: &[RunResult]) -> Vec<(usize, Tally)> {
+    let (mut by, _) = grouped(results, |r| r.run.slot, Tally::add);
+    by.sort_by_key(|(slot, _)| *slot);
+    by
+}
+
 /// `results` added up per `key`, in the order keys first appear, and over
 /// all.
 fn grouped<R, K: PartialEq, T: Default>(
@@ -102,4 +110,43 @@ impl HealthyTally {
 /// gaits), in the order gaits first appear, and over all.
 pub fn healthy_tally(results: &[HealthyResult]) -> (Vec<(usize, HealthyTally)>, HealthyTally) {
     grouped(results, |r| r.run.slot, HealthyTally::add)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::CampaignRun;
+    use crate::campaign::play::no_outcome;
+    use gait_control::operator::Gait;
+
+    fn result(slot: usize, fell: bool) -> RunResult {
+        let mut outcome = no_outcome();
+        outcome.fell = fell.then(|| "fell".to_string());
+        RunResult {
+            run: CampaignRun {
+                gait: Gait::Walk,
+                slot,
+                fault: "estop@2".parse().unwrap_or_else(|e| panic!("{e}")),
+                noise_seed: 1,
+            },
+            outcome,
+            false_trip: false,
+            detected: true,
+            error: None,
+            struck_in: None,
+            stance_after_strike: [false; 2],
+            stance_before_stop: [false; 2],
+            carrying_at_strike: [false; 2],
+        }
+    }
+
+    #[test]
+    fn fault_runs_are_tallied_per_gait_in_slot_order() {
+        let results = [result(2, true), result(0, false), result(2, false)];
+        let by = tally_by_gait(&results);
+        let slots: Vec<usize> = by.iter().map(|(s, _)| *s).collect();
+        assert_eq!(slots, [0, 2]);
+        assert_eq!((by[0].1.runs, by[0].1.falls), (1, 0));
+        assert_eq!((by[1].1.runs, by[1].1.falls), (2, 1));
+    }
 }
