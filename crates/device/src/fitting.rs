@@ -8,8 +8,10 @@
 //! for pilots of 40–120 kg. Outside it the device is not fitted, whatever
 //! the model could compute.
 
+use gait_control::supervisor::ResponseCheck;
 use gait_core::anthropometry::{AnthropometryError, Pilot, SegmentLengths};
 use gait_core::bundle::Patient;
+use gait_core::model::BodyModel;
 
 use crate::DeviceConfig;
 
@@ -96,4 +98,62 @@ pub fn fit(device: &DeviceConfig, measures: &Measures) -> Result<Patient, FitErr
         segments_m: [lengths.thigh_m, lengths.shank_m, lengths.foot_m],
         model,
     })
+}
+
+/// The residual check's inertias (`ResponseCheck`, fault 0x0404) set for
+/// the device's own body `was`, carried over to `body`: each in proportion
+/// to what it stands for. A swing knee moves the shank and foot about the
+/// knee (I₅ + m₅d₅²), a swing hip the straight leg about the hip, a stance
+/// joint the body over the foot (its mass times the leg's length squared).
+/// The check's limit stays: it is the torque a healthy drive never leaves
+/// unexplained, whoever wears the device.
+pub fn response_for(
+    check: &ResponseCheck,
+    was: &BodyModel<f64>,
+    body: &BodyModel<f64>,
+) -> ResponseCheck {
+    let ratio = |f: fn(&BodyModel<f64>) -> f64| {
+        let (now, before) = (f(body), f(was));
+        let r = now / before;
+        if r.is_finite() && r > 0.0 {
+            r as f32
+        } else {
+            1.0
+        }
+    };
+    let (stance, hip, knee) = (
+        ratio(stance_inertia),
+        ratio(swing_hip_inertia),
+        ratio(swing_knee_inertia),
+    );
+    let [sh, sk] = check.stance_inertia_kgm2;
+    let [wh, wk] = check.swing_inertia_kgm2;
+    ResponseCheck {
+        stance_inertia_kgm2: [sh * stance, sk * stance],
+        swing_inertia_kgm2: [wh * hip, wk * knee],
+        ..*check
+    }
+}
+
+/// The body about the stance foot: total mass × (shank + thigh)², kg·m².
+fn stance_inertia(body: &BodyModel<f64>) -> f64 {
+    let [shank, thigh, ..] = body.links();
+    let leg = shank.length_m + thigh.length_m;
+    body.total_mass_kg() * leg * leg
+}
+
+/// The swing leg, straight, about its hip, kg·m².
+fn swing_hip_inertia(body: &BodyModel<f64>) -> f64 {
+    let [.., thigh, shank] = body.links();
+    let shank_com = thigh.length_m + shank.com_m;
+    thigh.inertia_kgm2
+        + thigh.mass_kg * thigh.com_m * thigh.com_m
+        + shank.inertia_kgm2
+        + shank.mass_kg * shank_com * shank_com
+}
+
+/// The swing shank and foot about the knee, kg·m².
+fn swing_knee_inertia(body: &BodyModel<f64>) -> f64 {
+    let [.., shank] = body.links();
+    shank.inertia_kgm2 + shank.mass_kg * shank.com_m * shank.com_m
 }

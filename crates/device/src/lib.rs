@@ -253,13 +253,17 @@ impl DeviceConfig {
 
     /// The device fitted to a patient: the same drives, sensors, gains,
     /// thresholds and joint limits, with the patient's body model in the
-    /// controller's feed-forward (and in the simulator's plant). The
-    /// model's joint limits are replaced by the device's.
+    /// controller's feed-forward (and in the simulator's plant), and the
+    /// torque residual's inertias carried over to that body
+    /// ([`fitting::response_for`]). The model's joint limits are replaced
+    /// by the device's.
     pub fn fitted(&self, body: &BodyModel<f64>) -> Result<Self, AnthropometryError> {
         let body = BodyModel::new(*body.links(), *self.body.limits())?;
         let mut cfg = *self;
         cfg.body = body;
         cfg.controller.model = body.cast();
+        cfg.supervisor.response =
+            fitting::response_for(&self.supervisor.response, &self.body, &body);
         Ok(cfg)
     }
 

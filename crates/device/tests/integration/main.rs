@@ -1,5 +1,6 @@
 //! exogait-device's integration tests, in one binary (one link, one lint
-//! header): the boot from flash, the drives' figures, the re-plan.
+//! header): the boot from flash, the drives' figures, the device fitted to
+//! a patient, the re-plan.
 // Clippy's allow-*-in-tests covers `#[test]` fns, not the helpers here.
 #![allow(
     clippy::unwrap_used,
@@ -11,4 +12,5 @@
 
 mod boot;
 mod drive;
+mod fitting;
 mod replan;
