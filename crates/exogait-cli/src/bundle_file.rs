@@ -24,6 +24,22 @@ impl BundleFile {
         Ok(Self { bytes, device })
     }
 
+    /// The bundle at `path`, if one is given, and the device a command
+    /// plays on: fitted to the bundle's patient, else the device as built.
+    /// `Err` is the message a command prints before exiting with 2.
+    pub fn and_device(path: Option<&Path>) -> Result<(Option<Self>, DeviceConfig), String> {
+        let Some(path) = path else {
+            let device =
+                DeviceConfig::exogait().map_err(|e| format!("device configuration: {e:?}"))?;
+            return Ok((None, device));
+        };
+        let file = Self::load(path)?;
+        let device = file
+            .fitted_device()
+            .map_err(|e| format!("device configuration: {e}"))?;
+        Ok((Some(file), device))
+    }
+
     /// The verified bundle.
     pub fn bundle(&self) -> Result<Bundle<'_>, String> {
         Bundle::parse(&self.bytes, self.device.fingerprint()).map_err(|e| e.to_string())

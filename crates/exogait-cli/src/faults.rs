@@ -176,27 +176,14 @@ pub fn run(args: &FaultsArgs) -> u8 {
         );
         return 2;
     }
-    let bundle_file = match &args.bundle {
-        Some(path) => match crate::bundle_file::BundleFile::load(path) {
-            Ok(f) => Some(f),
+    let (bundle_file, device) =
+        match crate::bundle_file::BundleFile::and_device(args.bundle.as_deref()) {
+            Ok(loaded) => loaded,
             Err(e) => {
                 eprintln!("exogait faults: {e}");
                 return 2;
             }
-        },
-        None => None,
-    };
-    let device = match &bundle_file {
-        Some(f) => f.fitted_device(),
-        None => exogait_device::DeviceConfig::exogait().map_err(|e| format!("{e:?}")),
-    };
-    let device = match device {
-        Ok(d) => d,
-        Err(e) => {
-            eprintln!("exogait faults: device configuration: {e}");
-            return 2;
-        }
-    };
+        };
     let bundle = match bundle_file
         .as_ref()
         .map(crate::bundle_file::BundleFile::bundle)

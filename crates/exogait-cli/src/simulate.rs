@@ -202,27 +202,14 @@ pub fn run(args: &SimulateArgs) -> u8 {
         return 2;
     }
 
-    let bundle_file = match &args.bundle {
-        Some(path) => match crate::bundle_file::BundleFile::load(path) {
-            Ok(f) => Some(f),
+    let (bundle_file, device) =
+        match crate::bundle_file::BundleFile::and_device(args.bundle.as_deref()) {
+            Ok(loaded) => loaded,
             Err(e) => {
                 eprintln!("exogait simulate: {e}");
                 return 2;
             }
-        },
-        None => None,
-    };
-    let device = match &bundle_file {
-        Some(f) => f.fitted_device(),
-        None => exogait_device::DeviceConfig::exogait().map_err(|e| format!("{e:?}")),
-    };
-    let device = match device {
-        Ok(d) => d,
-        Err(e) => {
-            eprintln!("exogait simulate: device configuration: {e}");
-            return 2;
-        }
-    };
+        };
     let bundle = bundle_file.as_ref().and_then(|f| f.bundle().ok());
     let bundle_table = match (&bundle, &bundle_file) {
         (Some(b), Some(f)) => match b.find(&args.gait) {
