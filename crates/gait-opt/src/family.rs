@@ -15,6 +15,7 @@ use exogait_device::DeviceConfig;
 use exogait_device::admission::check_table;
 use gait_core::bundle::{GaitInfo, GaitName};
 use gait_core::tables::{GaitKind, GaitTable};
+use sim::campaign::{CampaignGait, CampaignGaits, plan_over, play_all_on};
 use sim::compare::{RunLength, play_for};
 use sim::scenario::strong_pilot;
 
@@ -390,4 +391,50 @@ pub fn check_playable(device: &DeviceConfig, table: &GaitTable<'_>) -> Result<()
         return Err("its first step does not land in the closed loop".into());
     }
     Ok(())
+}
+
+/// Plays `runs` runs of the seeded fault campaign (`sim::campaign`, seed
+/// `seed`) on a cleared gait of the fitted `device`. `Err` says how many
+/// dropped the pilot through the device (a fall no named case explains)
+/// and after which faults: such a gait is not for this patient.
+pub fn campaign_check(
+    gait: &ClearedGait,
+    device: &DeviceConfig,
+    runs: usize,
+    seed: u64,
+) -> Result<(), String> {
+    let table =
+        GaitTable::parse(&gait.image).map_err(|_| "table refused by its own reader".to_string())?;
+    let gaits = CampaignGaits::of(vec![CampaignGait {
+        name: gait.plan.name.clone(),
+        gait: sim::compare::gait_of(table.kind()),
+        tables: sim::compare::tables_of(table),
+    }]);
+    let plan = plan_over(seed, runs, &gaits);
+    let results = play_all_on(&plan, device, strong_pilot(), &gaits, &|| {});
+    let unnamed: Vec<String> = results
+        .iter()
+        .filter(|r| r.unnamed_fall())
+        .map(|r| r.run.fault.to_string())
+        .collect();
+    if unnamed.is_empty() {
+        return Ok(());
+    }
+    let kinds: Vec<&str> = results
+        .iter()
+        .filter(|r| r.unnamed_fall())
+        .map(|r| r.run.fault.kind.name())
+        .fold(Vec::new(), |mut v, k| {
+            if !v.contains(&k) {
+                v.push(k);
+            }
+            v
+        });
+    Err(format!(
+        "fault campaign: {} of {} runs drop the pilot with no named reason (after {}; first: {})",
+        unnamed.len(),
+        results.len(),
+        kinds.join(", "),
+        unnamed.first().map_or("", String::as_str),
+    ))
 }
