@@ -158,20 +158,43 @@ pub const ATTEMPTS: [(f64, f64); 3] = [(0.0, 0.75), (0.4, 0.65), (0.8, 0.55)];
 /// [`ATTEMPTS`] in turn until one is cleared; the reason given for a gait
 /// left out is its first attempt's (the plan as asked).
 pub fn design(plan: &GaitPlan, device: &DeviceConfig, max_evals: usize) -> Outcome {
+    design_checked(plan, device, max_evals, 0)
+}
+
+/// [`design`], each attempt that clears also played through
+/// `campaign_runs` runs of the fault campaign ([`campaign_check`]; 0:
+/// none): one a device fault drops the pilot from goes on to the next,
+/// slower attempt. A gait left out so gives the first such attempt's step
+/// time and campaign.
+pub fn design_checked(
+    plan: &GaitPlan,
+    device: &DeviceConfig,
+    max_evals: usize,
+    campaign_runs: usize,
+) -> Outcome {
     let mut first_reason = None;
+    let mut campaign_reason = None;
     for (extra_s, share) in ATTEMPTS {
         let mut p = plan.clone();
         p.step_time_s = ((plan.step_time_s + extra_s) * 100.0).round() / 100.0;
         match attempt(&p, device, max_evals, share) {
-            Ok(g) => return Outcome::Cleared(g),
+            Ok(g) if campaign_runs == 0 => return Outcome::Cleared(g),
+            Ok(g) => match campaign_check(&g, device, campaign_runs, 1) {
+                Ok(()) => return Outcome::Cleared(g),
+                Err(reason) => {
+                    campaign_reason.get_or_insert(format!("{:.2} s: {reason}", p.step_time_s));
+                }
+            },
             Err(reason) => {
                 first_reason.get_or_insert(reason);
             }
         }
     }
+    // An attempt the closed loop played but the campaign refused says more
+    // than the first attempt's reason.
     Outcome::LeftOut {
         plan: plan.clone(),
-        reason: first_reason.unwrap_or_default(),
+        reason: campaign_reason.or(first_reason).unwrap_or_default(),
     }
 }
 
@@ -305,6 +328,19 @@ pub fn design_all(
     threads: usize,
     progress: &(dyn Fn(usize, usize, &str) + Sync),
 ) -> Vec<Outcome> {
+    design_all_checked(plans, device, max_evals, 0, threads, progress)
+}
+
+/// [`design_all`] with each gait [`design_checked`] by `campaign_runs`
+/// runs of the fault campaign.
+pub fn design_all_checked(
+    plans: &[GaitPlan],
+    device: &DeviceConfig,
+    max_evals: usize,
+    campaign_runs: usize,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize, &str) + Sync),
+) -> Vec<Outcome> {
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<Outcome>>> = Mutex::new(vec![None; plans.len()]);
@@ -314,7 +350,7 @@ pub fn design_all(
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(plan) = plans.get(i) else { break };
-                    let outcome = design(plan, device, max_evals);
+                    let outcome = design_checked(plan, device, max_evals, campaign_runs);
                     if let Ok(mut r) = results.lock() {
                         if let Some(slot) = r.get_mut(i) {
                             *slot = Some(outcome);
