@@ -34,9 +34,7 @@ impl BundleFile {
             return Ok((None, device));
         };
         let file = Self::load(path)?;
-        let device = file
-            .fitted_device()
-            .map_err(|e| format!("device configuration: {e}"))?;
+        let device = file.fitted_device()?;
         Ok((Some(file), device))
     }
 

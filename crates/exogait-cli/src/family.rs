@@ -148,6 +148,17 @@ pub fn run(args: &TablesArgs) -> u8 {
         }
     };
     let plans = family_plans(&paces, &stairs, &fitted);
+    if let Some(twice) = plans
+        .iter()
+        .enumerate()
+        .find(|(i, p)| plans.iter().skip(i + 1).any(|q| q.name == p.name))
+    {
+        eprintln!(
+            "exogait tables: gait {} asked twice (each pace and stair once)",
+            twice.1.name
+        );
+        return 2;
+    }
     if plans.is_empty() || plans.len() > gait_core::bundle::MAX_GAITS {
         eprintln!(
             "exogait tables: {} gaits asked; a bundle holds 1-{}",

@@ -24,7 +24,7 @@ use sim::scenario::strong_pilot;
 /// Options of `exogait faults`.
 #[derive(Debug, Args)]
 pub struct FaultsArgs {
-    /// Runs (1 … 100,000).
+    /// Fault runs (0 … 100,000; not 0 with `--healthy 0`).
     #[arg(long, default_value_t = 300)]
     pub runs: usize,
     /// The campaign's seed (the same seed gives the same runs).
@@ -237,7 +237,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
         return 2;
     }
     let (by_kind, all) = tally(&results);
-    let faults_by_gait = tally_by_gait(&results);
+    let faults_by_gait = tally_by_gait(&results, gaits.len());
     let (by_gait, all_healthy) = healthy_tally(&healthy);
     if args.json {
         let answer = CampaignJson {

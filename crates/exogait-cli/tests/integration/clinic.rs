@@ -248,6 +248,7 @@ fn bad_family_options_are_refused() {
         vec!["--stairs", "0.30:0.28"],
         vec!["--evals", "10"],
         vec!["--campaign", "20000"],
+        vec!["--paces", "0.25,0.25"],
     ] {
         let mut args = vec!["tables", "--patient", s(&p), "--out", s(&out)];
         args.extend(bad.iter().copied());

@@ -160,6 +160,34 @@ mod tests {
         }
     }
 
+    /// Runs seed 1's campaigns drew before a campaign could play a bundle
+    /// (`exogait faults --seed 1 --runs 10000 --json`): the draws over the
+    /// device's own gaits are the same, run for run.
+    #[test]
+    fn seed_1_draws_the_runs_it_always_drew() {
+        let runs = plan(1, 10_000);
+        let has = |gait: Gait, fault: &str, noise_seed: u64| {
+            runs.iter().any(|r| {
+                r.gait == gait && r.fault.to_string() == fault && r.noise_seed == noise_seed
+            })
+        };
+        assert!(has(
+            Gait::StairUp,
+            "gear-slip=0.2654469242661147:right-hip@2.607",
+            838_232
+        ));
+        assert!(has(
+            Gait::Walk,
+            "pilot-lean=0.12628771405880707@1.954",
+            734_570
+        ));
+        assert!(has(
+            Gait::Walk,
+            "pilot-lean=0.19284182142236195@3.491",
+            972_269
+        ));
+    }
+
     #[test]
     fn a_campaign_over_a_bundle_draws_every_gait_by_its_slot() {
         let built_in = CampaignGaits::built_in();

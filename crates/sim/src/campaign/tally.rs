@@ -45,11 +45,16 @@ pub fn tally(results: &[RunResult]) -> (Vec<(&'static str, Tally)>, Tally) {
     grouped(results, |r| r.run.fault.kind.name(), Tally::add)
 }
 
-/// The tally of `results` per gait (its slot in the campaign's gaits),
-/// in slot order: which of a patient's gaits a fault drops the pilot from.
-pub fn tally_by_gait(results: &[RunResult]) -> Vec<(usize, Tally)> {
-    let (mut by, _) = grouped(results, |r| r.run.slot, Tally::add);
-    by.sort_by_key(|(slot, _)| *slot);
+/// The tally of `results` per gait, each of the campaign's `gaits` slots
+/// in order (one no run drew: an empty tally): which of a patient's gaits
+/// a fault drops the pilot from.
+pub fn tally_by_gait(results: &[RunResult], gaits: usize) -> Vec<(usize, Tally)> {
+    let mut by: Vec<(usize, Tally)> = (0..gaits).map(|g| (g, Tally::default())).collect();
+    for r in results {
+        if let Some((_, t)) = by.get_mut(r.run.slot) {
+            t.add(r);
+        }
+    }
     by
 }
 
@@ -141,12 +146,11 @@ mod tests {
     }
 
     #[test]
-    fn fault_runs_are_tallied_per_gait_in_slot_order() {
+    fn fault_runs_are_tallied_for_every_gait_in_slot_order() {
         let results = [result(2, true), result(0, false), result(2, false)];
-        let by = tally_by_gait(&results);
-        let slots: Vec<usize> = by.iter().map(|(s, _)| *s).collect();
-        assert_eq!(slots, [0, 2]);
-        assert_eq!((by[0].1.runs, by[0].1.falls), (1, 0));
-        assert_eq!((by[1].1.runs, by[1].1.falls), (2, 1));
+        let by = tally_by_gait(&results, 3);
+        let counts: Vec<(usize, usize, usize)> =
+            by.iter().map(|(s, t)| (*s, t.runs, t.falls)).collect();
+        assert_eq!(counts, [(0, 1, 0), (1, 0, 0), (2, 2, 1)]);
     }
 }
