@@ -36,6 +36,20 @@ pub struct Measures {
     pub foot_m: Option<f64>,
 }
 
+impl Measures {
+    /// Height and mass alone: every segment takes Winter's proportion.
+    #[must_use]
+    pub const fn height_and_mass(height_m: f64, mass_kg: f64) -> Self {
+        Self {
+            height_m,
+            mass_kg,
+            thigh_m: None,
+            shank_m: None,
+            foot_m: None,
+        }
+    }
+}
+
 /// Why a patient cannot be fitted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FitError {

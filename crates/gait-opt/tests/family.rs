@@ -17,14 +17,7 @@ use sim::scenario::strong_pilot;
 
 fn fitted(height_m: f64, mass_kg: f64) -> DeviceConfig {
     let device = DeviceConfig::exogait().unwrap();
-    let measures = Measures {
-        height_m,
-        mass_kg,
-        thigh_m: None,
-        shank_m: None,
-        foot_m: None,
-    };
-    let patient = fit(&device, &measures).unwrap();
+    let patient = fit(&device, &Measures::height_and_mass(height_m, mass_kg)).unwrap();
     device.fitted(&patient.model).unwrap()
 }
 

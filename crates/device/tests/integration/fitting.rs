@@ -8,14 +8,9 @@ use gait_core::model::BodyModel;
 
 fn patient(height_m: f64, mass_kg: f64) -> BodyModel<f64> {
     let device = DeviceConfig::exogait().unwrap();
-    let measures = Measures {
-        height_m,
-        mass_kg,
-        thigh_m: None,
-        shank_m: None,
-        foot_m: None,
-    };
-    fit(&device, &measures).unwrap().model
+    fit(&device, &Measures::height_and_mass(height_m, mass_kg))
+        .unwrap()
+        .model
 }
 
 /// What the swing inertias stand for, from the model's p_ij (D_ij = p_ij
