@@ -17,6 +17,7 @@ pub mod board_config;
 pub mod clock_tree;
 pub mod flash_sectors;
 pub mod idle_replan;
+pub mod model_task;
 #[cfg(not(feature = "board-stm32f405"))]
 pub mod qemu_bundle;
 pub mod qemu_rig;

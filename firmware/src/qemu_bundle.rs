@@ -94,6 +94,10 @@ pub fn play_step(
         &cfg,
         |_| once.take().ok_or(ReplayError::Config),
         time,
+        |model| {
+            model();
+            0
+        },
     )
     .map(Some)
     .map_err(CheckError::Replay)

@@ -10,6 +10,7 @@
 use exogait_device::DeviceConfig;
 use exogait_device::tick_record::{self, FileError};
 use gait_control::controller::{Controller, TickReport};
+use gait_control::feedforward::{ModelSlot, ModelTask};
 use gait_control::operator::Gait;
 use gait_control::sequencer::Phase;
 
@@ -74,6 +75,9 @@ pub struct Replay {
     pub ticks: u32,
     /// Per phase, in [`PHASES`] order.
     pub phases: [PhaseCost; 5],
+    /// The model task's answers between the ticks
+    /// ([`gait_control::feedforward`]), all phases together.
+    pub model: PhaseCost,
     /// The largest |target − host| motor command, N·m.
     pub max_command_diff_nm: f32,
     /// Ticks whose commands differ from the host's at all.
@@ -124,10 +128,12 @@ mod marks {
 }
 
 /// Replays [`TICK_RECORDS`] on `device`; `time` runs one tick and says how
-/// many instructions it took.
+/// many instructions it took, `time_model` the same of the model task's
+/// answer after it.
 pub fn replay(
     device: &DeviceConfig,
     mut time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
+    time_model: impl FnMut(&mut dyn FnMut()) -> u32,
 ) -> Result<Replay, ReplayError> {
     replay_starts();
     replay_with(
@@ -149,20 +155,27 @@ pub fn replay(
             }
             (instr, report)
         },
+        time_model,
     )
 }
 
 /// Replays the recording `file` on `device`, each run through the
-/// controller `controller` builds for its gait.
+/// controller `controller` builds for its gait, with the model task the
+/// board runs answering between two ticks, as its lower-priority
+/// interrupt does.
 pub fn replay_with<'t>(
     file: &[u8],
     device: &DeviceConfig,
     mut controller: impl FnMut(Gait) -> Result<Controller<'t>, ReplayError>,
     mut time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
+    mut time_model: impl FnMut(&mut dyn FnMut()) -> u32,
 ) -> Result<Replay, ReplayError> {
     let mut out = Replay::default();
     for segment in tick_record::segments(file).map_err(ReplayError::File)? {
-        let mut controller = controller(segment.gait)?;
+        let slot = ModelSlot::new();
+        let mut controller: Controller<'_> = controller(segment.gait)?;
+        controller.set_model_task(&slot);
+        let task = ModelTask::new(controller.config().model, &slot);
         let mut hw = board_config::hardware(device, qemu_rig::peripherals())
             .map_err(|_| ReplayError::Config)?;
         out.segments += 1;
@@ -170,6 +183,15 @@ pub fn replay_with<'t>(
             qemu_rig::replay(device, &record);
             let (instr, report) = time(&mut || controller.tick(&mut hw, record.deadline_missed));
             out.account(k, instr, &report, &record.host_command_nm);
+            let model = time_model(&mut || {
+                task.serve();
+            });
+            out.model.ticks += 1;
+            out.model.total += u64::from(model);
+            if model > out.model.worst {
+                out.model.worst = model;
+                out.model.worst_at = (out.segments.saturating_sub(1), k);
+            }
         }
     }
     Ok(out)

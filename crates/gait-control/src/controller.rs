@@ -38,6 +38,7 @@ use crate::drivers::mcp3208::{
 use crate::drivers::motor::Motor;
 use crate::drivers::status::Indicator;
 use crate::faults::{FaultCode, FaultSet, Reaction};
+use crate::feedforward::{FeedForward, ModelSlot};
 use crate::layout::Side;
 use crate::operator::{self, ControllerStatus, Input, Operator, OperatorConfig, Request};
 use crate::position_loop::{JointGains, JointLoop};
@@ -181,6 +182,10 @@ pub struct Controller<'t> {
     pending_reset: Option<PendingReset>,
     /// Integral of the other foot's load error in double support, N.
     other_foot_integral_n: f32,
+    /// The model's answer the next tick applies ([`crate::feedforward`]).
+    model_ff: FeedForward,
+    /// With a model task: the slot it answers through.
+    model_slot: Option<&'t ModelSlot>,
     /// The e-stop's stop: whether it has been seen since it last
     /// cleared, and the set-down of a swing it struck in.
     estop: estop::EStopStop,
@@ -246,6 +251,8 @@ impl<'t> Controller<'t> {
             primed: false,
             pending_reset: None,
             other_foot_integral_n: 0.0,
+            model_ff: FeedForward::NONE,
+            model_slot: None,
             estop: estop::EStopStop::default(),
             seq_status: SeqStatus::STANDING,
             orders: Orders::NONE,
@@ -257,6 +264,14 @@ impl<'t> Controller<'t> {
     /// idle-time re-planner that shares `slot` ([`crate::replan`]).
     pub fn set_replanner(&mut self, slot: &'t ReplanSlot, cfg: ReplanConfig) {
         self.seq = self.seq.with_replanner(slot, cfg);
+    }
+
+    /// Leaves the model's feed-forward to a task that answers through
+    /// `slot` between ticks ([`crate::feedforward::ModelTask`]), instead of
+    /// working it out at the start of the next tick: the same torques, off
+    /// the tick.
+    pub fn set_model_task(&mut self, slot: &'t ModelSlot) {
+        self.model_slot = Some(slot);
     }
 
     /// The configuration it was built with.

@@ -11,6 +11,7 @@ pub mod controller;
 pub mod crutch_load;
 pub mod drivers;
 pub mod faults;
+pub mod feedforward;
 mod fingerprint;
 pub mod layout;
 pub mod operator;

@@ -232,9 +232,10 @@ pub struct Supervisor {
     forces: [ForceTrack; FORCES],
     drive_currents: [drive_current::DriveCurrentTrack; JOINTS],
     previous_reference_rad: Option<[f32; JOINTS]>,
-    /// `calls` at the latest deadline misses (ring).
-    misses: [Option<u32>; MAX_DEADLINE_MISSES as usize],
-    miss_next: usize,
+    /// `calls` at the latest deadline misses (ring, filled from its start:
+    /// the first `deadline_misses_total` slots hold one).
+    misses: [u32; MAX_DEADLINE_MISSES as usize],
+    miss_next: u8,
     deadline_misses_total: u32,
     /// Some encoder's persistent jump is taken out of its frames
     /// ([`Supervisor::encoder_offsets`]).
@@ -281,7 +282,7 @@ impl Supervisor {
             forces: [ForceTrack::default(); FORCES],
             drive_currents: Default::default(),
             previous_reference_rad: None,
-            misses: [None; MAX_DEADLINE_MISSES as usize],
+            misses: [0; MAX_DEADLINE_MISSES as usize],
             miss_next: 0,
             deadline_misses_total: 0,
             encoder_offsets: false,

@@ -223,14 +223,14 @@ fn run() -> usize {
     );
 
     match cortex_m::Peripherals::take() {
-        Some(p) => {
+        Some(mut p) => {
             let mut ctr = InstrCounter::new(p.SYST);
             bench(out, &mut ctr);
             failed += control_tick_bench(out, &mut ctr);
             // Before the replay: `cargo xtask profile` counts from the
             // replay's start on.
             failed += replan::check(out, &mut ctr);
-            failed += preempted::check(out);
+            failed += preempted::check(out, &mut p.SCB);
             failed += replay_bench(out, &mut ctr);
             failed += calibration::check(out);
             failed += bundle::check(out, &mut ctr);
@@ -489,10 +489,19 @@ fn replay_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
         }
     };
     let base = ctr.once(|| black_box(0u32)).0;
-    let result = tick_replay::replay(&device, |tick| {
-        let (instr, report) = ctr.once(tick);
-        (instr.saturating_sub(base), report)
-    });
+    let result = tick_replay::replay(
+        &device,
+        |tick| {
+            let (instr, report) = ctr.once(tick);
+            (instr.saturating_sub(base), report)
+        },
+        |model| {
+            let start = SYST::get_current();
+            model();
+            let ticks = start.wrapping_sub(SYST::get_current()) & SYST_MAX;
+            ticks.saturating_mul(INSTR_PER_TICK).saturating_sub(base)
+        },
+    );
     match result {
         Ok(r) if r.segments == 0 => {
             out.put(&mut line(
@@ -502,6 +511,14 @@ fn replay_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
         }
         Ok(r) => {
             print_phases(out, "tick: phase=", &r);
+            out.put(
+                line("model: between ticks avg=")
+                    .u64(r.model.average())
+                    .str(" worst=")
+                    .u32(r.model.worst)
+                    .str(" answers=")
+                    .u32(r.model.ticks),
+            );
             out.put(
                 line("tick: replayed runs=")
                     .u32(r.segments)

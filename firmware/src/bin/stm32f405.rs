@@ -61,6 +61,7 @@ use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
 
 use cortex_m::peripheral::DWT;
+use cortex_m::peripheral::scb::SystemHandler;
 use cortex_m_rt::entry;
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
@@ -72,7 +73,8 @@ use exogait_device::replan::REPLAN;
 use firmware::board_config::{self, BoardIo, TICK_HZ};
 use firmware::clock_tree::{ADC_SPI_BR, ENCODER_SPI_BR};
 use firmware::idle_replan::IdleReplanner;
-use firmware::{flash_sectors, selftest};
+use firmware::{flash_sectors, model_task, selftest};
+use gait_control::feedforward::ModelTask;
 use stm32f4xx_hal::gpio::{ErasedPin, Input, Output};
 use stm32f4xx_hal::{pac, prelude::*, watchdog::IndependentWatchdog};
 
@@ -352,7 +354,21 @@ fn main() -> ! {
         IdleReplanner::new(&schedule::SLOT, cfg, tables)
     });
 
-    // 7. The 1 kHz tick in TIM2's interrupt under an independent watchdog;
+    // 7. The model's feed-forward in PendSV, below the tick
+    //    (`firmware::model_task`).
+    controller.set_model_task(&model_task::SLOT);
+    // SAFETY: PendSV has not run yet; lowering its priority breaks no
+    // critical section (nothing relies on PendSV being masked).
+    unsafe {
+        cp.SCB
+            .set_priority(SystemHandler::PendSV, model_task::PRIORITY);
+    }
+    let model = ModelTask::new(controller.config().model, &model_task::SLOT);
+    if !model_task::install(model) {
+        halt("the model task's state is in use: motors stay disabled");
+    }
+
+    // 8. The 1 kHz tick in TIM2's interrupt under an independent watchdog;
     //    the re-planner in thread mode.
     cp.DCB.enable_trace();
     cp.DWT.enable_cycle_counter();

@@ -2,13 +2,12 @@
 //! along the reference (gait-core, f32), with the other foot's load closed
 //! on its sensor in double support.
 
-use gait_core::dynamics::{self, Contact};
 use gait_core::foot::StanceFoot;
-use gait_core::kinematics::{Posture, joint_torques};
 use gait_core::model::GRAVITY_M_S2;
 
+use crate::feedforward::{FeedForward, ModelRequest, ModelSlot, feedforward};
 use crate::position_loop::Setpoint;
-use crate::posture::{JOINTS, joint_torques_from_theta_torques, phi_from_joints};
+use crate::posture::{JOINTS, phi_from_joints};
 use crate::reference::Reference;
 
 use super::Controller;
@@ -21,18 +20,6 @@ pub(super) struct Actuation {
     pub command_nm: [f32; JOINTS],
     /// The feed-forward part, N·m.
     pub feedforward_nm: [f32; JOINTS],
-}
-
-/// The model's torques along the reference and the load it plans for the
-/// other foot.
-struct FeedForward {
-    /// Joint torques, joint order, N·m.
-    torques_nm: [f32; JOINTS],
-    /// Vertical force the other foot is planned to carry, N.
-    other_foot_n: f32,
-    /// Joint torques (joint order) that one more newton pushed down by the
-    /// other foot takes, N·m/N.
-    per_other_foot_newton: [f32; JOINTS],
 }
 
 /// How much of its position feedback the other leg gives up while its foot
@@ -55,7 +42,8 @@ impl Controller<'_> {
     #[inline(always)]
     pub(super) fn act(&mut self, s: &Senses, r: &Reference) -> Actuation {
         let weight = self.cfg.model.total_mass_kg() * GRAVITY_M_S2 as f32;
-        let planned = self.feedforward(s, r, weight);
+        let planned = self.model_answer();
+        self.ask_model(s, r, weight);
         let mut feedforward = planned.torques_nm;
         let other_share = r.other_foot_share.unwrap_or(0.0).clamp(0.0, 1.0);
         self.push_other_foot(s, r, &planned, other_share, &mut feedforward);
@@ -176,19 +164,30 @@ impl Controller<'_> {
         }
     }
 
-    /// The model's joint torques along the reference: while a table plays,
-    /// from its Φ, Φ̇ and Φ̈; otherwise static torques of the reference
-    /// posture. In both, the other foot takes up to the load it may carry
-    /// where that lowers the effort (`dynamics::share_load`): the share the
-    /// plan gives it (the whole body between steps; along a swing what the
-    /// table plans for its swing foot, so a table can shift the weight in
-    /// double support before it lifts the foot). Not from the foot's sensor
-    /// during a swing: a swing foot brushing the ground then switched the
-    /// model's load on and off, and the feed-forward bounced the foot. In a
-    /// safe hold, what the sensor reads (NaN: nothing).
+    /// The model's answer to the last tick's request
+    /// ([`crate::feedforward`]): from the model task through the slot when
+    /// the board runs one (the one before kept if none came).
     #[inline(always)]
-    fn feedforward(&self, s: &Senses, r: &Reference, weight: f32) -> FeedForward {
-        let model = &self.cfg.model;
+    fn model_answer(&mut self) -> FeedForward {
+        if let Some(ff) = self.model_slot.and_then(ModelSlot::answer_to_last_request) {
+            self.model_ff = ff;
+        }
+        self.model_ff
+    }
+
+    /// Asks the model for the torques along this tick's reference, for the
+    /// next tick: while a table plays, its Φ, Φ̇ and Φ̈; otherwise the
+    /// statics of the reference posture. In both, the other foot takes up
+    /// to the load it may carry where that lowers the effort
+    /// (`dynamics::share_load`): the share the plan gives it (the whole
+    /// body between steps; along a swing what the table plans for its swing
+    /// foot, so a table can shift the weight in double support before it
+    /// lifts the foot). Not from the foot's sensor during a swing: a swing
+    /// foot brushing the ground then switched the model's load on and off,
+    /// and the feed-forward bounced the foot. In a safe hold, what the
+    /// sensor reads (NaN: nothing).
+    #[inline(always)]
+    fn ask_model(&mut self, s: &Senses, r: &Reference, weight: f32) {
         let other_load_n = match r.other_foot_share {
             Some(share) => weight * share.clamp(0.0, 1.0),
             None => {
@@ -204,48 +203,27 @@ impl Controller<'_> {
                 }
             }
         };
-        let (posture, dphi, ddphi) = match r.motion {
-            Some(m) => (m.posture, m.dphi, m.ddphi),
-            None => {
-                let stance_ankle = self.static_stance_phi1(s, r);
-                (
-                    Posture::new(&phi_from_joints(&r.angle_rad, stance_ankle, r.stance)),
-                    [0.0; gait_core::LINKS],
-                    [0.0; gait_core::LINKS],
-                )
-            }
+        let req = match r.motion {
+            Some(m) => ModelRequest {
+                phi: m.posture.phi,
+                motion: Some((m.dphi, m.ddphi)),
+                other_load_n,
+                stance: r.stance,
+            },
+            None => ModelRequest {
+                phi: phi_from_joints(&r.angle_rad, self.static_stance_phi1(s, r), r.stance),
+                motion: None,
+                other_load_n,
+                stance: r.stance,
+            },
         };
-        // The stance heel lifts past the ankle's stop (stair descent): the
-        // chain then turns about the toe (gait_core::foot). A constant
-        // contact: the inlined dispatch folds away.
-        let contact = Contact::ToeRocker(StanceFoot::for_model(model));
-        // A posture held at rest needs its statics alone.
-        let single = joint_torques(&if r.motion.is_some() {
-            dynamics::inverse_dynamics_at(model, &contact, &posture, &dphi, &ddphi)
-        } else {
-            dynamics::static_torques_at(model, &contact, &posture)
-        });
-        // In single support nothing is shared: the sharing's answer is the
-        // single-support torques and no reaction, and the load per newton
-        // it also gives is read only while the other foot carries a share
-        // (`push_other_foot`). Most of a swing's ticks skip it.
-        let shared = if other_load_n > 0.0 {
-            dynamics::share_load_at(model, &contact, &posture, &single, other_load_n)
-        } else {
-            dynamics::DoubleSupportStatics {
-                reaction_n: [0.0; 2],
-                torques: single,
-                per_newton: ([0.0; gait_core::LINKS], [0.0; gait_core::LINKS]),
+        // Without a task, the answer is worked out now and kept for the
+        // next tick: the same torques the task would give it.
+        match self.model_slot {
+            Some(slot) => {
+                slot.request(&req);
             }
-        };
-        let ff = joint_torques_from_theta_torques(&shared.torques, r.stance);
-        let (_, per_newton_up) = shared.per_newton;
-        let per_newton = joint_torques_from_theta_torques(&per_newton_up.map(|v| -v), r.stance);
-        let clean = |v: f32| if v.is_finite() { v } else { 0.0 };
-        FeedForward {
-            torques_nm: ff.map(clean),
-            other_foot_n: clean(shared.reaction_n[1]),
-            per_other_foot_newton: per_newton.map(clean),
+            None => self.model_ff = feedforward(&self.cfg.model, &req),
         }
     }
 

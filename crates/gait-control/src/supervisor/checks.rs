@@ -38,23 +38,32 @@ impl Supervisor {
     pub(super) fn check_deadline(&mut self, input: &SupervisorInput, t: &mut Tick) {
         if input.deadline_missed {
             self.deadline_misses_total = self.deadline_misses_total.saturating_add(1);
-            if let Some(slot) = self.misses.get_mut(self.miss_next) {
-                *slot = Some(self.calls);
+            if let Some(slot) = self.misses.get_mut(usize::from(self.miss_next)) {
+                *slot = self.calls;
             }
-            self.miss_next = (self.miss_next + 1) % self.misses.len();
+            self.miss_next = (self.miss_next + 1) % MAX_DEADLINE_MISSES;
+        }
+        if self.deadline_misses_total == 0 {
+            return;
         }
         let now = self.calls;
         let window = self.cfg.deadline_window_ticks;
         // The newest miss outside the window: none to count (most ticks).
-        let len = self.misses.len();
-        let newest = self.misses.get((self.miss_next + len - 1) % len.max(1));
-        if newest.is_none_or(|m| m.is_none_or(|at| now.wrapping_sub(at) >= window)) {
+        let newest = usize::from((self.miss_next + MAX_DEADLINE_MISSES - 1) % MAX_DEADLINE_MISSES);
+        if self
+            .misses
+            .get(newest)
+            .is_none_or(|&at| now.wrapping_sub(at) >= window)
+        {
             return;
         }
+        let held = self
+            .deadline_misses_total
+            .min(u32::from(MAX_DEADLINE_MISSES)) as usize;
         let recent = self
             .misses
             .iter()
-            .flatten()
+            .take(held)
             .filter(|&&at| now.wrapping_sub(at) < window)
             .count();
         if recent >= usize::from(self.cfg.deadline_miss_count) {

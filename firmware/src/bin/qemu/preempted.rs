@@ -23,7 +23,8 @@
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
-use cortex_m::peripheral::{NVIC, SYST};
+use cortex_m::peripheral::scb::SystemHandler;
+use cortex_m::peripheral::{NVIC, SCB, SYST};
 use cortex_m_rt::exception;
 use exogait_device::replan::REPLAN;
 use exogait_device::tick_record::{RECORD_LEN, Segment, TickRecord, segments};
@@ -32,8 +33,9 @@ use firmware::idle_replan::IdleReplanner;
 use firmware::qemu_rig::RigHardware;
 use firmware::tick_replay::{REPLANNING_RECORDS, Replay};
 use firmware::tick_state::TickState;
-use firmware::{board_config, qemu_rig};
+use firmware::{board_config, model_task, qemu_rig};
 use gait_control::controller::Controller;
+use gait_control::feedforward::ModelTask;
 use gait_control::replan::{ReplanOutcome, ReplanSlot};
 
 use crate::{INSTR_PER_TICK, Out, SYST_MAX, checked, line, print_phases};
@@ -56,6 +58,11 @@ static TICKS: AtomicU32 = AtomicU32::new(0);
 /// Instructions spent in the timer interrupt so far (taken out of the
 /// re-planner's count).
 static TICK_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+/// The model task's answers so far, their instructions, and the most one
+/// took (taken out of the re-planner's count, as the tick's are).
+static MODEL_ANSWERS: AtomicU32 = AtomicU32::new(0);
+static MODEL_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+static MODEL_WORST: AtomicU32 = AtomicU32::new(0);
 /// The recording has been replayed to its end.
 static DONE: AtomicBool = AtomicBool::new(false);
 
@@ -93,13 +100,15 @@ impl Ticking {
     }
 }
 
-/// The ticks so far, their instructions so far and SysTick, read together
-/// (no tick between them).
+/// The ticks so far, the instructions of the ticks and the model task so
+/// far, and SysTick, read together (no interrupt between them).
 fn clocks() -> (u32, u32, u32) {
     cortex_m::interrupt::free(|_| {
         (
             TICKS.load(Ordering::Acquire),
-            TICK_INSTRUCTIONS.load(Ordering::Acquire),
+            TICK_INSTRUCTIONS
+                .load(Ordering::Acquire)
+                .wrapping_add(MODEL_INSTRUCTIONS.load(Ordering::Acquire)),
             SYST::get_current(),
         )
     })
@@ -180,6 +189,18 @@ unsafe fn DefaultHandler(irqn: i16) {
     }
 }
 
+/// The model task, below the tick (`firmware::model_task`).
+#[exception]
+fn PendSV() {
+    static mut TASK: Option<ModelTask<'static>> = None;
+    let start = SYST::get_current();
+    model_task::serve(TASK);
+    let instr = since(start);
+    MODEL_ANSWERS.fetch_add(1, Ordering::AcqRel);
+    MODEL_INSTRUCTIONS.fetch_add(instr, Ordering::AcqRel);
+    MODEL_WORST.fetch_max(instr, Ordering::AcqRel);
+}
+
 /// The timer's interrupt: one control tick.
 fn on_tick() {
     let start = SYST::get_current();
@@ -195,6 +216,7 @@ fn on_tick() {
     });
     TICKS.fetch_add(1, Ordering::AcqRel);
     TICK_INSTRUCTIONS.fetch_add(since(start), Ordering::AcqRel);
+    model_task::pend();
 }
 
 /// One re-plan as thread mode ran it.
@@ -210,7 +232,7 @@ struct Seen {
 /// Replays the recording with the tick in the timer's interrupt and the
 /// re-planner in thread mode; prints what they did. Returns the number of
 /// failures.
-pub(crate) fn check(out: &mut Out) -> usize {
+pub(crate) fn check(out: &mut Out, scb: &mut SCB) -> usize {
     let Some(segment) = segments(REPLANNING_RECORDS).ok().and_then(|mut s| s.next()) else {
         out.put(&mut line(
             "tick: replanning: no recording built in (cargo xtask qemu records one)",
@@ -228,6 +250,14 @@ pub(crate) fn check(out: &mut Out) -> usize {
         ));
         return 1;
     };
+    // SAFETY: PendSV has not run yet; lowering its priority breaks no
+    // critical section (nothing relies on PendSV being masked).
+    unsafe { scb.set_priority(SystemHandler::PendSV, model_task::PRIORITY) };
+    let model = ModelTask::new(ticking.controller.config().model, &model_task::SLOT);
+    if !model_task::install(model) {
+        out.put(&mut line("FAIL replanning: the model task is in use"));
+        return 1;
+    }
     if !TICKING.place(ticking) {
         out.put(&mut line("FAIL replanning: the tick's state is in use"));
         return 1;
@@ -277,6 +307,7 @@ fn ticking(device: &DeviceConfig, segment: &Segment<'static>) -> Option<Ticking>
     let mut controller =
         build_controller(device, board_config::flash_tables(), segment.gait).ok()?;
     controller.set_replanner(&SLOT, REPLAN);
+    controller.set_model_task(&model_task::SLOT);
     let hw = board_config::hardware(device, qemu_rig::peripherals()).ok()?;
     Some(Ticking {
         device: *device,
@@ -319,6 +350,15 @@ fn report<'a>(out: &mut Out, done: &Ticking, seen: impl Iterator<Item = &'a Seen
     }
     let r = &done.replay;
     print_phases(out, "tick: replanning phase=", r);
+    let answers = MODEL_ANSWERS.load(Ordering::Acquire);
+    out.put(
+        line("model: replanning avg=")
+            .u32(MODEL_INSTRUCTIONS.load(Ordering::Acquire) / answers.max(1))
+            .str(" worst=")
+            .u32(MODEL_WORST.load(Ordering::Acquire))
+            .str(" answers=")
+            .u32(answers),
+    );
     let bad = r.differing_ticks > 0 || done.overruns > 0;
     failed += usize::from(bad);
     out.put(

@@ -1,9 +1,10 @@
-//! The motor board's two priorities (`firmware::idle_replan`): TIM2's
-//! update interrupt runs the control tick every 1 ms, and thread mode runs
-//! the step re-planner when the sequencer asked for one (with
-//! `board_config::REPLANNING`), else sleeps (WFI). The interrupt preempts
-//! thread mode; they share only the re-plan slot's atomics, so the tick
-//! never waits for the re-planner.
+//! The motor board's three priorities: TIM2's update interrupt runs the
+//! control tick every 1 ms; PendSV, which the tick pends as it ends, works
+//! out the model's feed-forward for the next tick (`firmware::model_task`);
+//! thread mode runs the step re-planner when the sequencer asked for one
+//! (with `board_config::REPLANNING`, `firmware::idle_replan`), else sleeps
+//! (WFI). Each preempts the ones below it; they share only the slots'
+//! atomics, so the tick never waits for either.
 //!
 //! The watchdog is fed by the tick: a tick that stops coming resets the
 //! board, whatever thread mode is doing.
@@ -12,8 +13,10 @@ use cortex_m::peripheral::{DWT, NVIC};
 use cortex_m_rt::exception;
 use firmware::board_config::{self, TICK_HZ};
 use firmware::idle_replan::IdleReplanner;
+use firmware::model_task;
 use firmware::tick_state::TickState;
 use gait_control::controller::{Controller, TickReport};
+use gait_control::feedforward::ModelTask;
 use gait_control::faults::{FaultCode, FaultSet, Reaction};
 use gait_control::replan::ReplanSlot;
 use stm32f4xx_hal::pac;
@@ -64,6 +67,7 @@ impl Board {
         let _ = self.tick.elapsed();
         let start = DWT::cycle_count();
         let report = self.controller.tick(&mut self.hw, self.overran);
+        model_task::pend();
         self.dog.feed();
         let cycles = DWT::cycle_count().wrapping_sub(start);
         self.log
@@ -73,6 +77,13 @@ impl Board {
         // supervisor decides what a run of them means.
         self.overran = self.tick.pending();
     }
+}
+
+/// The model task, below the tick.
+#[exception]
+fn PendSV() {
+    static mut TASK: Option<ModelTask<'static>> = None;
+    model_task::serve(TASK);
 }
 
 /// Every interrupt without a handler of its own comes here (cortex-m-rt's
