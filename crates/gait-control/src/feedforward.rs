@@ -105,13 +105,28 @@ pub fn feedforward(model: &BodyModel<f32>, req: &ModelRequest) -> FeedForward {
     }
 }
 
-/// Words of a request: Φ, Φ̇, Φ̈, the load, the flags.
-const REQUEST_WORDS: usize = 3 * LINKS + 2;
-/// Words of an answer: the torques, the other foot's load, per newton.
-const ANSWER_WORDS: usize = 2 * JOINTS + 1;
 /// Flag bits of a request.
 const MOVING: u32 = 1;
 const RIGHT_STANCE: u32 = 2;
+
+/// Five f32 as atomic words.
+type Words5 = [AtomicU32; LINKS];
+/// Four f32 as atomic words.
+type Words4 = [AtomicU32; JOINTS];
+
+fn store<const N: usize>(words: &[AtomicU32; N], values: &[f32; N]) {
+    for (w, v) in words.iter().zip(values) {
+        w.store(v.to_bits(), Ordering::Relaxed);
+    }
+}
+
+fn load<const N: usize>(words: &[AtomicU32; N]) -> [f32; N] {
+    let mut out = [0.0; N];
+    for (o, w) in out.iter_mut().zip(words) {
+        *o = f32::from_bits(w.load(Ordering::Relaxed));
+    }
+    out
+}
 
 /// The hand-off between the tick and the model task: every word an atomic,
 /// one writer each way. The tick writes a request (it is never interrupted
@@ -122,12 +137,18 @@ const RIGHT_STANCE: u32 = 2;
 pub struct ModelSlot {
     /// Requests made so far.
     request_seq: AtomicU32,
-    request: [AtomicU32; REQUEST_WORDS],
+    phi: Words5,
+    dphi: Words5,
+    ddphi: Words5,
+    other_load_n: AtomicU32,
+    flags: AtomicU32,
     /// Twice the answers begun, plus one while one is being written.
     answer_seq: AtomicU32,
     /// The request the answer is for.
     answered: AtomicU32,
-    answer: [AtomicU32; ANSWER_WORDS],
+    torques_nm: Words4,
+    other_foot_n: AtomicU32,
+    per_other_foot_newton: Words4,
 }
 
 impl Default for ModelSlot {
@@ -142,29 +163,35 @@ impl ModelSlot {
     pub const fn new() -> Self {
         Self {
             request_seq: AtomicU32::new(0),
-            request: [const { AtomicU32::new(0) }; REQUEST_WORDS],
+            phi: [const { AtomicU32::new(0) }; LINKS],
+            dphi: [const { AtomicU32::new(0) }; LINKS],
+            ddphi: [const { AtomicU32::new(0) }; LINKS],
+            other_load_n: AtomicU32::new(0),
+            flags: AtomicU32::new(0),
             answer_seq: AtomicU32::new(0),
             answered: AtomicU32::new(0),
-            answer: [const { AtomicU32::new(0) }; ANSWER_WORDS],
+            torques_nm: [const { AtomicU32::new(0) }; JOINTS],
+            other_foot_n: AtomicU32::new(0),
+            per_other_foot_newton: [const { AtomicU32::new(0) }; JOINTS],
         }
     }
 
     /// The tick: makes `req` the request; returns its number.
     pub fn request(&self, req: &ModelRequest) -> u32 {
-        let (dphi, ddphi) = req.motion.unwrap_or(([0.0; LINKS], [0.0; LINKS]));
-        let flags = if req.motion.is_some() { MOVING } else { 0 }
-            | if req.stance == Side::Right {
-                RIGHT_STANCE
-            } else {
-                0
-            };
-        let values = req.phi.iter().chain(&dphi).chain(&ddphi);
-        for (w, &v) in self.request.iter().zip(values) {
-            w.store(v.to_bits(), Ordering::Relaxed);
+        store(&self.phi, &req.phi);
+        let mut flags = if req.stance == Side::Right {
+            RIGHT_STANCE
+        } else {
+            0
+        };
+        if let Some((dphi, ddphi)) = &req.motion {
+            store(&self.dphi, dphi);
+            store(&self.ddphi, ddphi);
+            flags |= MOVING;
         }
-        let [.., load, f] = &self.request;
-        load.store(req.other_load_n.to_bits(), Ordering::Relaxed);
-        f.store(flags, Ordering::Relaxed);
+        self.other_load_n
+            .store(req.other_load_n.to_bits(), Ordering::Relaxed);
+        self.flags.store(flags, Ordering::Relaxed);
         let n = self.request_seq.load(Ordering::Relaxed).wrapping_add(1);
         self.request_seq.store(n, Ordering::Release);
         n
@@ -177,17 +204,12 @@ impl ModelSlot {
         if seq == 0 || seq % 2 == 1 {
             return None;
         }
-        let mut words = [0.0f32; ANSWER_WORDS];
-        for (v, w) in words.iter_mut().zip(&self.answer) {
-            *v = f32::from_bits(w.load(Ordering::Relaxed));
-        }
-        let [t0, t1, t2, t3, other, p0, p1, p2, p3] = words;
         Some((
             self.answered.load(Ordering::Relaxed),
             FeedForward {
-                torques_nm: [t0, t1, t2, t3],
-                other_foot_n: other,
-                per_other_foot_newton: [p0, p1, p2, p3],
+                torques_nm: load(&self.torques_nm),
+                other_foot_n: f32::from_bits(self.other_foot_n.load(Ordering::Relaxed)),
+                per_other_foot_newton: load(&self.per_other_foot_newton),
             },
         ))
     }
@@ -199,40 +221,29 @@ impl ModelSlot {
         (n == self.request_seq.load(Ordering::Relaxed)).then_some(ff)
     }
 
-    /// The task: the newest request and its number, read whole (a tick
-    /// that came while it was read made a newer one: read again, at most
-    /// a few times); `None` before the first request.
+    /// The task (and observers): the newest request and its number, read
+    /// whole (a tick that came while it was read made a newer one: read
+    /// again, at most a few times); `None` before the first request.
     pub fn newest_request(&self) -> Option<(u32, ModelRequest)> {
         for _ in 0..4 {
             let before = self.request_seq.load(Ordering::Acquire);
             if before == 0 {
                 return None;
             }
-            let mut words = [0u32; REQUEST_WORDS];
-            for (v, w) in words.iter_mut().zip(&self.request) {
-                *v = w.load(Ordering::Relaxed);
-            }
-            if self.request_seq.load(Ordering::Acquire) != before {
-                continue;
-            }
-            let f = |i: usize| f32::from_bits(words.get(i).copied().unwrap_or(0));
-            let phi: Phi<f32> = core::array::from_fn(f);
-            let dphi: Phi<f32> = core::array::from_fn(|i| f(LINKS + i));
-            let ddphi: Phi<f32> = core::array::from_fn(|i| f(2 * LINKS + i));
-            let flags = words.get(REQUEST_WORDS - 1).copied().unwrap_or(0);
-            return Some((
-                before,
-                ModelRequest {
-                    phi,
-                    motion: (flags & MOVING != 0).then_some((dphi, ddphi)),
-                    other_load_n: f(3 * LINKS),
-                    stance: if flags & RIGHT_STANCE != 0 {
-                        Side::Right
-                    } else {
-                        Side::Left
-                    },
+            let flags = self.flags.load(Ordering::Relaxed);
+            let req = ModelRequest {
+                phi: load(&self.phi),
+                motion: (flags & MOVING != 0).then(|| (load(&self.dphi), load(&self.ddphi))),
+                other_load_n: f32::from_bits(self.other_load_n.load(Ordering::Relaxed)),
+                stance: if flags & RIGHT_STANCE != 0 {
+                    Side::Right
+                } else {
+                    Side::Left
                 },
-            ));
+            };
+            if self.request_seq.load(Ordering::Acquire) == before {
+                return Some((before, req));
+            }
         }
         None
     }
@@ -241,14 +252,10 @@ impl ModelSlot {
     fn publish(&self, n: u32, ff: &FeedForward) {
         let writing = self.answer_seq.load(Ordering::Relaxed).wrapping_add(1) | 1;
         self.answer_seq.store(writing, Ordering::Release);
-        let values = ff
-            .torques_nm
-            .iter()
-            .chain(core::iter::once(&ff.other_foot_n))
-            .chain(&ff.per_other_foot_newton);
-        for (w, &v) in self.answer.iter().zip(values) {
-            w.store(v.to_bits(), Ordering::Relaxed);
-        }
+        store(&self.torques_nm, &ff.torques_nm);
+        self.other_foot_n
+            .store(ff.other_foot_n.to_bits(), Ordering::Relaxed);
+        store(&self.per_other_foot_newton, &ff.per_other_foot_newton);
         self.answered.store(n, Ordering::Relaxed);
         // Even again (never 0: 0 means no answer yet).
         self.answer_seq
