@@ -23,9 +23,16 @@ fn in_the_first_swing(device: &DeviceConfig, gait: Gait, fraction: f32) -> f64 {
         .unwrap()
 }
 
+/// A foot carrying this is on the ground, N (half the load the device
+/// takes for a landing, `SequencerConfig::landing_contact_n`: a set-down
+/// foot meets the ground under a body held on the other leg, and carries
+/// what the hold puts on it, not a landing's share).
+const ON_THE_GROUND_N: f64 = 40.0;
+
 /// One step of `gait` with the stance (left) hip's encoder failing at
 /// `fraction` of the swing: the outcome, when the hold began, and how
-/// long after it the swing (right) foot first carried 80 N, s.
+/// long after it the swing (right) foot first carried
+/// [`ON_THE_GROUND_N`], s.
 fn hold_in_a_swing(device: &DeviceConfig, gait: Gait, fraction: f32) -> (Outcome, f64, f64) {
     let at_s = in_the_first_swing(device, gait, fraction);
     let fault = Injection {
@@ -46,7 +53,7 @@ fn hold_in_a_swing(device: &DeviceConfig, gait: Gait, fraction: f32) -> (Outcome
         .unwrap();
     let contact_s = trace
         .iter()
-        .find(|s| s.state.time_s >= held_s && s.state.foot_forces_n[1] >= 80.0)
+        .find(|s| s.state.time_s >= held_s && s.state.foot_forces_n[1] >= ON_THE_GROUND_N)
         .map_or(f64::INFINITY, |s| s.state.time_s - held_s);
     (o, held_s, contact_s)
 }
