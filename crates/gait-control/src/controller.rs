@@ -8,7 +8,8 @@
 //!    sequencer's one update obeys them and the last verdict's orders and
 //!    hands over the whole [`Reference`] (one table interpolation);
 //! 3. **act** (`controller/act.rs`) — per joint, PID plus the model's
-//!    inverse-dynamics feed-forward along the reference (gait-core, f32);
+//!    feed-forward: its answer to the last tick's request, and the request
+//!    for this tick's reference ([`crate::feedforward`]);
 //! 4. **guard** — the supervisor checks every fact and decides a reaction
 //!    before anything is written; the reaction becomes the orders of the
 //!    next update;
@@ -16,7 +17,8 @@
 //!    guard), indicators, the crutch-load metric.
 //!
 //! Bounded: fixed numbers of reads, one table interpolation (three lookups
-//! for the rates), one inverse-dynamics evaluation, no allocation, no wait.
+//! for the rates), no allocation, no wait; the inverse dynamics run between
+//! ticks (or, without a model task, once a tick for the next one).
 
 mod act;
 mod chain;

@@ -1,6 +1,7 @@
-//! *act*: per joint, PID plus the model's inverse-dynamics feed-forward
-//! along the reference (gait-core, f32), with the other foot's load closed
-//! on its sensor in double support.
+//! *act*: per joint, PID plus the model's feed-forward (its answer to the
+//! last tick's request, [`crate::feedforward`]), with the other foot's
+//! load closed on its sensor in double support; and the model's request
+//! for this tick's reference.
 
 use gait_core::foot::StanceFoot;
 use gait_core::model::GRAVITY_M_S2;
