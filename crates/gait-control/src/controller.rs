@@ -406,6 +406,7 @@ impl<'t> Controller<'t> {
                 hold_joint_at: s.chain_hold,
                 restart,
                 dt_s: self.cfg.dt_s,
+                ik_ahead: self.model_slot.map(ModelSlot::ik),
             }),
             operator,
         }

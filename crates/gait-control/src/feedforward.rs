@@ -30,6 +30,7 @@ use gait_core::foot::StanceFoot;
 use gait_core::kinematics::{Phi, Posture, joint_torques};
 use gait_core::model::BodyModel;
 
+use crate::ik_ahead::IkSlot;
 use crate::posture::{JOINTS, Side, joint_torques_from_theta_torques};
 
 /// What a tick asks of the model: its reference in the stance leg's frame.
@@ -149,6 +150,8 @@ pub struct ModelSlot {
     torques_nm: Words4,
     other_foot_n: AtomicU32,
     per_other_foot_newton: Words4,
+    /// The weight transfer's IK, a tick ahead.
+    ik: IkSlot,
 }
 
 impl Default for ModelSlot {
@@ -173,7 +176,13 @@ impl ModelSlot {
             torques_nm: [const { AtomicU32::new(0) }; JOINTS],
             other_foot_n: AtomicU32::new(0),
             per_other_foot_newton: [const { AtomicU32::new(0) }; JOINTS],
+            ik: IkSlot::new(),
         }
+    }
+
+    /// The weight transfer's IK hand-off ([`crate::ik_ahead`]).
+    pub const fn ik(&self) -> &IkSlot {
+        &self.ik
     }
 
     /// The tick: makes `req` the request; returns its number.
@@ -277,9 +286,10 @@ impl<'t> ModelTask<'t> {
         Self { model, slot }
     }
 
-    /// Answers the newest request if it has no answer yet; the request's
-    /// number when it did.
+    /// Answers the newest request for the feed-forward if it has no answer
+    /// yet (its number when it did), and the transfer's IK ask.
     pub fn serve(&self) -> Option<u32> {
+        self.slot.ik.serve(&self.model);
         let (n, req) = self.slot.newest_request()?;
         if self.slot.answer().is_some_and(|(a, _)| a == n) {
             return None;

@@ -13,6 +13,7 @@ pub mod drivers;
 pub mod faults;
 pub mod feedforward;
 mod fingerprint;
+pub mod ik_ahead;
 pub mod layout;
 pub mod operator;
 pub mod position_loop;

@@ -31,6 +31,7 @@ mod transfer;
 
 use gait_core::BodyModel;
 
+use crate::ik_ahead::IkSlot;
 use crate::operator::{Gait, MAX_GAITS};
 use crate::posture::{JOINTS, Side};
 pub use crate::reference::Reference;
@@ -47,6 +48,7 @@ pub use step::StepTable;
 use swing::SwingState;
 pub use tables::{GaitTables, Selection, gait_of_kind};
 use transfer::TransferPlan;
+pub(crate) use transfer::transfer_params;
 
 /// Where gait execution is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -289,7 +291,7 @@ impl<'t> Sequencer<'t> {
             None => {}
         }
         let (next_reference, swing, other_share) =
-            self.advance(input.sensed, input.dt_s, &mut events);
+            self.advance(input.sensed, input.dt_s, input.ik_ahead, &mut events);
         self.reference_of(
             next_reference,
             swing,
@@ -307,6 +309,7 @@ impl<'t> Sequencer<'t> {
         &mut self,
         sensed: &Sensed,
         dt_s: f32,
+        ik_ahead: Option<&IkSlot>,
         events: &mut SeqEvents,
     ) -> ([f32; JOINTS], Option<swing::Playing>, Option<f32>) {
         // The table's Φ at the swing's time while it plays (stance, t, Φ).
@@ -318,11 +321,16 @@ impl<'t> Sequencer<'t> {
             Phase::Swing { stance, t_s } => {
                 let (reference, playing, share) =
                     self.swing_tick(sensed, stance, t_s, dt_s, events);
+                if let (Phase::Transfer { .. }, Some(slot)) = (self.phase, ik_ahead) {
+                    self.ask_transfer_start(slot);
+                }
                 swing = playing;
                 other_share = Some(share);
                 reference
             }
-            Phase::Transfer { stance, t_s } => self.transfer_tick(stance, t_s, dt_s, events),
+            Phase::Transfer { stance, t_s } => {
+                self.transfer_tick(stance, t_s, dt_s, ik_ahead, events)
+            }
             Phase::SafeHold { t_s } => {
                 other_share = None;
                 self.hold_tick(sensed, t_s, dt_s)

@@ -1,8 +1,8 @@
-//! The model's feed-forward worked out between ticks
-//! (`gait_control::feedforward`): a controller whose model task answers
-//! through a slot, as on the board, drives the device exactly as one that
-//! works the answer out itself, and each tick applies the answer to the
-//! tick before's request.
+//! The model's work between ticks (`gait_control::feedforward`, the
+//! transfer's IK of `gait_control::ik_ahead`): a controller whose model
+//! task answers through a slot, as on the board, drives the device exactly
+//! as one that works the answers out itself, and each tick applies the
+//! feed-forward answered to the tick before's request.
 
 use gait_control::controller::TickReport;
 use gait_control::feedforward::{ModelSlot, ModelTask, feedforward};

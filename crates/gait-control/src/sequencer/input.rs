@@ -9,6 +9,7 @@
 //! tick's, which is where the orders take effect.
 
 use crate::faults::{FaultCode, InSwing, Reaction};
+use crate::ik_ahead::IkSlot;
 use crate::operator::Gait;
 use crate::posture::{JOINTS, Side};
 use crate::replan::ReplanResult;
@@ -65,6 +66,9 @@ pub struct SeqInput<'a, S> {
     pub restart: bool,
     /// Tick period, s.
     pub dt_s: f32,
+    /// Where the weight transfer asks the model task for its next tick's IK
+    /// ([`crate::ik_ahead`]); `None`: it works every solve out itself.
+    pub ik_ahead: Option<&'a IkSlot>,
 }
 
 /// What a verdict asks of the sequencer.

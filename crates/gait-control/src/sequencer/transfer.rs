@@ -6,9 +6,10 @@
 
 use gait_core::BodyModel;
 use gait_core::LINKS;
-use gait_core::ik::{IkSolver, IkTarget};
+use gait_core::ik::{IkOptions, IkSolver};
 use gait_core::kinematics::{Phi, forward_kinematics, swap_legs};
 
+use crate::ik_ahead::{IkAsk, IkJob, IkSlot};
 use crate::operator::{Gait, MAX_GAITS};
 use crate::posture::{JOINTS, Side, joints_from_phi};
 
@@ -38,7 +39,11 @@ pub(super) struct TransferPlan {
 
 /// (x5, y5, φ1, φ3, r2) of posture `phi`: the swing ankle, the stance shank
 /// and torso, and where φ2 sits in the IK's range for them.
-fn transfer_params(model: &BodyModel<f32>, ik: &IkSolver<f32>, phi: &Phi<f32>) -> Option<[f32; 5]> {
+pub(crate) fn transfer_params(
+    model: &BodyModel<f32>,
+    ik: &IkSolver<f32>,
+    phi: &Phi<f32>,
+) -> Option<[f32; 5]> {
     let [x5, y5] = forward_kinematics(model, phi).get(LINKS - 1).copied()?;
     let (lo, hi) = ik.phi2_range(x5, y5, phi[0]).ok()?;
     let r2 = if hi - lo > 1e-4 {
@@ -77,21 +82,26 @@ pub(super) const fn kind_index(gait: Gait) -> usize {
 impl Sequencer<'_> {
     /// A tick of the weight transfer `t_s + dt_s` after the landing: on to
     /// the next step's start posture, then waiting for the pilot (or
-    /// standing, when a stop was asked for).
+    /// standing, when a stop was asked for). With `ahead`, the next tick's
+    /// IK is asked of the model task ([`crate::ik_ahead`]).
     pub(super) fn transfer_tick(
         &mut self,
         stance: Side,
         t_s: f32,
         dt_s: f32,
+        ahead: Option<&IkSlot>,
         events: &mut SeqEvents,
     ) -> [f32; JOINTS] {
         let cfg = self.cfg;
         let t = t_s + dt_s;
-        let frac = if cfg.transfer_s > 0.0 {
-            t / cfg.transfer_s
-        } else {
-            1.0
+        let fraction_at = |t: f32| {
+            if cfg.transfer_s > 0.0 {
+                t / cfg.transfer_s
+            } else {
+                1.0
+            }
         };
+        let frac = fraction_at(t);
         if frac >= 1.0 {
             if self.stop_requested {
                 self.phase = Phase::Standing;
@@ -103,8 +113,48 @@ impl Sequencer<'_> {
             self.blend_to
         } else {
             self.phase = Phase::Transfer { stance, t_s: t };
-            self.transfer_reference(frac, stance)
+            let reference = self.transfer_reference(frac, stance, ahead);
+            if let Some(slot) = ahead {
+                self.ask_transfer_ik(slot, fraction_at(t + dt_s));
+            }
+            reference
         }
+    }
+
+    /// Asks the model task for what the transfer's next tick (at
+    /// `next_fraction`) will solve: the landing offset's IK after the first
+    /// tick, the path's after that.
+    fn ask_transfer_ik(&self, slot: &IkSlot, next_fraction: f32) {
+        let (Some(plan), Some(options)) = (self.transfer, self.transfer_ik_options()) else {
+            return;
+        };
+        let job = match (plan.from, plan.offset) {
+            (Some(from), None) => IkJob::Solve(from),
+            (Some(from), Some(_)) if next_fraction < 1.0 => {
+                let Some(to) = self.transfer_targets.get(self.slot).copied().flatten() else {
+                    return;
+                };
+                IkJob::Solve(transfer_point(&from, &to, next_fraction))
+            }
+            _ => return,
+        };
+        slot.request(&IkAsk { job, options });
+    }
+
+    /// Asks the model task for the transfer's first tick: the landing
+    /// posture's IK parameters.
+    pub(super) fn ask_transfer_start(&self, slot: &IkSlot) {
+        if let (Some(plan), Some(options)) = (self.transfer, self.transfer_ik_options()) {
+            slot.request(&IkAsk {
+                job: IkJob::Params(plan.landing_phi),
+                options,
+            });
+        }
+    }
+
+    /// The IK options of the gait's table; `None` without one.
+    fn transfer_ik_options(&self) -> Option<IkOptions<f32>> {
+        Some(self.table.as_ref()?.ik_options())
     }
 
     /// The double-support plan from the reference Φ at landing (old stance
@@ -122,45 +172,36 @@ impl Sequencer<'_> {
         })
     }
 
-    fn transfer_joints(
-        &self,
-        ik: &IkSolver<f32>,
-        p: &[f32; 5],
-        stance: Side,
-    ) -> Option<[f32; JOINTS]> {
-        let sol = ik
-            .solve(&IkTarget {
-                x5: p[0],
-                y5: p[1],
-                phi1: p[2],
-                phi3: p[3],
-                r2: p[4],
-            })
-            .ok()?;
-        Some(joints_from_phi(&sol.phi, stance))
-    }
-
-    /// The IK the gait's table was made with (the options its header
-    /// carries); `None` without a table.
-    fn transfer_ik(&self, model: &BodyModel<f32>) -> Option<IkSolver<f32>> {
-        let options = self.table.as_ref()?.ik_options();
-        Some(IkSolver::new(model).with_options(options))
+    /// `ask`'s answer: the model task's when it gave it, else worked out
+    /// now (the same computation).
+    fn ik_answer(model: &BodyModel<f32>, ahead: Option<&IkSlot>, ask: &IkAsk) -> Option<[f32; 5]> {
+        match ahead.and_then(|slot| slot.answer_to(ask)) {
+            Some(answer) => answer,
+            None => ask.work(model),
+        }
     }
 
     /// The transfer reference at `fraction` (smoothstepped), or the joint
     /// blend when there is no plan or the IK fails. The first call of a
-    /// transfer solves the landing's offset and holds the landing reference.
-    fn transfer_reference(&mut self, fraction: f32, stance: Side) -> [f32; JOINTS] {
+    /// transfer finds the landing's parameters and the second its offset;
+    /// both hold the landing reference.
+    fn transfer_reference(
+        &mut self,
+        fraction: f32,
+        stance: Side,
+        ahead: Option<&IkSlot>,
+    ) -> [f32; JOINTS] {
         let planned = self.transfer.and_then(|plan| {
             let model = self.model.as_ref()?;
-            let ik = self.transfer_ik(model)?;
+            let options = self.transfer_ik_options()?;
             let landing = joints_from_phi(&plan.landing_phi, stance);
+            let answer = |job| Self::ik_answer(model, ahead, &IkAsk { job, options });
             let Some(from) = plan.from else {
-                let from = transfer_params(model, &ik, &plan.landing_phi)?;
+                let from = answer(IkJob::Params(plan.landing_phi))?;
                 return Some((landing, Solved::From(from)));
             };
             let Some(offset) = plan.offset else {
-                let at_landing = self.transfer_joints(&ik, &from, stance)?;
+                let at_landing = joints_from_phi(&answer(IkJob::Solve(from))?, stance);
                 let mut offset = [0.0; JOINTS];
                 for ((o, r), a) in offset.iter_mut().zip(&landing).zip(&at_landing) {
                     *o = r - a;
@@ -169,11 +210,8 @@ impl Sequencer<'_> {
             };
             let to = self.transfer_targets.get(self.slot).copied().flatten()?;
             let s = smoothstep(fraction);
-            let mut p = from;
-            for (v, &b) in p.iter_mut().zip(&to) {
-                *v += s * (b - *v);
-            }
-            let mut joints = self.transfer_joints(&ik, &p, stance)?;
+            let p = transfer_point(&from, &to, fraction);
+            let mut joints = joints_from_phi(&answer(IkJob::Solve(p))?, stance);
             for (j, &o) in joints.iter_mut().zip(&offset) {
                 *j += (1.0 - s) * o;
             }
@@ -193,6 +231,17 @@ impl Sequencer<'_> {
             None => self.blended(fraction),
         }
     }
+}
+
+/// The transfer path's IK parameters at `fraction` (smoothstepped) of the
+/// way from `from` to `to`.
+fn transfer_point(from: &[f32; 5], to: &[f32; 5], fraction: f32) -> [f32; 5] {
+    let s = smoothstep(fraction);
+    let mut p = *from;
+    for (v, &b) in p.iter_mut().zip(to) {
+        *v += s * (b - *v);
+    }
+    p
 }
 
 /// What a transfer tick worked out for the ticks after it.

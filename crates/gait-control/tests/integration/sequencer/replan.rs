@@ -206,6 +206,7 @@ fn the_selected_tables_samples_are_played_when_a_movement_has_several() {
             hold_joint_at: None,
             restart: false,
             dt_s: DT,
+            ik_ahead: None,
         });
         last = Some(r);
     }

@@ -1,0 +1,293 @@
+//! The weight transfer's inverse kinematics, worked out a tick ahead by the
+//! model task ([`crate::feedforward::ModelTask`]).
+//!
+//! Between two steps the reference follows a path in the IK's parameters
+//! (`sequencer/transfer.rs`): each tick solves the IK once, the largest
+//! piece of a transfer tick. Where the next tick's solve is known (the
+//! path is fixed once the foot has landed), the tick asks for it and the
+//! model task answers between the two ticks; the next tick takes the
+//! answer if it is for exactly what it needs (the same job, bit for bit)
+//! and works it out itself otherwise. The answer is the very computation
+//! the tick would make, so the reference is the same either way.
+
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use gait_core::BodyModel;
+use gait_core::ik::{IkOptions, IkSolver, KneeRange};
+use gait_core::kinematics::Phi;
+
+use crate::sequencer::transfer_params;
+
+/// One solve the transfer needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum IkJob {
+    /// The IK's parameters (x5, y5, φ1, φ3, r2) of a posture Φ: where the
+    /// transfer starts.
+    Params(Phi<f32>),
+    /// The posture Φ at parameters (x5, y5, φ1, φ3, r2).
+    Solve([f32; 5]),
+}
+
+/// A job with the IK options of the table it is for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IkAsk {
+    /// What to work out.
+    pub job: IkJob,
+    /// The IK the table was made with.
+    pub options: IkOptions<f32>,
+}
+
+impl IkAsk {
+    /// The answer: five values, or `None` where the IK has none.
+    #[must_use]
+    pub fn work(&self, model: &BodyModel<f32>) -> Option<[f32; 5]> {
+        let ik = IkSolver::new(model).with_options(self.options);
+        match &self.job {
+            IkJob::Params(phi) => transfer_params(model, &ik, phi),
+            IkJob::Solve([x5, y5, phi1, phi3, r2]) => ik
+                .solve(&gait_core::ik::IkTarget {
+                    x5: *x5,
+                    y5: *y5,
+                    phi1: *phi1,
+                    phi3: *phi3,
+                    r2: *r2,
+                })
+                .ok()
+                .map(|s| s.phi),
+        }
+    }
+
+    /// Its words: the kind and the knee range as flags, the cap, the input.
+    fn words(&self) -> (u32, u32, [u32; 5]) {
+        let (kind, input) = match &self.job {
+            IkJob::Params(phi) => (0, *phi),
+            IkJob::Solve(p) => (SOLVE, *p),
+        };
+        let range = match self.options.knee_range {
+            KneeRange::Reach => 0,
+            KneeRange::Human => HUMAN_RANGE,
+        };
+        (
+            kind | range,
+            self.options.stance_knee_max_rad.to_bits(),
+            input.map(f32::to_bits),
+        )
+    }
+}
+
+/// Flag bits of an ask.
+const SOLVE: u32 = 1;
+const HUMAN_RANGE: u32 = 2;
+/// Flag bit of an answer: the IK found one.
+const FOUND: u32 = 1;
+
+/// The IK's hand-off, one writer each way, as the feed-forward's
+/// ([`crate::feedforward::ModelSlot`]).
+#[derive(Debug)]
+pub struct IkSlot {
+    request_seq: AtomicU32,
+    flags: AtomicU32,
+    cap: AtomicU32,
+    input: [AtomicU32; 5],
+    answer_seq: AtomicU32,
+    answered: AtomicU32,
+    found: AtomicU32,
+    output: [AtomicU32; 5],
+}
+
+impl Default for IkSlot {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl IkSlot {
+    /// Nothing asked.
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            request_seq: AtomicU32::new(0),
+            flags: AtomicU32::new(0),
+            cap: AtomicU32::new(0),
+            input: [const { AtomicU32::new(0) }; 5],
+            answer_seq: AtomicU32::new(0),
+            answered: AtomicU32::new(0),
+            found: AtomicU32::new(0),
+            output: [const { AtomicU32::new(0) }; 5],
+        }
+    }
+
+    /// Asks made so far (for observers).
+    pub fn asked(&self) -> u32 {
+        self.request_seq.load(Ordering::Relaxed)
+    }
+
+    /// The tick: asks for `ask`'s answer by the next tick.
+    pub fn request(&self, ask: &IkAsk) {
+        let (flags, cap, input) = ask.words();
+        self.flags.store(flags, Ordering::Relaxed);
+        self.cap.store(cap, Ordering::Relaxed);
+        for (w, v) in self.input.iter().zip(input) {
+            w.store(v, Ordering::Relaxed);
+        }
+        let n = self.request_seq.load(Ordering::Relaxed).wrapping_add(1);
+        self.request_seq.store(n, Ordering::Release);
+    }
+
+    /// The tick: the answer to `ask` if its last request was `ask`, bit for
+    /// bit, and the task has answered it whole (`Some(None)`: the IK has
+    /// none); `None` otherwise (the tick works it out).
+    pub fn answer_to(&self, ask: &IkAsk) -> Option<Option<[f32; 5]>> {
+        let seq = self.answer_seq.load(Ordering::Acquire);
+        let last = self.request_seq.load(Ordering::Relaxed);
+        if seq == 0 || seq % 2 == 1 || self.answered.load(Ordering::Relaxed) != last {
+            return None;
+        }
+        let (flags, cap, input) = ask.words();
+        let same = self.flags.load(Ordering::Relaxed) == flags
+            && self.cap.load(Ordering::Relaxed) == cap
+            && self
+                .input
+                .iter()
+                .zip(input)
+                .all(|(w, v)| w.load(Ordering::Relaxed) == v);
+        if !same {
+            return None;
+        }
+        let found = self.found.load(Ordering::Relaxed) & FOUND != 0;
+        let out = self
+            .output
+            .each_ref()
+            .map(|w| f32::from_bits(w.load(Ordering::Relaxed)));
+        Some(found.then_some(out))
+    }
+
+    /// The task: the newest ask and its number, read whole; `None` before
+    /// the first, or if ticks kept replacing it while it was read.
+    fn newest(&self) -> Option<(u32, IkAsk)> {
+        for _ in 0..4 {
+            let before = self.request_seq.load(Ordering::Acquire);
+            if before == 0 {
+                return None;
+            }
+            let flags = self.flags.load(Ordering::Relaxed);
+            let cap = f32::from_bits(self.cap.load(Ordering::Relaxed));
+            let input = self
+                .input
+                .each_ref()
+                .map(|w| f32::from_bits(w.load(Ordering::Relaxed)));
+            if self.request_seq.load(Ordering::Acquire) != before {
+                continue;
+            }
+            let job = if flags & SOLVE != 0 {
+                IkJob::Solve(input)
+            } else {
+                IkJob::Params(input)
+            };
+            let knee_range = if flags & HUMAN_RANGE != 0 {
+                KneeRange::Human
+            } else {
+                KneeRange::Reach
+            };
+            return Some((
+                before,
+                IkAsk {
+                    job,
+                    options: IkOptions {
+                        stance_knee_max_rad: cap,
+                        knee_range,
+                    },
+                },
+            ));
+        }
+        None
+    }
+
+    /// The task: answers the newest ask if it has no answer yet; its
+    /// number when it did.
+    pub(crate) fn serve(&self, model: &BodyModel<f32>) -> Option<u32> {
+        let (n, ask) = self.newest()?;
+        let seq = self.answer_seq.load(Ordering::Relaxed);
+        if seq != 0 && seq % 2 == 0 && self.answered.load(Ordering::Relaxed) == n {
+            return None;
+        }
+        let out = ask.work(model);
+        let writing = seq.wrapping_add(1) | 1;
+        self.answer_seq.store(writing, Ordering::Release);
+        for (w, v) in self.output.iter().zip(out.unwrap_or([0.0; 5])) {
+            w.store(v.to_bits(), Ordering::Relaxed);
+        }
+        self.found
+            .store(if out.is_some() { FOUND } else { 0 }, Ordering::Relaxed);
+        self.answered.store(n, Ordering::Relaxed);
+        self.answer_seq
+            .store(writing.wrapping_add(1).max(2), Ordering::Release);
+        Some(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gait_core::kinematics::forward_kinematics;
+
+    fn model() -> BodyModel<f32> {
+        BodyModel::<f32>::paper_table_iii()
+    }
+
+    #[test]
+    fn an_answer_serves_only_the_ask_it_was_made_for() {
+        let m = model();
+        let slot = IkSlot::new();
+        let phi = [0.1, 0.35, 0.05, 2.9, 3.3];
+        let params = IkAsk {
+            job: IkJob::Params(phi),
+            options: IkOptions::paper(),
+        };
+        assert_eq!(slot.answer_to(&params), None, "nothing asked");
+        slot.request(&params);
+        assert_eq!(slot.answer_to(&params), None, "not answered yet");
+        assert!(slot.serve(&m).is_some());
+        assert!(slot.serve(&m).is_none(), "answered once");
+        let answer = slot.answer_to(&params).unwrap();
+        assert_eq!(answer, params.work(&m));
+        let p = answer.unwrap();
+        // The same posture's ankle: the parameters are its own.
+        let ankle = forward_kinematics(&m, &phi)[4];
+        assert_eq!([p[0], p[1]], ankle);
+        // Another job, or the same with other options, is not answered.
+        let solve = IkAsk {
+            job: IkJob::Solve(p),
+            options: IkOptions::paper(),
+        };
+        assert_eq!(slot.answer_to(&solve), None);
+        let human = IkAsk {
+            options: IkOptions {
+                knee_range: KneeRange::Human,
+                ..IkOptions::paper()
+            },
+            ..params
+        };
+        assert_eq!(slot.answer_to(&human), None);
+        // Asked, the solve comes back as the tick would work it out.
+        slot.request(&solve);
+        assert_eq!(slot.answer_to(&params), None, "a newer ask replaced it");
+        slot.serve(&m);
+        assert_eq!(slot.answer_to(&solve), Some(solve.work(&m)));
+    }
+
+    #[test]
+    fn an_answer_being_written_is_not_read_and_no_solution_is_an_answer() {
+        let m = model();
+        let slot = IkSlot::new();
+        let far = IkAsk {
+            job: IkJob::Solve([5.0, 0.0, 0.0, 0.0, 0.5]),
+            options: IkOptions::paper(),
+        };
+        slot.request(&far);
+        slot.serve(&m);
+        assert_eq!(slot.answer_to(&far), Some(None), "out of reach");
+        slot.answer_seq.fetch_add(1, Ordering::Release);
+        assert_eq!(slot.answer_to(&far), None, "being written");
+    }
+}
