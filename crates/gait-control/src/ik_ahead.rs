@@ -208,7 +208,7 @@ impl IkSlot {
     pub(crate) fn serve(&self, model: &BodyModel<f32>) -> Option<u32> {
         let (n, ask) = self.newest()?;
         let seq = self.answer_seq.load(Ordering::Relaxed);
-        if seq != 0 && seq % 2 == 0 && self.answered.load(Ordering::Relaxed) == n {
+        if seq != 0 && seq & 1 == 0 && self.answered.load(Ordering::Relaxed) == n {
             return None;
         }
         let out = ask.work(model);
