@@ -41,6 +41,7 @@ use exogait_device::DeviceError;
 use firmware::text::Line;
 use firmware::{board_config, qemu_rig, selftest, tick_replay};
 use gait_control::faults::{FaultSet, Reaction};
+use gait_control::feedforward::{ModelSlot, ModelTask};
 use gait_core::BodyModel;
 use gait_core::dynamics::Contact::{FixedAnkle, ToeRocker};
 use gait_core::dynamics::{inverse_dynamics, share_load};
@@ -338,7 +339,7 @@ fn control_tick_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
     };
     // xtask compares this with the host's (the simulator's) configuration.
     out.put(line("device: fingerprint=0x").hex(device.fingerprint(), 8));
-    let mut controller = match board_config::build_controller() {
+    let controller = match board_config::build_controller() {
         Ok(c) => c,
         Err(e) => {
             let mut l = line("FAIL control: configuration refused: ");
@@ -371,6 +372,11 @@ fn control_tick_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
             .usize(core::mem::size_of_val(&hw))
             .str(")"),
     );
+    // The model task answers between the ticks, as PendSV does on the board.
+    let slot = ModelSlot::new();
+    let mut controller: gait_control::controller::Controller<'_> = controller;
+    controller.set_model_task(&slot);
+    let task = ModelTask::new(controller.config().model, &slot);
     let base = ctr.once(|| black_box(0u32)).0;
     let mut total: u64 = 0;
     let mut worst = 0u32;
@@ -379,6 +385,7 @@ fn control_tick_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
     let mut last = None;
     for i in 0..CONTROL_TICKS {
         let (instr, report) = ctr.once(|| controller.tick(&mut hw, false));
+        task.serve();
         let instr = instr.saturating_sub(base);
         total += u64::from(instr);
         if instr > worst {
