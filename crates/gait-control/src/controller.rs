@@ -406,7 +406,7 @@ impl<'t> Controller<'t> {
                 hold_joint_at: s.chain_hold,
                 restart,
                 dt_s: self.cfg.dt_s,
-                ik_ahead: self.model_slot.map(ModelSlot::ik),
+                ahead: self.model_slot.map(ModelSlot::ahead),
             }),
             operator,
         }

@@ -30,7 +30,7 @@ use gait_core::foot::StanceFoot;
 use gait_core::kinematics::{Phi, Posture, joint_torques};
 use gait_core::model::BodyModel;
 
-use crate::ik_ahead::IkSlot;
+use crate::ahead::AheadSlot;
 use crate::posture::{JOINTS, Side, joint_torques_from_theta_torques};
 
 /// What a tick asks of the model: its reference in the stance leg's frame.
@@ -150,8 +150,8 @@ pub struct ModelSlot {
     torques_nm: Words4,
     other_foot_n: AtomicU32,
     per_other_foot_newton: Words4,
-    /// The weight transfer's IK, a tick ahead.
-    ik: IkSlot,
+    /// The work asked a tick ahead (the transfer's IK, the swing's share).
+    ahead: AheadSlot,
 }
 
 impl Default for ModelSlot {
@@ -176,13 +176,13 @@ impl ModelSlot {
             torques_nm: [const { AtomicU32::new(0) }; JOINTS],
             other_foot_n: AtomicU32::new(0),
             per_other_foot_newton: [const { AtomicU32::new(0) }; JOINTS],
-            ik: IkSlot::new(),
+            ahead: AheadSlot::new(),
         }
     }
 
-    /// The weight transfer's IK hand-off ([`crate::ik_ahead`]).
-    pub const fn ik(&self) -> &IkSlot {
-        &self.ik
+    /// The hand-off of the work a tick ahead ([`crate::ahead`]).
+    pub const fn ahead(&self) -> &AheadSlot {
+        &self.ahead
     }
 
     /// The tick: makes `req` the request; returns its number.
@@ -287,9 +287,10 @@ impl<'t> ModelTask<'t> {
     }
 
     /// Answers the newest request for the feed-forward if it has no answer
-    /// yet (its number when it did), and the transfer's IK ask.
+    /// yet (its number when it did), and the newest ask of the work a tick
+    /// ahead ([`crate::ahead`]).
     pub fn serve(&self) -> Option<u32> {
-        self.slot.ik.serve(&self.model);
+        self.slot.ahead.serve(&self.model);
         let (n, req) = self.slot.newest_request()?;
         if self.slot.answer().is_some_and(|(a, _)| a == n) {
             return None;

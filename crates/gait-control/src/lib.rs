@@ -7,13 +7,13 @@
 //!   machine (described for clinicians in `docs/operation.md`).
 #![no_std]
 
+pub mod ahead;
 pub mod controller;
 pub mod crutch_load;
 pub mod drivers;
 pub mod faults;
 pub mod feedforward;
 mod fingerprint;
-pub mod ik_ahead;
 pub mod layout;
 pub mod operator;
 pub mod position_loop;

@@ -7,7 +7,7 @@
 //! motion → torques in the controller.
 
 use gait_core::LINKS;
-use gait_core::kinematics::{Phi, Posture};
+use gait_core::kinematics::Phi;
 use gait_core::tables::GaitTable;
 
 use crate::posture::{JOINTS, Side};
@@ -49,23 +49,22 @@ pub struct Reference {
 /// The table's motion at one time, stance frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TableMotion {
-    /// Φ (rad) with its sines, worked out once for the tick.
-    pub posture: Posture<f32>,
+    /// Φ, rad.
+    pub phi: Phi<f32>,
     /// Φ̇, rad/s.
     pub dphi: Phi<f32>,
     /// Φ̈, rad/s².
     pub ddphi: Phi<f32>,
 }
 
-/// The motion of `table` at `t_s`, given its posture there (`posture`, the
-/// one interpolation of the tick): rates by central differences over one table
+/// The motion of `table` at `t_s`, given its Φ there (`phi`, the one
+/// interpolation of the tick): rates by central differences over one table
 /// period, taken from samples inside the table. Past either end, at_time
 /// clamps, and a central difference across the clamp would read the last
 /// rate as a stop within one period (φ1 still moving at 0.14 rad/s at the
 /// landing became a 1,200 N·m ankle and 600 N·m knee demand). `None` once
 /// the table has ended: the reference then holds its last posture.
-pub fn table_motion(table: &StepTable<'_>, t_s: f32, posture: Posture<f32>) -> Option<TableMotion> {
-    let phi = posture.phi;
+pub fn table_motion(table: &StepTable<'_>, t_s: f32, phi: Phi<f32>) -> Option<TableMotion> {
     if t_s > table.duration_s() {
         return None;
     }
@@ -84,11 +83,7 @@ pub fn table_motion(table: &StepTable<'_>, t_s: f32, posture: Posture<f32>) -> O
         *o1 = (x2 - x0) / (2.0 * h);
         *o2 = (x2 - 2.0 * x1 + x0) / (h * h);
     }
-    Some(TableMotion {
-        posture,
-        dphi,
-        ddphi,
-    })
+    Some(TableMotion { phi, dphi, ddphi })
 }
 
 /// Where the ankles are planned while both feet are down in a table's

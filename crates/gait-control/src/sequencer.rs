@@ -31,7 +31,7 @@ mod transfer;
 
 use gait_core::BodyModel;
 
-use crate::ik_ahead::IkSlot;
+use crate::ahead::AheadSlot;
 use crate::operator::{Gait, MAX_GAITS};
 use crate::posture::{JOINTS, Side};
 pub use crate::reference::Reference;
@@ -291,7 +291,7 @@ impl<'t> Sequencer<'t> {
             None => {}
         }
         let (next_reference, swing, other_share) =
-            self.advance(input.sensed, input.dt_s, input.ik_ahead, &mut events);
+            self.advance(input.sensed, input.dt_s, input.ahead, &mut events);
         self.reference_of(
             next_reference,
             swing,
@@ -309,7 +309,7 @@ impl<'t> Sequencer<'t> {
         &mut self,
         sensed: &Sensed,
         dt_s: f32,
-        ik_ahead: Option<&IkSlot>,
+        ahead: Option<&AheadSlot>,
         events: &mut SeqEvents,
     ) -> ([f32; JOINTS], Option<swing::Playing>, Option<f32>) {
         // The table's Φ at the swing's time while it plays (stance, t, Φ).
@@ -317,20 +317,18 @@ impl<'t> Sequencer<'t> {
         let mut other_share = Some(1.0);
         let next_reference = match self.phase {
             Phase::Standing => self.blend_to,
-            Phase::WaitingReady { stance } => self.wait_ready(sensed, stance, events),
+            Phase::WaitingReady { stance } => self.wait_ready(sensed, stance, dt_s, ahead, events),
             Phase::Swing { stance, t_s } => {
                 let (reference, playing, share) =
-                    self.swing_tick(sensed, stance, t_s, dt_s, events);
-                if let (Phase::Transfer { .. }, Some(slot)) = (self.phase, ik_ahead) {
+                    self.swing_tick(sensed, stance, t_s, dt_s, ahead, events);
+                if let (Phase::Transfer { .. }, Some(slot)) = (self.phase, ahead) {
                     self.ask_transfer_start(slot);
                 }
                 swing = playing;
                 other_share = Some(share);
                 reference
             }
-            Phase::Transfer { stance, t_s } => {
-                self.transfer_tick(stance, t_s, dt_s, ik_ahead, events)
-            }
+            Phase::Transfer { stance, t_s } => self.transfer_tick(stance, t_s, dt_s, ahead, events),
             Phase::SafeHold { t_s } => {
                 other_share = None;
                 self.hold_tick(sensed, t_s, dt_s)
@@ -366,7 +364,7 @@ impl<'t> Sequencer<'t> {
             // table is read).
             Phase::Swing { .. } => swing.map_or([f32::NAN; 2], |(s, t, phi)| {
                 let phi1 = match (step, phi) {
-                    (Some(tb), Some(p)) if t <= tb.duration_s() => p.phi[0],
+                    (Some(tb), Some(p)) if t <= tb.duration_s() => p[0],
                     (Some(tb), _) => tb.at_time(tb.duration_s())[0],
                     (None, _) => f32::NAN,
                 };

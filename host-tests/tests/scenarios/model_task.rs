@@ -1,5 +1,5 @@
-//! The model's work between ticks (`gait_control::feedforward`, the
-//! transfer's IK of `gait_control::ik_ahead`): a controller whose model
+//! The model's work between ticks (`gait_control::feedforward`, and the
+//! transfer's IK and the swing's share of `gait_control::ahead`): a controller whose model
 //! task answers through a slot, as on the board, drives the device exactly
 //! as one that works the answers out itself, and each tick applies the
 //! feed-forward answered to the tick before's request.

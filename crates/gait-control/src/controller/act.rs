@@ -206,7 +206,7 @@ impl Controller<'_> {
         };
         let req = match r.motion {
             Some(m) => ModelRequest {
-                phi: m.posture.phi,
+                phi: m.phi,
                 motion: Some((m.dphi, m.ddphi)),
                 other_load_n,
                 stance: r.stance,

@@ -8,8 +8,8 @@
 //! written), so the earliest reference a reaction can change is the next
 //! tick's, which is where the orders take effect.
 
+use crate::ahead::AheadSlot;
 use crate::faults::{FaultCode, InSwing, Reaction};
-use crate::ik_ahead::IkSlot;
 use crate::operator::Gait;
 use crate::posture::{JOINTS, Side};
 use crate::replan::ReplanResult;
@@ -66,9 +66,10 @@ pub struct SeqInput<'a, S> {
     pub restart: bool,
     /// Tick period, s.
     pub dt_s: f32,
-    /// Where the weight transfer asks the model task for its next tick's IK
-    /// ([`crate::ik_ahead`]); `None`: it works every solve out itself.
-    pub ik_ahead: Option<&'a IkSlot>,
+    /// Where the weight transfer and the swing ask the model task for their
+    /// next tick's IK and share ([`crate::ahead`]); `None`: the sequencer
+    /// works them out itself.
+    pub ahead: Option<&'a AheadSlot>,
 }
 
 /// What a verdict asks of the sequencer.

@@ -6,6 +6,7 @@
 
 use gait_core::kinematics::Posture;
 
+use crate::ahead::AheadSlot;
 use crate::posture::{Side, joints_from_phi};
 
 use crate::replan::{ReplanOutcome, ReplanRequest, ReplanResult, SlotView};
@@ -59,6 +60,8 @@ impl<'t> Sequencer<'t> {
         &mut self,
         sensed: &Sensed,
         stance: Side,
+        dt_s: f32,
+        ahead: Option<&AheadSlot>,
         events: &mut SeqEvents,
     ) -> [f32; JOINTS] {
         if self.stop_requested {
@@ -78,6 +81,9 @@ impl<'t> Sequencer<'t> {
             .unwrap_or([0.0; 2]);
         let lands_first_from_s = self.lands_first_from_s();
         self.swing.begin(start_m, lands_first_from_s);
+        if let Some(slot) = ahead {
+            self.ask_swing_share(slot, dt_s);
+        }
         events.push(SeqEvent::SwingStarted(self.gait, stance));
         joints_from_phi(&start, stance)
     }

@@ -5,8 +5,9 @@
 //! [`SequencerConfig::ground_search_depth_m`](super::SequencerConfig))
 //! until the foot's sensor feels the ground or the landing times out.
 
-use gait_core::kinematics::Posture;
+use gait_core::kinematics::{Phi, Posture};
 
+use crate::ahead::{AheadAsk, AheadJob, AheadSlot};
 use crate::posture::{Side, joints_from_phi};
 
 use super::{
@@ -18,7 +19,7 @@ use super::{
 pub(super) const SEARCH_MIN_KNEE_FLEXION_RAD: f32 = 0.1;
 
 /// The table's posture at the swing's time while it plays: (stance, t, Φ).
-pub(super) type Playing = (Side, f32, Option<Posture<f32>>);
+pub(super) type Playing = (Side, f32, Option<Phi<f32>>);
 
 /// The present swing's landing detection.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,6 +75,7 @@ impl Sequencer<'_> {
         stance: Side,
         t_s: f32,
         dt_s: f32,
+        ahead: Option<&AheadSlot>,
         events: &mut SeqEvents,
     ) -> ([f32; JOINTS], Option<Playing>, f32) {
         let cfg = self.cfg;
@@ -88,9 +90,8 @@ impl Sequencer<'_> {
         // Past the table's end without a landing, the foot goes on down
         // looking for the ground.
         let phi_t = step.map(|tb| self.searching_for_ground(&tb.at_time(t), t - duration));
-        let posture_t = phi_t.map(|p| Posture::new(&p));
         self.swing.phi1 = phi_t.map_or(f32::NAN, |p| p[0]);
-        let share = self.swing_share(posture_t.as_ref());
+        let share = phi_t.map_or(0.0, |p| self.swing_share(&p, ahead));
         if self.swing.lifted_at_s.is_none() && share <= 0.0 {
             self.swing.lifted_at_s = Some(t);
         }
@@ -152,9 +153,29 @@ impl Sequencer<'_> {
             events.push(SeqEvent::Stopped);
         } else {
             self.phase = Phase::Swing { stance, t_s: t };
-            playing = Some((stance, t, posture_t));
+            playing = Some((stance, t, phi_t));
+            if let Some(slot) = ahead {
+                self.ask_swing_share(slot, t + dt_s);
+            }
         }
         (reference, playing, share)
+    }
+
+    /// Asks the model task for the share at the swing's next tick, `t_s`
+    /// into it, while the table plays (the ground search past its end
+    /// works its posture out only then).
+    pub(super) fn ask_swing_share(&self, slot: &AheadSlot, t_s: f32) {
+        let (Some(step), Some(table)) = (self.step, self.table) else {
+            return;
+        };
+        let searching = t_s - step.duration_s() - self.cfg.ground_search_after_s;
+        if searching.is_finite() && searching > 0.0 {
+            return;
+        }
+        slot.request(&AheadAsk {
+            job: AheadJob::SwingShare(step.at_time(t_s), self.swing.start_m),
+            options: table.ik_options(),
+        });
     }
 
     /// From when in the present swing a safe hold lands the step first, s
@@ -210,13 +231,24 @@ impl Sequencer<'_> {
         gait_core::reach::lower_swing_ankle(model, phi, depth, SEARCH_MIN_KNEE_FLEXION_RAD)
     }
 
-    /// The other foot's share at the table's posture in the present swing
-    /// (0 without a model: the foot is taken as lifted from the start, and
-    /// the landing window counts from the swing's start).
-    fn swing_share(&self, posture: Option<&Posture<f32>>) -> f32 {
-        self.planned_swing_toe(posture).map_or(0.0, |p| {
-            gait_core::playback::other_foot_share(p, self.swing.start_m)
-        })
+    /// The other foot's share at the table's posture `phi` in the present
+    /// swing (0 without a model: the foot is taken as lifted from the
+    /// start, and the landing window counts from the swing's start): the
+    /// model task's answer when it gave it, else worked out now.
+    fn swing_share(&self, phi: &Phi<f32>, ahead: Option<&AheadSlot>) -> f32 {
+        if let (Some(slot), Some(table), true) = (ahead, self.table, self.model.is_some()) {
+            let ask = AheadAsk {
+                job: AheadJob::SwingShare(*phi, self.swing.start_m),
+                options: table.ik_options(),
+            };
+            if let Some(Some([share, ..])) = slot.answer_to(&ask) {
+                return share;
+            }
+        }
+        self.planned_swing_toe(Some(&Posture::new(phi)))
+            .map_or(0.0, |p| {
+                gait_core::playback::other_foot_share(p, self.swing.start_m)
+            })
     }
 
     /// The step has ended: a re-planned one's samples go back to the

@@ -9,7 +9,7 @@ use gait_core::LINKS;
 use gait_core::ik::{IkOptions, IkSolver};
 use gait_core::kinematics::{Phi, forward_kinematics, swap_legs};
 
-use crate::ik_ahead::{IkAsk, IkJob, IkSlot};
+use crate::ahead::{AheadAsk, AheadJob, AheadSlot};
 use crate::operator::{Gait, MAX_GAITS};
 use crate::posture::{JOINTS, Side, joints_from_phi};
 
@@ -83,13 +83,13 @@ impl Sequencer<'_> {
     /// A tick of the weight transfer `t_s + dt_s` after the landing: on to
     /// the next step's start posture, then waiting for the pilot (or
     /// standing, when a stop was asked for). With `ahead`, the next tick's
-    /// IK is asked of the model task ([`crate::ik_ahead`]).
+    /// IK is asked of the model task ([`crate::ahead`]).
     pub(super) fn transfer_tick(
         &mut self,
         stance: Side,
         t_s: f32,
         dt_s: f32,
-        ahead: Option<&IkSlot>,
+        ahead: Option<&AheadSlot>,
         events: &mut SeqEvents,
     ) -> [f32; JOINTS] {
         let cfg = self.cfg;
@@ -124,29 +124,29 @@ impl Sequencer<'_> {
     /// Asks the model task for what the transfer's next tick (at
     /// `next_fraction`) will solve: the landing offset's IK after the first
     /// tick, the path's after that.
-    fn ask_transfer_ik(&self, slot: &IkSlot, next_fraction: f32) {
+    fn ask_transfer_ik(&self, slot: &AheadSlot, next_fraction: f32) {
         let (Some(plan), Some(options)) = (self.transfer, self.transfer_ik_options()) else {
             return;
         };
         let job = match (plan.from, plan.offset) {
-            (Some(from), None) => IkJob::Solve(from),
+            (Some(from), None) => AheadJob::Solve(from),
             (Some(from), Some(_)) if next_fraction < 1.0 => {
                 let Some(to) = self.transfer_targets.get(self.slot).copied().flatten() else {
                     return;
                 };
-                IkJob::Solve(transfer_point(&from, &to, next_fraction))
+                AheadJob::Solve(transfer_point(&from, &to, next_fraction))
             }
             _ => return,
         };
-        slot.request(&IkAsk { job, options });
+        slot.request(&AheadAsk { job, options });
     }
 
     /// Asks the model task for the transfer's first tick: the landing
     /// posture's IK parameters.
-    pub(super) fn ask_transfer_start(&self, slot: &IkSlot) {
+    pub(super) fn ask_transfer_start(&self, slot: &AheadSlot) {
         if let (Some(plan), Some(options)) = (self.transfer, self.transfer_ik_options()) {
-            slot.request(&IkAsk {
-                job: IkJob::Params(plan.landing_phi),
+            slot.request(&AheadAsk {
+                job: AheadJob::Params(plan.landing_phi),
                 options,
             });
         }
@@ -174,7 +174,11 @@ impl Sequencer<'_> {
 
     /// `ask`'s answer: the model task's when it gave it, else worked out
     /// now (the same computation).
-    fn ik_answer(model: &BodyModel<f32>, ahead: Option<&IkSlot>, ask: &IkAsk) -> Option<[f32; 5]> {
+    fn ik_answer(
+        model: &BodyModel<f32>,
+        ahead: Option<&AheadSlot>,
+        ask: &AheadAsk,
+    ) -> Option<[f32; 5]> {
         match ahead.and_then(|slot| slot.answer_to(ask)) {
             Some(answer) => answer,
             None => ask.work(model),
@@ -189,19 +193,19 @@ impl Sequencer<'_> {
         &mut self,
         fraction: f32,
         stance: Side,
-        ahead: Option<&IkSlot>,
+        ahead: Option<&AheadSlot>,
     ) -> [f32; JOINTS] {
         let planned = self.transfer.and_then(|plan| {
             let model = self.model.as_ref()?;
             let options = self.transfer_ik_options()?;
             let landing = joints_from_phi(&plan.landing_phi, stance);
-            let answer = |job| Self::ik_answer(model, ahead, &IkAsk { job, options });
+            let answer = |job| Self::ik_answer(model, ahead, &AheadAsk { job, options });
             let Some(from) = plan.from else {
-                let from = answer(IkJob::Params(plan.landing_phi))?;
+                let from = answer(AheadJob::Params(plan.landing_phi))?;
                 return Some((landing, Solved::From(from)));
             };
             let Some(offset) = plan.offset else {
-                let at_landing = joints_from_phi(&answer(IkJob::Solve(from))?, stance);
+                let at_landing = joints_from_phi(&answer(AheadJob::Solve(from))?, stance);
                 let mut offset = [0.0; JOINTS];
                 for ((o, r), a) in offset.iter_mut().zip(&landing).zip(&at_landing) {
                     *o = r - a;
@@ -211,7 +215,7 @@ impl Sequencer<'_> {
             let to = self.transfer_targets.get(self.slot).copied().flatten()?;
             let s = smoothstep(fraction);
             let p = transfer_point(&from, &to, fraction);
-            let mut joints = joints_from_phi(&answer(IkJob::Solve(p))?, stance);
+            let mut joints = joints_from_phi(&answer(AheadJob::Solve(p))?, stance);
             for (j, &o) in joints.iter_mut().zip(&offset) {
                 *j += (1.0 - s) * o;
             }

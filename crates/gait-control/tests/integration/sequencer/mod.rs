@@ -121,7 +121,7 @@ impl<'t> Rig<'t> {
             hold_joint_at: None,
             restart: false,
             dt_s: DT,
-            ik_ahead: None,
+            ahead: None,
         });
         self.events.extend(r.events.iter());
         r

@@ -88,7 +88,7 @@ fn a_replanned_step_is_played_exactly_at_the_latency() {
         assert!((a - b).abs() < 1e-5, "{:?} vs {:?}", r.angle_rad, played);
     }
     let motion = r.motion.unwrap();
-    assert!((motion.posture.phi[0] - answer[30][0]).abs() < 1e-5);
+    assert!((motion.phi[0] - answer[30][0]).abs() < 1e-5);
 }
 
 #[test]
@@ -206,12 +206,12 @@ fn the_selected_tables_samples_are_played_when_a_movement_has_several() {
             hold_joint_at: None,
             restart: false,
             dt_s: DT,
-            ik_ahead: None,
+            ahead: None,
         });
         last = Some(r);
     }
     assert!(matches!(seq.phase(), Phase::Swing { .. }));
-    let phi = last.unwrap().motion.unwrap().posture.phi;
+    let phi = last.unwrap().motion.unwrap().phi;
     let t = match seq.phase() {
         Phase::Swing { t_s, .. } => t_s,
         _ => unreachable!(),

@@ -1,50 +1,65 @@
-//! The weight transfer's inverse kinematics, worked out a tick ahead by the
-//! model task ([`crate::feedforward::ModelTask`]).
+//! Work a tick ahead, by the model task ([`crate::feedforward::ModelTask`]):
+//! the weight transfer's inverse kinematics and the swing foot's planned
+//! share.
 //!
 //! Between two steps the reference follows a path in the IK's parameters
 //! (`sequencer/transfer.rs`): each tick solves the IK once, the largest
-//! piece of a transfer tick. Where the next tick's solve is known (the
-//! path is fixed once the foot has landed), the tick asks for it and the
-//! model task answers between the two ticks; the next tick takes the
-//! answer if it is for exactly what it needs (the same job, bit for bit)
-//! and works it out itself otherwise. The answer is the very computation
-//! the tick would make, so the reference is the same either way.
+//! piece of a transfer tick. In a swing each tick works out where the
+//! table puts the swing foot's toe, for the share of the body it may carry
+//! (the landing window and the load sharing). Both are known a tick ahead
+//! (the transfer's path once the foot has landed, the table's next
+//! posture), so the tick asks for the next one and the model task answers
+//! between the two ticks; the next tick takes the answer if it is for
+//! exactly what it needs (the same job, bit for bit) and works it out
+//! itself otherwise. The answer is the very computation the tick would
+//! make, so the reference is the same either way.
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use gait_core::BodyModel;
+use gait_core::foot::StanceFoot;
 use gait_core::ik::{IkOptions, IkSolver, KneeRange};
-use gait_core::kinematics::Phi;
+use gait_core::kinematics::{Phi, Posture};
+use gait_core::playback::{other_foot_share, swing_toe_at};
 
 use crate::sequencer::transfer_params;
 
-/// One solve the transfer needs.
+/// One piece of work a tick needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum IkJob {
+pub enum AheadJob {
     /// The IK's parameters (x5, y5, φ1, φ3, r2) of a posture Φ: where the
     /// transfer starts.
     Params(Phi<f32>),
     /// The posture Φ at parameters (x5, y5, φ1, φ3, r2).
     Solve([f32; 5]),
+    /// The share of the body's weight a swing foot may carry at a table's
+    /// posture Φ, its toe having started at (x, y) (the stance foot's flat
+    /// frame; `gait_core::playback::other_foot_share`): the first value.
+    SwingShare(Phi<f32>, [f32; 2]),
 }
 
 /// A job with the IK options of the table it is for.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct IkAsk {
+pub struct AheadAsk {
     /// What to work out.
-    pub job: IkJob,
+    pub job: AheadJob,
     /// The IK the table was made with.
     pub options: IkOptions<f32>,
 }
 
-impl IkAsk {
+impl AheadAsk {
     /// The answer: five values, or `None` where the IK has none.
     #[must_use]
     pub fn work(&self, model: &BodyModel<f32>) -> Option<[f32; 5]> {
         let ik = IkSolver::new(model).with_options(self.options);
         match &self.job {
-            IkJob::Params(phi) => transfer_params(model, &ik, phi),
-            IkJob::Solve([x5, y5, phi1, phi3, r2]) => ik
+            AheadJob::Params(phi) => transfer_params(model, &ik, phi),
+            AheadJob::SwingShare(phi, start) => {
+                let foot = StanceFoot::for_model(model);
+                let toe = swing_toe_at(model, &foot, &Posture::new(phi));
+                Some([other_foot_share(toe, *start), 0.0, 0.0, 0.0, 0.0])
+            }
+            AheadJob::Solve([x5, y5, phi1, phi3, r2]) => ik
                 .solve(&gait_core::ik::IkTarget {
                     x5: *x5,
                     y5: *y5,
@@ -58,11 +73,13 @@ impl IkAsk {
     }
 
     /// Its words: the kind and the knee range as flags, the cap, the input.
-    fn words(&self) -> (u32, u32, [u32; 5]) {
-        let (kind, input) = match &self.job {
-            IkJob::Params(phi) => (0, *phi),
-            IkJob::Solve(p) => (SOLVE, *p),
+    fn words(&self) -> (u32, u32, [u32; 7]) {
+        let (kind, input, [x, y]) = match &self.job {
+            AheadJob::Params(phi) => (0, *phi, [0.0; 2]),
+            AheadJob::Solve(p) => (SOLVE, *p, [0.0; 2]),
+            AheadJob::SwingShare(phi, start) => (SHARE, *phi, *start),
         };
+        let [a, b, c, d, e] = input.map(f32::to_bits);
         let range = match self.options.knee_range {
             KneeRange::Reach => 0,
             KneeRange::Human => HUMAN_RANGE,
@@ -70,7 +87,7 @@ impl IkAsk {
         (
             kind | range,
             self.options.stance_knee_max_rad.to_bits(),
-            input.map(f32::to_bits),
+            [a, b, c, d, e, x.to_bits(), y.to_bits()],
         )
     }
 }
@@ -78,30 +95,32 @@ impl IkAsk {
 /// Flag bits of an ask.
 const SOLVE: u32 = 1;
 const HUMAN_RANGE: u32 = 2;
+const SHARE: u32 = 4;
 /// Flag bit of an answer: the IK found one.
 const FOUND: u32 = 1;
 
-/// The IK's hand-off, one writer each way, as the feed-forward's
+/// The hand-off of the work a tick ahead, one writer each way, as the
+/// feed-forward's
 /// ([`crate::feedforward::ModelSlot`]).
 #[derive(Debug)]
-pub struct IkSlot {
+pub struct AheadSlot {
     request_seq: AtomicU32,
     flags: AtomicU32,
     cap: AtomicU32,
-    input: [AtomicU32; 5],
+    input: [AtomicU32; 7],
     answer_seq: AtomicU32,
     answered: AtomicU32,
     found: AtomicU32,
     output: [AtomicU32; 5],
 }
 
-impl Default for IkSlot {
+impl Default for AheadSlot {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl IkSlot {
+impl AheadSlot {
     /// Nothing asked.
     #[must_use]
     pub const fn new() -> Self {
@@ -109,7 +128,7 @@ impl IkSlot {
             request_seq: AtomicU32::new(0),
             flags: AtomicU32::new(0),
             cap: AtomicU32::new(0),
-            input: [const { AtomicU32::new(0) }; 5],
+            input: [const { AtomicU32::new(0) }; 7],
             answer_seq: AtomicU32::new(0),
             answered: AtomicU32::new(0),
             found: AtomicU32::new(0),
@@ -123,7 +142,7 @@ impl IkSlot {
     }
 
     /// The tick: asks for `ask`'s answer by the next tick.
-    pub fn request(&self, ask: &IkAsk) {
+    pub fn request(&self, ask: &AheadAsk) {
         let (flags, cap, input) = ask.words();
         self.flags.store(flags, Ordering::Relaxed);
         self.cap.store(cap, Ordering::Relaxed);
@@ -137,7 +156,7 @@ impl IkSlot {
     /// The tick: the answer to `ask` if its last request was `ask`, bit for
     /// bit, and the task has answered it whole (`Some(None)`: the IK has
     /// none); `None` otherwise (the tick works it out).
-    pub fn answer_to(&self, ask: &IkAsk) -> Option<Option<[f32; 5]>> {
+    pub fn answer_to(&self, ask: &AheadAsk) -> Option<Option<[f32; 5]>> {
         let seq = self.answer_seq.load(Ordering::Acquire);
         let last = self.request_seq.load(Ordering::Relaxed);
         if seq == 0 || seq % 2 == 1 || self.answered.load(Ordering::Relaxed) != last {
@@ -164,7 +183,7 @@ impl IkSlot {
 
     /// The task: the newest ask and its number, read whole; `None` before
     /// the first, or if ticks kept replacing it while it was read.
-    fn newest(&self) -> Option<(u32, IkAsk)> {
+    fn newest(&self) -> Option<(u32, AheadAsk)> {
         for _ in 0..4 {
             let before = self.request_seq.load(Ordering::Acquire);
             if before == 0 {
@@ -172,17 +191,20 @@ impl IkSlot {
             }
             let flags = self.flags.load(Ordering::Relaxed);
             let cap = f32::from_bits(self.cap.load(Ordering::Relaxed));
-            let input = self
+            let [a, b, c, d, e, x, y] = self
                 .input
                 .each_ref()
                 .map(|w| f32::from_bits(w.load(Ordering::Relaxed)));
             if self.request_seq.load(Ordering::Acquire) != before {
                 continue;
             }
-            let job = if flags & SOLVE != 0 {
-                IkJob::Solve(input)
+            let input = [a, b, c, d, e];
+            let job = if flags & SHARE != 0 {
+                AheadJob::SwingShare(input, [x, y])
+            } else if flags & SOLVE != 0 {
+                AheadJob::Solve(input)
             } else {
-                IkJob::Params(input)
+                AheadJob::Params(input)
             };
             let knee_range = if flags & HUMAN_RANGE != 0 {
                 KneeRange::Human
@@ -191,7 +213,7 @@ impl IkSlot {
             };
             return Some((
                 before,
-                IkAsk {
+                AheadAsk {
                     job,
                     options: IkOptions {
                         stance_knee_max_rad: cap,
@@ -238,10 +260,10 @@ mod tests {
     #[test]
     fn an_answer_serves_only_the_ask_it_was_made_for() {
         let m = model();
-        let slot = IkSlot::new();
+        let slot = AheadSlot::new();
         let phi = [0.1, 0.35, 0.05, 2.9, 3.3];
-        let params = IkAsk {
-            job: IkJob::Params(phi),
+        let params = AheadAsk {
+            job: AheadJob::Params(phi),
             options: IkOptions::paper(),
         };
         assert_eq!(slot.answer_to(&params), None, "nothing asked");
@@ -256,12 +278,12 @@ mod tests {
         let ankle = forward_kinematics(&m, &phi)[4];
         assert_eq!([p[0], p[1]], ankle);
         // Another job, or the same with other options, is not answered.
-        let solve = IkAsk {
-            job: IkJob::Solve(p),
+        let solve = AheadAsk {
+            job: AheadJob::Solve(p),
             options: IkOptions::paper(),
         };
         assert_eq!(slot.answer_to(&solve), None);
-        let human = IkAsk {
+        let human = AheadAsk {
             options: IkOptions {
                 knee_range: KneeRange::Human,
                 ..IkOptions::paper()
@@ -277,11 +299,33 @@ mod tests {
     }
 
     #[test]
+    fn a_swing_foot_carries_the_body_only_near_where_its_toe_started() {
+        let m = model();
+        let phi = [0.1, 0.35, 0.05, 2.9, 3.3];
+        let toe = swing_toe_at(&m, &StanceFoot::for_model(&m), &Posture::new(&phi));
+        let share = |start: [f32; 2]| {
+            AheadAsk {
+                job: AheadJob::SwingShare(phi, start),
+                options: IkOptions::paper(),
+            }
+            .work(&m)
+            .map(|[s, ..]| s)
+        };
+        assert_eq!(share(toe), Some(1.0), "still where it started");
+        assert_eq!(share([toe[0] - 0.05, toe[1]]), Some(0.0), "5 cm on");
+        let half = share([toe[0] - 0.007, toe[1]]).unwrap();
+        assert!(
+            (half - 0.5).abs() < 1e-3,
+            "halfway between 2 and 12 mm: {half}"
+        );
+    }
+
+    #[test]
     fn an_answer_being_written_is_not_read_and_no_solution_is_an_answer() {
         let m = model();
-        let slot = IkSlot::new();
-        let far = IkAsk {
-            job: IkJob::Solve([5.0, 0.0, 0.0, 0.0, 0.5]),
+        let slot = AheadSlot::new();
+        let far = AheadAsk {
+            job: AheadJob::Solve([5.0, 0.0, 0.0, 0.0, 0.5]),
             options: IkOptions::paper(),
         };
         slot.request(&far);
