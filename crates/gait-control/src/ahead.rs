@@ -51,15 +51,15 @@ impl AheadAsk {
     /// The answer: five values, or `None` where the IK has none.
     #[must_use]
     pub fn work(&self, model: &BodyModel<f32>) -> Option<[f32; 5]> {
-        let ik = IkSolver::new(model).with_options(self.options);
+        let ik = || IkSolver::new(model).with_options(self.options);
         match &self.job {
-            AheadJob::Params(phi) => transfer_params(model, &ik, phi),
+            AheadJob::Params(phi) => transfer_params(model, &ik(), phi),
             AheadJob::SwingShare(phi, start) => {
                 let foot = StanceFoot::for_model(model);
                 let toe = swing_toe_at(model, &foot, &Posture::new(phi));
                 Some([other_foot_share(toe, *start), 0.0, 0.0, 0.0, 0.0])
             }
-            AheadJob::Solve([x5, y5, phi1, phi3, r2]) => ik
+            AheadJob::Solve([x5, y5, phi1, phi3, r2]) => ik()
                 .solve(&gait_core::ik::IkTarget {
                     x5: *x5,
                     y5: *y5,
