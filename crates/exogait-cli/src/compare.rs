@@ -380,6 +380,12 @@ pub fn table_text(a: &CompareJson) -> String {
         waits(&a.human.waited_s),
     );
     let c = &a.conditions;
+    if let Some((enc, adc)) = c.sensor_noise {
+        out += &format!(
+            "sensor noise: ±{enc} encoder counts, ±{adc} ADC counts (seed {})\n",
+            c.noise_seed
+        );
+    }
     if c.replan == crate::conditions::OnOff::On || c.pilot_lean != 0.0 || c.pilot_stiffness != 1.0 {
         out += &format!(
             "pilot: lean {:+.1}°, stiffness ×{:.2}; re-planning {} (re-planned answers: shipped {}, human {})\n",

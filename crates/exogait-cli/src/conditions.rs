@@ -1,7 +1,8 @@
 //! The pilot and board conditions `simulate` and `compare` run under: a
 //! pilot whose stance ankle departs from the plan (a habitual lean, a
-//! slower shank), and whether the board re-plans each step from the
-//! measured ankle in its idle time (`exogait_device::replan`).
+//! slower shank), the sensors' noise, and whether the board re-plans each
+//! step from the measured ankle in its idle time
+//! (`exogait_device::replan`).
 
 use clap::{Args, ValueEnum};
 use serde::Serialize;
@@ -42,6 +43,22 @@ pub struct Conditions {
     /// default (below 1: a slower shank that lags the plan).
     #[arg(long, value_name = "SHARE", default_value_t = 1.0)]
     pub pilot_stiffness: f64,
+    /// Sensor noise: uniform ±ENC counts on every encoder (of 16,384 per
+    /// turn) and ±ADC counts on the force ADC (of 4,096), e.g. `3,10`
+    /// (the encoder's datasheet noise is 0.06° RMS, 2.7 counts). Without
+    /// it a joint the chain holds reads exactly the same counts tick after
+    /// tick, which a real encoder never does.
+    #[arg(long, value_name = "ENC,ADC", value_parser = parse_noise)]
+    pub sensor_noise: Option<(u16, u16)>,
+    /// Seed of the sensor noise (`exogait faults` lists each run's, so a
+    /// run can be played again here).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 2026,
+        requires = "sensor_noise"
+    )]
+    pub noise_seed: u64,
 }
 
 impl Conditions {
@@ -69,10 +86,46 @@ impl Conditions {
         }
     }
 
-    /// Sets `rig` up: its board's re-planner on `slot` when on.
+    /// Sets `rig` up: its sensors' noise, its board's re-planner on
+    /// `slot` when on.
     pub fn prepare<'t>(&self, rig: &mut Rig<'t>, slot: &'t gait_control::replan::ReplanSlot) {
+        if let Some((enc, adc)) = self.sensor_noise {
+            rig.set_sensor_noise(enc, adc, self.noise_seed);
+        }
         if self.replan == OnOff::On {
             rig.replan_with(slot);
+        }
+    }
+}
+
+/// `ENC,ADC` → counts of noise on the encoders and the ADC (each ≤ 1,000).
+fn parse_noise(text: &str) -> Result<(u16, u16), String> {
+    let (enc, adc) = text
+        .split_once(',')
+        .ok_or_else(|| format!("expected ENC,ADC (two counts), got {text:?}"))?;
+    let count = |s: &str, what: &str| -> Result<u16, String> {
+        let v: u16 = s
+            .trim()
+            .parse()
+            .map_err(|_| format!("{what} noise must be a whole number of counts, got {s:?}"))?;
+        if v > 1000 {
+            return Err(format!("{what} noise {v} is beyond 1,000 counts"));
+        }
+        Ok(v)
+    };
+    Ok((count(enc, "encoder")?, count(adc, "ADC")?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_noise;
+
+    #[test]
+    fn noise_option_parses_and_refuses_clearly() {
+        assert_eq!(parse_noise("3,10"), Ok((3, 10)));
+        assert_eq!(parse_noise(" 0 , 0 "), Ok((0, 0)));
+        for bad in ["3", "a,1", "1,-2", "1,2000", "", "1,2,3"] {
+            assert!(parse_noise(bad).is_err(), "{bad:?} accepted");
         }
     }
 }

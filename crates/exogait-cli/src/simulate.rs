@@ -63,19 +63,6 @@ pub struct SimulateArgs {
     /// Write a plot of the run (.svg or .png).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
-    /// Sensor noise: uniform ±ENC counts on every encoder (of 16,384 per
-    /// turn) and ±ADC counts on the force ADC (of 4,096), e.g. `3,10`.
-    #[arg(long, value_name = "ENC,ADC", value_parser = parse_noise)]
-    pub sensor_noise: Option<(u16, u16)>,
-    /// Seed of the sensor noise (`exogait faults` lists each run's, so a
-    /// run can be played again here).
-    #[arg(
-        long,
-        value_name = "N",
-        default_value_t = 2026,
-        requires = "sensor_noise"
-    )]
-    pub noise_seed: u64,
     /// Play this table (flash format, `exogait table`) or `optimize`
     /// report instead of the flash table; its kind sets the gait. Refused
     /// before the run when the device cannot play it.
@@ -283,8 +270,6 @@ pub fn run(args: &SimulateArgs) -> u8 {
         );
         return 2;
     }
-    let noise = args.sensor_noise;
-    let noise_seed = args.noise_seed;
     let injections = args.inject.clone();
     let conditions = args.conditions;
     let slot = gait_control::replan::ReplanSlot::new();
@@ -297,9 +282,6 @@ pub fn run(args: &SimulateArgs) -> u8 {
         args.steps,
         |rig| {
             conditions.prepare(rig, &slot);
-            if let Some((enc, adc)) = noise {
-                rig.set_sensor_noise(enc, adc, noise_seed);
-            }
             for f in injections {
                 rig.schedule(f);
             }
@@ -437,36 +419,4 @@ pub fn run(args: &SimulateArgs) -> u8 {
         eprintln!("exogait simulate: a step landed more than 5 cm from its planned length");
     }
     1
-}
-
-/// `ENC,ADC` → counts of noise on the encoders and the ADC (each ≤ 1,000).
-fn parse_noise(text: &str) -> Result<(u16, u16), String> {
-    let (enc, adc) = text
-        .split_once(',')
-        .ok_or_else(|| format!("expected ENC,ADC (two counts), got {text:?}"))?;
-    let count = |s: &str, what: &str| -> Result<u16, String> {
-        let v: u16 = s
-            .trim()
-            .parse()
-            .map_err(|_| format!("{what} noise must be a whole number of counts, got {s:?}"))?;
-        if v > 1000 {
-            return Err(format!("{what} noise {v} is beyond 1,000 counts"));
-        }
-        Ok(v)
-    };
-    Ok((count(enc, "encoder")?, count(adc, "ADC")?))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::parse_noise;
-
-    #[test]
-    fn noise_option_parses_and_refuses_clearly() {
-        assert_eq!(parse_noise("3,10"), Ok((3, 10)));
-        assert_eq!(parse_noise(" 0 , 0 "), Ok((0, 0)));
-        for bad in ["3", "a,1", "1,-2", "1,2000", "", "1,2,3"] {
-            assert!(parse_noise(bad).is_err(), "{bad:?} accepted");
-        }
-    }
 }

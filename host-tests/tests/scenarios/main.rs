@@ -12,6 +12,7 @@ mod device;
 mod documents;
 mod fault_injection;
 mod ground_search;
+mod leaning_pilot;
 mod model_task;
 mod patient_bundle;
 mod replanning;
