@@ -253,14 +253,17 @@ pub fn compare_table(
     let pilot = conditions.pilot(sim::scenario::strong_pilot());
     let max_s = 8.0 + (2.0 + case.step_time_s) * steps as f64;
     let (our_slot, their_slot) = (ReplanSlot::new(), ReplanSlot::new());
+    let (mut our_setup, mut their_setup) = (Ok(()), Ok(()));
     let (ours, our_rig) = play(device, shipped, pilot, steps, max_s, |rig| {
-        conditions.prepare(rig, &our_slot);
+        our_setup = conditions.prepare(rig, &our_slot);
     })
     .map_err(|e| format!("shipped table: {e}"))?;
+    our_setup?;
     let (theirs, their_rig) = play(device, human_table, pilot, steps, max_s, |rig| {
-        conditions.prepare(rig, &their_slot);
+        their_setup = conditions.prepare(rig, &their_slot);
     })
     .map_err(|e| format!("human-data gait: {e}"))?;
+    their_setup.map_err(|e| format!("human-data gait: {e}"))?;
     let level = kind == GaitKind::Walk;
     let answer = CompareJson {
         gait: name,
@@ -386,11 +389,16 @@ pub fn table_text(a: &CompareJson) -> String {
             c.noise_seed
         );
     }
-    if c.replan == crate::conditions::OnOff::On || c.pilot_lean != 0.0 || c.pilot_stiffness != 1.0 {
+    if c.replan == crate::conditions::OnOff::On
+        || c.pilot_lean != 0.0
+        || c.pilot_stiffness != 1.0
+        || c.stance_foot_off != 0.0
+    {
         out += &format!(
-            "pilot: lean {:+.1}°, stiffness ×{:.2}; re-planning {} (re-planned answers: shipped {}, human {})\n",
+            "pilot: lean {:+.1}°, stiffness ×{:.2}, stance foot {:+.1} cm off; re-planning {} (re-planned answers: shipped {}, human {})\n",
             c.pilot_lean,
             c.pilot_stiffness,
+            c.stance_foot_off,
             if c.replan == crate::conditions::OnOff::On {
                 "on"
             } else {

@@ -1,6 +1,7 @@
 //! The pilot and board conditions `simulate` and `compare` run under: a
 //! pilot whose stance ankle departs from the plan (a habitual lean, a
-//! slower shank), the sensors' noise, and whether the board re-plans each
+//! slower shank, a stance foot placed off), the sensors' noise, and
+//! whether the board re-plans each
 //! step from the measured ankle in its idle time
 //! (`exogait_device::replan`).
 
@@ -21,6 +22,8 @@ pub enum OnOff {
 
 /// Largest habitual lean taken, degrees.
 const MAX_LEAN_DEG: f64 = 10.0;
+/// Farthest a stance foot is placed off, cm.
+const MAX_FOOT_OFF_CM: f64 = 5.0;
 
 /// Options shared by `simulate` and `compare`.
 #[derive(Debug, Clone, Copy, Args, Serialize)]
@@ -43,6 +46,17 @@ pub struct Conditions {
     /// default (below 1: a slower shank that lags the plan).
     #[arg(long, value_name = "SHARE", default_value_t = 1.0)]
     pub pilot_stiffness: f64,
+    /// The pilot stands with the stance foot this much further forward
+    /// under the body than the gait's start posture puts it (negative:
+    /// back), cm: the hip, torso and other leg where planned, the stance
+    /// shank leaning back from its plan (forward for a foot placed back).
+    #[arg(
+        long,
+        value_name = "CM",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub stance_foot_off: f64,
     /// Sensor noise: uniform ±ENC counts on every encoder (of 16,384 per
     /// turn) and ±ADC counts on the force ADC (of 4,096), e.g. `3,10`
     /// (the encoder's datasheet noise is 0.06° RMS, 2.7 counts). Without
@@ -72,6 +86,11 @@ impl Conditions {
         if !(self.pilot_stiffness.is_finite() && (0.2..=2.0).contains(&self.pilot_stiffness)) {
             return Err("--pilot-stiffness must be in [0.2, 2]".into());
         }
+        if !(self.stance_foot_off.is_finite() && self.stance_foot_off.abs() <= MAX_FOOT_OFF_CM) {
+            return Err(format!(
+                "--stance-foot-off must be within ±{MAX_FOOT_OFF_CM} cm"
+            ));
+        }
         Ok(())
     }
 
@@ -86,15 +105,29 @@ impl Conditions {
         }
     }
 
-    /// Sets `rig` up: its sensors' noise, its board's re-planner on
-    /// `slot` when on.
-    pub fn prepare<'t>(&self, rig: &mut Rig<'t>, slot: &'t gait_control::replan::ReplanSlot) {
+    /// Sets `rig` up: the pilot's stance foot, its sensors' noise, its board's
+    /// re-planner on `slot` when on.
+    ///
+    /// # Errors
+    ///
+    /// The message for the user when the stance leg cannot reach a foot
+    /// placed so.
+    pub fn prepare<'t>(
+        &self,
+        rig: &mut Rig<'t>,
+        slot: &'t gait_control::replan::ReplanSlot,
+    ) -> Result<(), String> {
+        if self.stance_foot_off != 0.0 {
+            rig.place_stance_foot(self.stance_foot_off / 100.0)
+                .map_err(|e| format!("--stance-foot-off {} cm: {e}", self.stance_foot_off))?;
+        }
         if let Some((enc, adc)) = self.sensor_noise {
             rig.set_sensor_noise(enc, adc, self.noise_seed);
         }
         if self.replan == OnOff::On {
             rig.replan_with(slot);
         }
+        Ok(())
     }
 }
 

@@ -273,6 +273,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
     let injections = args.inject.clone();
     let conditions = args.conditions;
     let slot = gait_control::replan::ReplanSlot::new();
+    let mut setup = Ok(());
     let run = match sim::scenario::run_tables_with(
         &device,
         tables,
@@ -281,7 +282,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
         seconds,
         args.steps,
         |rig| {
-            conditions.prepare(rig, &slot);
+            setup = conditions.prepare(rig, &slot);
             for f in injections {
                 rig.schedule(f);
             }
@@ -293,6 +294,10 @@ pub fn run(args: &SimulateArgs) -> u8 {
             return 2;
         }
     };
+    if let Err(e) = setup {
+        eprintln!("exogait simulate: {e}");
+        return 2;
+    }
     let step = run.summary.planned_landing_x_m;
     // Each step is judged from where its stance foot stood (the previous
     // landing): a step lands within 5 cm of its planned length.

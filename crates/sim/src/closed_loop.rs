@@ -32,6 +32,7 @@ use crate::shared::SharedF64;
 use crate::wiring::{Wiring, mount_of};
 
 mod pilot_aim;
+mod placement;
 
 use pilot_aim::pilot_target;
 pub use pilot_aim::{PilotBehaviour, table_stance_shank};

@@ -34,6 +34,14 @@ fn negative_numbers_reach_the_range_check() {
     let (code, _, err) = exogait(&["simulate", "--seconds", "-1"], b"");
     assert_eq!(code, 2);
     assert!(err.contains("--seconds must be in"), "{err}");
+    for cmd in ["simulate", "compare"] {
+        let (code, _, err) = exogait(&[cmd, "--gait", "walk", "--stance-foot-off", "-6"], b"");
+        assert_eq!(code, 2, "{cmd}");
+        assert!(
+            err.contains("--stance-foot-off must be within"),
+            "{cmd}: {err}"
+        );
+    }
     let (code, _, err) = exogait(
         &[
             "optimize",
