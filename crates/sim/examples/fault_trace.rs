@@ -5,7 +5,8 @@
 //! Feet and crutches are [left, right]; `FULL=1` prints the phase whole
 //! (its time into a swing, to time a landing), `PILOT=1` the plant's stance, its five link angles φ and the
 //! pilot's torque, `POINTS=1` adds the
-//! body's points and the feet, m.
+//! body's points and the feet, m; `PLACE=M` stands the stance foot M metres
+//! further forward first (`Rig::place_stance_foot`).
 
 use std::str::FromStr;
 
@@ -39,6 +40,11 @@ fn main() {
         fault.at_s + 4.0,
         2,
         |rig| {
+            if let Some(m) = std::env::var("PLACE").ok().and_then(|v| v.parse().ok()) {
+                if let Err(e) = rig.place_stance_foot(m) {
+                    eprintln!("fault_trace: PLACE={m}: {e}");
+                }
+            }
             rig.set_sensor_noise(3, 10, seed);
             rig.schedule(fault);
         },
