@@ -22,7 +22,9 @@
 //!   it has been lifted (double support is not a constraint). A landing is
 //!   only registered after the swing ankle has risen above
 //!   `lift_clearance_m`, then comes back within `landing_tolerance_m` of the
-//!   ground at its x while moving down.
+//!   ground at its x while moving down, at least 5 cm along the ground from
+//!   where it was at the last leg swap (a trailing foot settling back onto
+//!   its own tread is no step).
 //! - Leg swap: the posture is mirrored exactly (old swing leg → links 1–2,
 //!   old stance leg → links 4–5), so every point keeps its world position.
 //!   Velocities follow a rigid plastic impact that conserves the angular

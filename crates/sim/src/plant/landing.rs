@@ -29,6 +29,14 @@ pub struct Landing {
 /// at the last leg swap has been lifted, m.
 pub(super) const MIN_STEP_TRAVEL_M: f64 = 0.2;
 
+/// A lifted swing foot lands only this far along the ground from where it
+/// was at the last leg swap, m: a trailing foot that hovers above its
+/// clearance after an impact and settles back onto its own tread has not
+/// taken a step (counted as one, the plant swapped its legs twice within a
+/// weight transfer, and the velocity jumps of the two impacts read to the
+/// supervisor as a drive that did not follow).
+pub(super) const MIN_LANDING_TRAVEL_M: f64 = 0.05;
+
 /// A lifted swing foot whose ground contact carries this much has landed,
 /// N (well below the controller's 80 N landing threshold, so the plant's
 /// leg swap never lags the controller's).
@@ -90,7 +98,8 @@ impl Plant {
         // without ever moving down through the tolerance band.
         let touching = above <= self.cfg.landing_tolerance_m && v[1] < 0.0;
         let loaded = self.contact_n[1] >= LANDED_LOAD_N;
-        if !(touching || loaded) {
+        let travel = (self.swing_foot_world()[0] - self.swing_start_x_m).abs();
+        if !(touching || loaded) || travel < MIN_LANDING_TRAVEL_M {
             return None;
         }
         let foot = self.swing_foot_world();
@@ -158,5 +167,54 @@ impl Plant {
         // A failure here would repeat at the next step's first stage and be
         // reported there; the outputs keep their pre-swap values meanwhile.
         let _ = self.refresh_outputs();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plant standing on its left foot with the right one lifted
+    /// (`lifted`) from `start_x` (world, m) and now carrying 100 N.
+    fn loaded_swing_foot(start_x: f64) -> Plant {
+        let mut plant = Plant::with_posture(
+            PlantConfig::default(),
+            STANDING,
+            [0.0; LINKS],
+            Side::Left,
+            [0.0; 2],
+        )
+        .unwrap();
+        plant.lifted = true;
+        plant.swing_start_x_m = start_x;
+        plant.contact_n = [0.0, 100.0];
+        plant
+    }
+
+    #[test]
+    fn a_lifted_foot_lands_only_a_step_from_where_it_lifted() {
+        // Standing: the swing foot is beside the stance foot, at x = 0.
+        let x = Plant::with_posture(
+            PlantConfig::default(),
+            STANDING,
+            [0.0; LINKS],
+            Side::Left,
+            [0.0; 2],
+        )
+        .unwrap()
+        .swing_foot_world()[0];
+        // Settling back where it lifted (a trailing foot hovering after an
+        // impact): no landing, no swap.
+        let mut hover = loaded_swing_foot(x - 0.5 * MIN_LANDING_TRAVEL_M);
+        assert!(hover.detect_landing().is_none());
+        assert_eq!(hover.stance(), Side::Left);
+        // A step's travel forward (or back, a descent's foot set down behind):
+        // a landing, the legs swapped.
+        for from in [x - 0.1, x + 0.1] {
+            let mut step = loaded_swing_foot(from);
+            let landed = step.detect_landing().expect("a landing");
+            assert_eq!(landed.side, Side::Right);
+            assert_eq!(step.stance(), Side::Right);
+        }
     }
 }
