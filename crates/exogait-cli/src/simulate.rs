@@ -302,11 +302,25 @@ pub fn run(args: &SimulateArgs) -> u8 {
     // Each step is judged from where its stance foot stood (the previous
     // landing): a step lands within 5 cm of its planned length.
     let landed_x: Vec<f64> = run.summary.landing_points.iter().map(|(_, x)| *x).collect();
+    // The first from the stance foot the run started on (0 unless placed
+    // off: `--stance-foot-off`).
+    let start_x = run
+        .rig
+        .trace
+        .first()
+        .map_or(0.0, |s| s.state.points_m[0][0]);
+    let from = |i: usize| {
+        i.checked_sub(1)
+            .and_then(|j| landed_x.get(j))
+            .copied()
+            .unwrap_or(start_x)
+    };
     let on_plan = landed_x.len() >= args.steps
-        && landed_x.iter().take(args.steps).enumerate().all(|(i, x)| {
-            let from = if i == 0 { 0.0 } else { landed_x[i - 1] };
-            (x - from - step).abs() < 0.05
-        });
+        && landed_x
+            .iter()
+            .take(args.steps)
+            .enumerate()
+            .all(|(i, x)| (x - from(i) - step).abs() < 0.05);
     if args.json {
         let o = sim::outcome::outcome(&run.rig, run.ended_by.as_ref());
         let answer = SimulateJson {
@@ -347,10 +361,7 @@ pub fn run(args: &SimulateArgs) -> u8 {
             step_error_m: landed_x
                 .iter()
                 .enumerate()
-                .map(|(i, x)| {
-                    let from = i.checked_sub(1).and_then(|j| landed_x.get(j)).copied();
-                    x - from.unwrap_or(0.0) - step
-                })
+                .map(|(i, x)| x - from(i) - step)
                 .collect(),
             waited_s: sim::summary::waited_before_swings(&run.rig.trace, f64::from(device.dt_s)),
             replans: run

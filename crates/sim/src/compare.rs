@@ -42,7 +42,7 @@ pub struct StepLoad {
     /// drift of the steps so far.
     pub landing_error_m: Option<f64>,
     /// This step's own error: its landing less the previous one (or the
-    /// start) less the planned step, m.
+    /// stance foot the run started on) less the planned step, m.
     pub step_error_m: Option<f64>,
     /// Time the device waited for the pilot before this step's swing
     /// (readiness, and a re-plan's latency), s.
@@ -212,6 +212,9 @@ fn measure(
         .collect();
     let waits = crate::summary::waited_before_swings(trace, dt);
     let landings = rig.plant.landings();
+    // Where the first step starts from: the stance ankle the run began on
+    // (0 unless the pilot placed the foot off: `Rig::place_stance_foot`).
+    let start_foot_x = trace.first().map_or(0.0, |s| s.state.points_m[0][0]);
     let end_of_run = trace.last().map_or(0.0, |s| s.state.time_s);
     let limit = pilot.torque_limit_nm - 1e-9;
     let steps = starts
@@ -254,7 +257,7 @@ fn measure(
                     .iter()
                     .rev()
                     .find(|p| p.time_s < start)
-                    .map_or(0.0, |p| p.position_m[0]);
+                    .map_or(start_foot_x, |p| p.position_m[0]);
                 s.step_error_m = Some(l.position_m[0] - from - step_m[0]);
                 s.landing_s = Some(l.time_s);
             }
