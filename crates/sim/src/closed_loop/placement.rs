@@ -65,7 +65,7 @@ impl Rig<'_> {
         let now = self.plant.state();
         let mut phi = now.phi;
         let model = self.plant.config().model;
-        let [l1, l2, _, l4, l5] = model.lengths();
+        let [l1, l2, ..] = model.lengths();
         let [_, hip, _, _, other] = forward_kinematics(&model, &phi);
         // The stance ankle is the origin of the stance frame: a foot moved
         // forward under the body puts the hip and the other foot that much
@@ -76,27 +76,17 @@ impl Rig<'_> {
         let reach = MAX_STRETCH * (l1 + l2);
         let y = hip[1].min((reach * reach - x * x).max(0.0).sqrt());
         let aim = [x, y];
-        let other_aim = [other[0] - offset_m - aim[0], other[1] - aim[1]];
         let (phi1, phi2) = two_link(l1, l2, aim, phi[1] - phi[0]).ok_or_else(unreachable)?;
-        // The other leg, hip to ankle: the same two links pointing down.
-        let down = |a: f64| a - core::f64::consts::PI;
-        let up = |a: f64| a + core::f64::consts::PI;
-        let (phi4, phi5) = two_link(
-            l4,
-            l5,
-            [-other_aim[0], -other_aim[1]],
-            down(phi[4]) - down(phi[3]),
-        )
-        .map(|(a4, a5)| (up(a4), up(a5)))
-        .ok_or_else(unreachable)?;
         phi[0] = phi1;
         phi[1] = phi2;
-        phi[3] = phi4;
-        phi[4] = phi5;
+        // The other leg reaches its foot from the new hip, its knee on its
+        // branch (the swing leg's reach of the sequencer's set-down).
+        let other_aim = [other[0] - offset_m, other[1]];
+        phi = gait_core::reach::place_swing_ankle_from(&model, &phi, aim, other_aim, 0.0);
         let [_, placed, _, _, placed_other] = forward_kinematics(&model, &phi);
         let missed = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
         if missed(placed, aim) > PLACEMENT_TOLERANCE_M
-            || missed(placed_other, [other[0] - offset_m, other[1]]) > PLACEMENT_TOLERANCE_M
+            || missed(placed_other, other_aim) > PLACEMENT_TOLERANCE_M
         {
             return Err(unreachable());
         }
@@ -127,6 +117,18 @@ mod tests {
     use super::two_link;
     use crate::scenario::{flash_tables, gait_rig, strong_pilot};
     use gait_control::operator::Gait;
+
+    #[test]
+    fn dbg_compare_branches() {
+        let mut rig = gait_rig(Gait::StairDown, strong_pilot(), flash_tables()).unwrap();
+        let before = rig.plant.state();
+        rig.place_stance_foot(0.02).unwrap();
+        let after = rig.plant.state();
+        eprintln!(
+            "before {:?}\nafter {:?}\npts b {:?}\npts a {:?}",
+            before.phi, after.phi, before.points_m, after.points_m
+        );
+    }
 
     #[test]
     fn a_placed_stance_foot_moves_alone_and_its_shank_leans_the_other_way() {
