@@ -33,8 +33,7 @@ pub(super) const MIN_STEP_TRAVEL_M: f64 = 0.2;
 /// was at the last leg swap, m: a trailing foot that hovers above its
 /// clearance after an impact and settles back onto its own tread has not
 /// taken a step (counted as one, the plant swapped its legs twice within a
-/// weight transfer, and the velocity jumps of the two impacts read to the
-/// supervisor as a drive that did not follow).
+/// weight transfer, with an impact's velocity jump at each swap).
 pub(super) const MIN_LANDING_TRAVEL_M: f64 = 0.05;
 
 /// A lifted swing foot whose ground contact carries this much has landed,
