@@ -174,8 +174,8 @@ pub fn replay_with<'t>(
     for segment in tick_record::segments(file).map_err(ReplayError::File)? {
         let slot = ModelSlot::new();
         let mut controller: Controller<'_> = controller(segment.gait)?;
-        controller.set_model_task(&slot);
-        let task = ModelTask::new(controller.config().model, &slot);
+        let checks = controller.set_model_task(&slot);
+        let mut task = ModelTask::new(controller.config().model, &slot).with_checks(checks);
         let mut hw = board_config::hardware(device, qemu_rig::peripherals())
             .map_err(|_| ReplayError::Config)?;
         out.segments += 1;

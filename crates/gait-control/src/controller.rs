@@ -23,6 +23,7 @@
 mod act;
 mod chain;
 mod estop;
+mod guard;
 mod sense;
 mod write;
 
@@ -50,9 +51,8 @@ use crate::replan::{ReplanConfig, ReplanSlot};
 use crate::sequencer::{
     GaitTables, Orders, Phase, SeqInput, SeqRequest, SeqStatus, Sequencer, SequencerConfig,
 };
-use crate::supervisor::{MotorSense, Supervisor, SupervisorInput, Verdict};
+use crate::supervisor::{Findings, MotorSense, Supervisor, WindowedChecks};
 
-use act::Actuation;
 use sense::Senses;
 
 pub use crate::layout::{ENCODERS, FORCES};
@@ -174,6 +174,8 @@ pub struct Controller<'t> {
     chain: chain::ChainEstimate,
     motor_sense: [MotorSense; JOINTS],
     motors_enabled: bool,
+    /// The model task runs the windowed checks.
+    checks_in_task: bool,
     /// Joints whose drive the supervisor has disabled, braked
     /// (`FaultCode::brakes_joint`: an output-stage fault, 0x0404 until a
     /// reset; a lost encoder while the closed chain does not give its
@@ -199,9 +201,21 @@ pub struct Controller<'t> {
     tick: u32,
     /// Near the end: its per-gait tables are read once a tick at most.
     seq: Sequencer<'t>,
-    /// Last: its log of steps is written once a step.
+    /// Its log of steps is written once a step.
     crutch: CrutchLoad,
+    /// With a model task: the tick whose facts were last handed to its
+    /// windowed checks (`supervisor/windowed.rs`); 0 before the first.
+    handed_over: u32,
+    /// Last, past the fields a tick reads on the board (4 KiB, see
+    /// `firmware/src/lib.rs`): without a model task, what the windowed
+    /// checks found in the last tick's facts.
+    findings: Findings,
 }
+
+/// Bytes of the controller's state that a tick reads on the board: every
+/// field before the host's `findings` (`firmware/src/lib.rs` keeps them
+/// under 4 KiB).
+pub const TICK_STATE_BYTES: usize = core::mem::offset_of!(Controller<'static>, findings);
 
 impl<'t> Controller<'t> {
     /// Builds the controller. Tables must already be verified
@@ -233,6 +247,9 @@ impl<'t> Controller<'t> {
         };
         Ok(Self {
             cfg,
+            handed_over: 0,
+            checks_in_task: false,
+            findings: Findings::NONE,
             seq: Sequencer::new(cfg.sequencer, tables, [0.0; JOINTS]).with_model(cfg.model),
             loops: [JointLoop::default(); JOINTS],
             operator: Operator::new(operator),
@@ -268,12 +285,18 @@ impl<'t> Controller<'t> {
         self.seq = self.seq.with_replanner(slot, cfg);
     }
 
-    /// Leaves the model's feed-forward to a task that answers through
-    /// `slot` between ticks ([`crate::feedforward::ModelTask`]), instead of
-    /// working it out at the start of the next tick: the same torques, off
-    /// the tick.
-    pub fn set_model_task(&mut self, slot: &'t ModelSlot) {
+    /// Leaves the model's feed-forward and the supervisor's windowed
+    /// checks to a task that answers through `slot` between ticks
+    /// ([`crate::feedforward::ModelTask`]), instead of working them out in
+    /// the tick: the same torques and verdicts, off the tick. Returns the
+    /// windowed checks for the task
+    /// ([`crate::feedforward::ModelTask::with_checks`]); a task without
+    /// them leaves every tick's facts unchecked, and the next tick latches
+    /// [`FaultCode::ChecksLate`]. Call before the first tick.
+    pub fn set_model_task(&mut self, slot: &'t ModelSlot) -> Option<WindowedChecks> {
         self.model_slot = Some(slot);
+        self.checks_in_task = true;
+        Some(self.supervisor.windowed_checks())
     }
 
     /// The configuration it was built with.
@@ -447,66 +470,6 @@ impl<'t> Controller<'t> {
                 .get(leg.foot())
                 .is_some_and(|&load| load < contact)
         })
-    }
-
-    /// Stage 4: the supervisor's verdict on everything sensed and
-    /// commanded, and the orders it gives the sequencer's next update.
-    #[inline(always)]
-    fn guard(
-        &mut self,
-        s: &Senses,
-        r: &Reference,
-        a: &Actuation,
-        deadline_missed: bool,
-    ) -> Verdict {
-        let mut motors = self.motor_sense;
-        for (((m, &c), &f), &g) in motors
-            .iter_mut()
-            .zip(&a.command_nm)
-            .zip(&a.feedforward_nm)
-            .zip(&self.cfg.gains)
-        {
-            m.commanded_nm = c;
-            m.feedforward_nm = f;
-            m.limit_nm = g.torque_limit_nm;
-        }
-        let status = &r.status;
-        // Joints, then ankles (`layout::encoder`).
-        let [j0, j1, j2, j3, left_ankle, right_ankle] = s.encoders;
-        let input = SupervisorInput {
-            tick: self.tick,
-            joints: [j0, j1, j2, j3],
-            joint_reference_rad: r.angle_rad,
-            ankles: [left_ankle, right_ankle],
-            forces: s.forces,
-            motors,
-            e_stop_pressed: s.e_stop_pressed,
-            e_stop_read_error: s.e_stop_read_error,
-            deadline_missed,
-            step_in_progress: status.step_in_progress(),
-            button_input_fault: s.mode.input_fault || s.go.input_fault,
-            ankle_plan_rad: r.ankle_plan_rad,
-            swing_leg: status.swing_leg,
-            airborne_leg: self.airborne_leg(s, status),
-            chain_closed: s.chain_closed,
-            drive_current: Some(s.drive_current),
-        };
-        let mut verdict = self.supervisor.check_frames(&input, &s.frames);
-        let estop_hold = self.stop_for_estop(&mut verdict, status);
-        if verdict.reaction == Reaction::None && !estop_hold {
-            // Nothing to order (most ticks): no fault latched re-holds a
-            // joint either.
-            self.orders = Orders::NONE;
-            self.seq_status = *status;
-        } else {
-            self.orders = Orders::from_verdict(&verdict, estop_hold, &s.sensed);
-            self.seq_status =
-                status.obeying(&self.orders, &verdict.braked_joints, &self.cfg.sequencer);
-        }
-        if verdict.reaction == Reaction::DisableMotors {
-            self.loops.iter_mut().for_each(JointLoop::reset);
-        }
-        verdict
     }
 
     /// Standing still with both crutches loaded: a reset cannot surprise.

@@ -514,6 +514,18 @@ fault_table! {
         detection_bound: "the re-plan latency (the answer is read then)",
         reset_allowed_when: "not latched: logged, the next step is re-planned afresh",
     },
+    /// The windowed checks (`supervisor/windowed.rs`: velocities, frozen
+    /// counts, tracking, the torque residual, the ankles' and forces'
+    /// rules), which run between two ticks, had not answered the last
+    /// tick's facts by the next tick: those rules are a tick blind. Only a
+    /// tick that overran or a model task held off can cause it.
+    ChecksLate = 0x0608 {
+        name: "windowed checks late",
+        reaction: Reaction::SafeHold,
+        detection_bound: "the tick after the one whose facts were not checked",
+        reset_allowed_when: "the checks answer again",
+        in_swing: InSwing::LandFirst,
+    },
     /// A planned ankle's shank tips forward of its plan ever faster: the
     /// pilot no longer balances the body over the foot through the
     /// crutches (stopped, or leans past what they hold). In a swing the

@@ -31,7 +31,9 @@ use gait_core::kinematics::{Phi, Posture, joint_torques};
 use gait_core::model::BodyModel;
 
 use crate::ahead::AheadSlot;
+use crate::check_slot::CheckSlot;
 use crate::posture::{JOINTS, Side, joint_torques_from_theta_torques};
+use crate::supervisor::WindowedChecks;
 
 /// What a tick asks of the model: its reference in the stance leg's frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -152,6 +154,8 @@ pub struct ModelSlot {
     per_other_foot_newton: Words4,
     /// The work asked a tick ahead (the transfer's IK, the swing's share).
     ahead: AheadSlot,
+    /// The supervisor's windowed checks of the last tick's facts.
+    checks: CheckSlot,
 }
 
 impl Default for ModelSlot {
@@ -177,12 +181,19 @@ impl ModelSlot {
             other_foot_n: AtomicU32::new(0),
             per_other_foot_newton: [const { AtomicU32::new(0) }; JOINTS],
             ahead: AheadSlot::new(),
+            checks: CheckSlot::new(),
         }
     }
 
     /// The hand-off of the work a tick ahead ([`crate::ahead`]).
     pub const fn ahead(&self) -> &AheadSlot {
         &self.ahead
+    }
+
+    /// The hand-off of the supervisor's windowed checks
+    /// ([`crate::check_slot`]).
+    pub const fn checks(&self) -> &CheckSlot {
+        &self.checks
     }
 
     /// The tick: makes `req` the request; returns its number.
@@ -277,19 +288,36 @@ impl ModelSlot {
 pub struct ModelTask<'t> {
     model: BodyModel<f32>,
     slot: &'t ModelSlot,
+    checks: Option<WindowedChecks>,
 }
 
 impl<'t> ModelTask<'t> {
     /// The task for the controller built with `model`, sharing `slot`.
     #[must_use]
     pub const fn new(model: BodyModel<f32>, slot: &'t ModelSlot) -> Self {
-        Self { model, slot }
+        Self {
+            model,
+            slot,
+            checks: None,
+        }
     }
 
-    /// Answers the newest request for the feed-forward if it has no answer
-    /// yet (its number when it did), and the newest ask of the work a tick
-    /// ahead ([`crate::ahead`]).
-    pub fn serve(&self) -> Option<u32> {
+    /// The task that also runs the supervisor's windowed checks, with the
+    /// memory the controller lent when it was given the slot
+    /// ([`crate::controller::Controller::set_model_task`]).
+    #[must_use]
+    pub fn with_checks(self, checks: Option<WindowedChecks>) -> Self {
+        Self { checks, ..self }
+    }
+
+    /// Runs the windowed checks of the newest tick's facts if they have not
+    /// been run (its tick when they were), the newest ask of the work a
+    /// tick ahead ([`crate::ahead`]), and answers the newest request for
+    /// the feed-forward if it has no answer yet (its number when it did).
+    pub fn serve(&mut self) -> Option<u32> {
+        if let Some(c) = self.checks.as_mut() {
+            self.slot.checks.serve(c);
+        }
         self.slot.ahead.serve(&self.model);
         let (n, req) = self.slot.newest_request()?;
         if self.slot.answer().is_some_and(|(a, _)| a == n) {
@@ -318,7 +346,7 @@ mod tests {
     fn the_task_answers_each_request_once_with_the_models_torques() {
         let model = BodyModel::<f32>::paper_table_iii();
         let slot = ModelSlot::new();
-        let task = ModelTask::new(model, &slot);
+        let mut task = ModelTask::new(model, &slot);
         assert_eq!(task.serve(), None, "nothing asked yet");
         assert_eq!(slot.answer(), None);
         for req in [
@@ -351,7 +379,7 @@ mod tests {
     fn an_answer_being_written_is_not_read() {
         let model = BodyModel::<f32>::paper_table_iii();
         let slot = ModelSlot::new();
-        let task = ModelTask::new(model, &slot);
+        let mut task = ModelTask::new(model, &slot);
         slot.request(&request(0.0, true, Side::Left));
         task.serve();
         let before = slot.answer().unwrap();

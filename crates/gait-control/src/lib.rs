@@ -8,6 +8,7 @@
 #![no_std]
 
 pub mod ahead;
+pub mod check_slot;
 pub mod controller;
 pub mod crutch_load;
 pub mod drivers;

@@ -33,6 +33,7 @@ mod drive_current;
 mod frames;
 mod response;
 mod tracks;
+mod windowed;
 
 pub use balance::{BalanceCheck, ErrorBounds};
 pub use config::{
@@ -41,7 +42,8 @@ pub use config::{
 pub use drive_current::{DriveCurrentCheck, DriveCurrentSense};
 pub use frames::EncoderFrame;
 pub use response::ResponseCheck;
-use tracks::{Class, EncoderTrack, ForceTrack, JointTrack};
+use tracks::{Class, EncoderTrack, JointTrack};
+pub use windowed::{Findings, MAX_RAISES, Marks, Raise, WindowedChecks, WindowedJob};
 /// Records kept in the post-mortem log (the newest ones).
 pub const LOG_LEN: usize = 32;
 /// Channel of a [`FaultRecord`] for faults that belong to no channel.
@@ -205,9 +207,9 @@ pub struct FaultRecord {
 /// The safety supervisor. See the module docs and `docs/safety.md`.
 #[derive(Debug, Clone)]
 pub struct Supervisor {
-    cfg: SupervisorConfig,
-    /// 0x0404's observer constants, from `cfg.response`.
-    observer: response::Observer,
+    /// The windowed checks' memory, which [`Supervisor::check`] and a
+    /// controller without a model task run, and the configuration.
+    windowed: WindowedChecks,
     /// Calls of `check` so far (the supervisor's own clock).
     calls: u32,
     /// Faults whose condition held at the last check.
@@ -216,22 +218,9 @@ pub struct Supervisor {
     latch: Latch,
     joints: [JointTrack; JOINTS],
     ankles: [EncoderTrack; ANKLES],
-    /// Consecutive ticks each ankle has rested on its stop unplanned.
-    heel_off_ticks: [u32; ANKLES],
-    /// Consecutive frames each ankle has read its dorsiflexion stop,
-    /// unchanged, with its foot in the air (0x0207's stuck ankle).
-    stuck_in_air_ticks: [u32; ANKLES],
-    /// The plan of each stance ankle when its counts last changed (NaN
-    /// outside a swing's stance): 0x0207's frozen stance ankle.
-    plan_since_moved: [f32; ANKLES],
     /// An ankle found stuck: control takes none of its frames until its
     /// counts move again.
     ankle_stuck: [bool; ANKLES],
-    /// Each ankle's error from its plan, for 0x0701 and 0x0702.
-    balance: [balance::BalanceTrack; ANKLES],
-    forces: [ForceTrack; FORCES],
-    drive_currents: [drive_current::DriveCurrentTrack; JOINTS],
-    previous_reference_rad: Option<[f32; JOINTS]>,
     /// `calls` at the latest deadline misses (ring, filled from its start:
     /// the first `deadline_misses_total` slots hold one).
     misses: [u32; MAX_DEADLINE_MISSES as usize],
@@ -243,6 +232,9 @@ pub struct Supervisor {
     /// Faults found at boot in flash data ([`Supervisor::report_boot_fault`]):
     /// present at every check.
     boot_faults: FaultSet,
+    /// [`Supervisor::report_checks_late`] since the last check: 0x0608 is
+    /// present at the next one.
+    checks_late: bool,
 }
 
 /// Collects what one check raised.
@@ -257,11 +249,11 @@ impl Supervisor {
     pub fn new(cfg: SupervisorConfig) -> Result<Self, ConfigError> {
         cfg.validate()?;
         Ok(Self {
-            observer: response::Observer::new(&cfg.response, cfg.dt_s),
-            cfg,
+            windowed: WindowedChecks::new(&cfg),
             calls: 0,
             present: FaultSet::EMPTY,
             boot_faults: FaultSet::EMPTY,
+            checks_late: false,
             latch: Latch {
                 latched: FaultSet::EMPTY,
                 logged_channels: [0; FaultCode::COUNT],
@@ -274,14 +266,7 @@ impl Supervisor {
             },
             joints: [JointTrack::default(); JOINTS],
             ankles: [EncoderTrack::default(); ANKLES],
-            heel_off_ticks: [0; ANKLES],
-            stuck_in_air_ticks: [0; ANKLES],
-            plan_since_moved: [f32::NAN; ANKLES],
             ankle_stuck: [false; ANKLES],
-            balance: [balance::BalanceTrack::default(); ANKLES],
-            forces: [ForceTrack::default(); FORCES],
-            drive_currents: Default::default(),
-            previous_reference_rad: None,
             misses: [0; MAX_DEADLINE_MISSES as usize],
             miss_next: 0,
             deadline_misses_total: 0,
@@ -291,7 +276,7 @@ impl Supervisor {
 
     /// The configuration in use.
     pub const fn config(&self) -> &SupervisorConfig {
-        &self.cfg
+        &self.windowed.cfg
     }
 
     /// Every latched fault.
@@ -429,27 +414,151 @@ impl Supervisor {
 
     /// [`Supervisor::check`] with this tick's encoder frames already
     /// taken ([`Supervisor::take_encoder`], joints then ankles, from the
-    /// senses in `input`).
-    #[inline(always)]
+    /// senses in `input`): the tick's own checks, then the windowed checks
+    /// on the same facts.
     pub fn check_frames(
         &mut self,
         input: &SupervisorInput,
         frames: &[EncoderFrame; ENCODERS],
     ) -> Verdict {
-        self.calls = self.calls.wrapping_add(1);
+        let mut t = self.begin(input);
+        self.check_tick(input, frames, &mut t);
+        let found = self.run_windowed(&self.windowed_job(input, frames));
+        self.apply(&found, &mut t);
+        self.end(input, t)
+    }
+
+    /// The controller's check of one tick: the windowed checks' `found` in
+    /// the last tick's facts, then this tick's own checks
+    /// (`supervisor/windowed.rs`). Hand this tick's facts
+    /// ([`Supervisor::windowed_job`]) to the windowed checks next.
+    #[inline(always)]
+    pub fn check_after(
+        &mut self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+        found: &Findings,
+    ) -> Verdict {
+        let mut t = self.begin(input);
+        self.apply(found, &mut t);
+        self.check_tick(input, frames, &mut t);
+        self.end(input, t)
+    }
+
+    /// Latches [`FaultCode::ChecksLate`]: the windowed checks did not
+    /// answer the last tick's facts before this tick's guard. Call before
+    /// [`Supervisor::check_after`], whose verdict then has it.
+    pub fn report_checks_late(&mut self, tick: u32) {
         let mut t = Tick {
-            tick: input.tick,
+            tick,
             present: FaultSet::EMPTY,
             new: FaultSet::EMPTY,
         };
-        self.check_operator_inputs(input, &mut t);
-        self.check_deadline(input, &mut t);
-        self.check_motors(input, &mut t);
-        self.check_joints(input, frames, &mut t);
-        self.check_ankles(input, frames, &mut t);
-        self.check_forces(input, &mut t);
-        self.check_drive_current(input, &mut t);
-        self.previous_reference_rad = Some(input.joint_reference_rad);
+        self.latch
+            .raise(&mut t, FaultCode::ChecksLate, NO_CHANNEL, 1.0);
+        self.checks_late = true;
+    }
+
+    /// The facts of the tick just checked, for the windowed checks, with
+    /// the latch's marks as they stand.
+    #[inline(always)]
+    pub fn windowed_job(
+        &self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+    ) -> WindowedJob {
+        let mut job = WindowedJob {
+            input: *input,
+            frames: *frames,
+            marks: Marks::default(),
+        };
+        self.mark(&mut job);
+        job
+    }
+
+    /// Writes the latch's marks as they stand into `job`, whose facts were
+    /// just checked: the windowed checks go on from them.
+    #[inline(always)]
+    pub fn mark(&self, job: &mut WindowedJob) {
+        job.marks = Marks {
+            braked: self.latch.braked,
+            angle_lost: self.latch.angle_lost,
+            held_once: self.latch.held_in_place_once,
+        };
+    }
+
+    /// The windowed checks of `job`, on the supervisor's own memory of
+    /// them: a controller without a model task runs them so.
+    pub fn run_windowed(&mut self, job: &WindowedJob) -> Findings {
+        self.windowed.run(job)
+    }
+
+    /// Fresh windowed checks of this configuration, for a model task to run
+    /// in the supervisor's stead (then only the task's memory moves on).
+    pub fn windowed_checks(&self) -> WindowedChecks {
+        WindowedChecks::new(&self.windowed.cfg)
+    }
+
+    #[inline(always)]
+    fn begin(&mut self, input: &SupervisorInput) -> Tick {
+        self.calls = self.calls.wrapping_add(1);
+        let mut present = FaultSet::EMPTY;
+        if core::mem::take(&mut self.checks_late) {
+            present.insert(FaultCode::ChecksLate);
+        }
+        Tick {
+            tick: input.tick,
+            present,
+            new: FaultSet::EMPTY,
+        }
+    }
+
+    #[inline(always)]
+    fn check_tick(
+        &mut self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+        t: &mut Tick,
+    ) {
+        self.check_operator_inputs(input, t);
+        self.check_deadline(input, t);
+        self.check_motors(input, t);
+        self.check_joints(input, frames, t);
+        self.check_ankles(frames, t);
+    }
+
+    /// Latches what the windowed checks found, as found in their tick.
+    #[inline(always)]
+    fn apply(&mut self, found: &Findings, t: &mut Tick) {
+        for (stuck, change) in self.ankle_stuck.iter_mut().zip(found.ankle_stuck) {
+            if let Some(s) = change {
+                *stuck = s;
+            }
+        }
+        let raises = found.raises();
+        if raises.is_empty() {
+            return;
+        }
+        let now = core::mem::replace(&mut t.tick, found.tick);
+        for r in raises {
+            if r.hold {
+                let j = usize::from(r.channel);
+                if let (Some(once), Some(hold)) = (
+                    self.latch.held_in_place_once.get_mut(j),
+                    self.latch.hold_in_place.get_mut(j),
+                ) {
+                    *once = true;
+                    *hold = true;
+                }
+            }
+            self.latch
+                .raise_marking(t, r.code, r.channel, r.value, !r.hold);
+        }
+        t.tick = now;
+    }
+
+    #[inline(always)]
+    fn end(&mut self, input: &SupervisorInput, t: Tick) -> Verdict {
         self.present = t.present.union(self.boot_faults);
         Verdict {
             reaction: self.latch.latched.reaction(),
@@ -489,41 +598,6 @@ impl Latch {
     /// and logs it once per channel while latched.
     pub(super) fn raise(&mut self, t: &mut Tick, code: FaultCode, channel: u8, value: f32) {
         self.raise_marking(t, code, channel, value, true);
-    }
-
-    /// `code` on `joint`, as [`Latch::raise`]; but a code
-    /// [`FaultCode::held_in_place_first`] raised while another joint is
-    /// already braked (or blind), on a joint not held in place before, is
-    /// latched and logged as ever and holds its joint where it is
-    /// ([`Verdict::rehold_joints`]) instead of braking it. Returns whether
-    /// it did.
-    pub(super) fn raise_on_joint(
-        &mut self,
-        t: &mut Tick,
-        code: FaultCode,
-        joint: usize,
-        value: f32,
-    ) -> bool {
-        let other_braked = self
-            .braked
-            .iter()
-            .zip(&self.angle_lost)
-            .enumerate()
-            .any(|(k, (&b, &l))| k != joint && (b || l));
-        let first = self.held_in_place_once.get(joint) == Some(&false);
-        let hold = code.held_in_place_first() && other_braked && first;
-        if hold {
-            if let (Some(once), Some(now)) = (
-                self.held_in_place_once.get_mut(joint),
-                self.hold_in_place.get_mut(joint),
-            ) {
-                *once = true;
-                *now = true;
-            }
-        }
-        let channel = u8::try_from(joint).unwrap_or(NO_CHANNEL);
-        self.raise_marking(t, code, channel, value, !hold);
-        hold
     }
 
     /// [`Latch::raise`]; a joint's brake or lost angle marked only with

@@ -375,8 +375,8 @@ fn control_tick_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
     // The model task answers between the ticks, as PendSV does on the board.
     let slot = ModelSlot::new();
     let mut controller: gait_control::controller::Controller<'_> = controller;
-    controller.set_model_task(&slot);
-    let task = ModelTask::new(controller.config().model, &slot);
+    let checks = controller.set_model_task(&slot);
+    let mut task = ModelTask::new(controller.config().model, &slot).with_checks(checks);
     let base = ctr.once(|| black_box(0u32)).0;
     let mut total: u64 = 0;
     let mut worst = 0u32;

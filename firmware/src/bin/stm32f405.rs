@@ -356,14 +356,14 @@ fn main() -> ! {
 
     // 7. The model's feed-forward in PendSV, below the tick
     //    (`firmware::model_task`).
-    controller.set_model_task(&model_task::SLOT);
+    let checks = controller.set_model_task(&model_task::SLOT);
     // SAFETY: PendSV has not run yet; lowering its priority breaks no
     // critical section (nothing relies on PendSV being masked).
     unsafe {
         cp.SCB
             .set_priority(SystemHandler::PendSV, model_task::PRIORITY);
     }
-    let model = ModelTask::new(controller.config().model, &model_task::SLOT);
+    let model = ModelTask::new(controller.config().model, &model_task::SLOT).with_checks(checks);
     if !model_task::install(model) {
         halt("the model task's state is in use: motors stay disabled");
     }

@@ -1,30 +1,43 @@
-//! The model's work between ticks (`gait_control::feedforward`, and the
-//! transfer's IK and the swing's share of `gait_control::ahead`): a controller whose model
-//! task answers through a slot, as on the board, drives the device exactly
-//! as one that works the answers out itself, and each tick applies the
-//! feed-forward answered to the tick before's request.
+//! The model's work between ticks (`gait_control::feedforward`, the
+//! transfer's IK and the swing's share of `gait_control::ahead`, the
+//! supervisor's windowed checks): a controller whose model task answers
+//! through a slot, as on the board, drives the device exactly as one that
+//! works the answers out itself, faults included; each tick applies the
+//! feed-forward answered to the tick before's request; a task that leaves
+//! the checks unanswered holds the device.
 
 use gait_control::controller::TickReport;
+use gait_control::faults::{FaultCode, Reaction};
 use gait_control::feedforward::{ModelSlot, ModelTask, feedforward};
 use gait_control::sequencer::Phase;
 use host_tests::{standing_rig, strong_pilot};
 use sim::closed_loop::Rig;
+use sim::inject::{Injection, Kind, Target};
 
 /// Ticks of a walk from standing: GO, the weight transfer, two swings.
 const TICKS: usize = 6_000;
 
 fn walk(slot: Option<&'static ModelSlot>) -> Vec<TickReport> {
+    walk_with(slot, None)
+}
+
+/// [`walk`], `fault` injected.
+fn walk_with(slot: Option<&'static ModelSlot>, fault: Option<Injection>) -> Vec<TickReport> {
     let mut rig = standing_rig(strong_pilot()).unwrap();
-    let task = slot.map(|s| {
-        rig.controller.set_model_task(s);
-        ModelTask::new(rig.controller.config().model, s)
+    let healthy = fault.is_none();
+    if let Some(f) = fault {
+        rig.schedule(f);
+    }
+    let mut task = slot.map(|s| {
+        let checks = rig.controller.set_model_task(s);
+        ModelTask::new(rig.controller.config().model, s).with_checks(checks)
     });
     Rig::press(&rig.go, sim::scenario::GO_AT_TICK, sim::scenario::GO_TICKS);
     let mut requests = Vec::new();
     let mut reports = Vec::new();
     for _ in 0..TICKS {
         let report = rig.tick().unwrap().report;
-        if let (Some(task), Some(s)) = (&task, slot) {
+        if let (Some(task), Some(s)) = (&mut task, slot) {
             requests.push(s.newest_request().map(|(_, r)| r));
             task.serve();
         }
@@ -48,7 +61,7 @@ fn walk(slot: Option<&'static ModelSlot>) -> Vec<TickReport> {
         }
     }
     assert!(
-        slot.is_none() || swing_ticks > 1_000,
+        slot.is_none() || !healthy || swing_ticks > 1_000,
         "{swing_ticks} swing ticks"
     );
     reports
@@ -65,4 +78,65 @@ fn a_model_task_between_ticks_drives_the_device_as_the_tick_alone_does() {
         assert_eq!(bits(a), bits(b), "tick {n}");
         assert_eq!(a.feedforward_nm, b.feedforward_nm, "tick {n}");
     }
+}
+
+/// Faults that only the windowed checks find (the torque residual, a
+/// frozen encoder, a force sensor's debounce): found in the task's time,
+/// they latch on the same tick, with the same reaction, as the tick's own
+/// run of the checks finds them.
+#[test]
+fn the_windowed_checks_in_the_task_find_what_the_tick_finds_on_the_same_tick() {
+    // A slot each: one serves one controller from its first tick.
+    static SLOTS: [ModelSlot; 3] = [ModelSlot::new(), ModelSlot::new(), ModelSlot::new()];
+    for ((kind, target, code), slot) in [
+        (Kind::MotorStuck, Target::Joint(3), FaultCode::MotorResponse),
+        (
+            Kind::EncoderStuck,
+            Target::Joint(1),
+            FaultCode::EncoderFrozen,
+        ),
+        (Kind::FsrOpen, Target::Force(2), FaultCode::ForceOpen),
+    ]
+    .into_iter()
+    .zip(&SLOTS)
+    {
+        let fault = Injection {
+            kind,
+            target: Some(target),
+            at_s: 2.6,
+        };
+        let alone = walk_with(None, Some(fault));
+        let with_task = walk_with(Some(slot), Some(fault));
+        let first = alone.iter().position(|r| r.faults.contains(code));
+        assert!(first.is_some(), "{kind:?}: {code:?} not found");
+        for (n, (a, b)) in alone.iter().zip(&with_task).enumerate() {
+            let bits = |r: &TickReport| r.command_nm.map(f32::to_bits);
+            assert_eq!(bits(a), bits(b), "{kind:?}: tick {n}");
+            assert_eq!(a.faults, b.faults, "{kind:?}: tick {n}");
+            assert_eq!(a.reaction, b.reaction, "{kind:?}: tick {n}");
+        }
+    }
+}
+
+/// A model task that does not run the windowed checks (given none) leaves
+/// the first tick's facts unchecked: the second tick latches 0x0608 and
+/// holds.
+#[test]
+fn unanswered_windowed_checks_hold_the_device_on_the_next_tick() {
+    static SLOT: ModelSlot = ModelSlot::new();
+    let mut rig = standing_rig(strong_pilot()).unwrap();
+    let _checks = rig.controller.set_model_task(&SLOT);
+    let mut task = ModelTask::new(rig.controller.config().model, &SLOT);
+    let first = rig.tick().unwrap().report;
+    assert!(!first.faults.contains(FaultCode::ChecksLate));
+    task.serve();
+    let second = rig.tick().unwrap().report;
+    assert!(second.faults.contains(FaultCode::ChecksLate));
+    assert_eq!(second.reaction, Reaction::SafeHold);
+    assert!(
+        rig.controller
+            .supervisor()
+            .log()
+            .any(|r| r.code == FaultCode::ChecksLate && r.tick == first.tick)
+    );
 }

@@ -19,6 +19,7 @@
 //! torque. Under-delivery there is not counted.
 
 use super::tracks::SampleWindow;
+use super::windowed::{Findings, WindowedChecks};
 use super::*;
 
 /// Settings of the drive-current check.
@@ -101,8 +102,8 @@ pub(super) struct DriveCurrentTrack {
     mismatches: u8,
 }
 
-impl Supervisor {
-    pub(super) fn check_drive_current(&mut self, input: &SupervisorInput, t: &mut Tick) {
+impl WindowedChecks {
+    pub(super) fn check_drive_current(&mut self, input: &SupervisorInput, f: &mut Findings) {
         let Some(s) = input.drive_current else {
             return;
         };
@@ -122,11 +123,9 @@ impl Supervisor {
         track.window.push(bad, c.debounce.window_ticks);
         let n = track.window.count();
         if not_finite {
-            self.latch
-                .raise(t, FaultCode::DriveCurrentMonitor, s.joint, s.torque_nm);
+            f.raise(FaultCode::DriveCurrentMonitor, s.joint, s.torque_nm);
         } else if n >= u32::from(c.debounce.count) {
-            self.latch
-                .raise(t, FaultCode::DriveCurrentMonitor, s.joint, n as f32);
+            f.raise(FaultCode::DriveCurrentMonitor, s.joint, n as f32);
         }
         // A disabled drive's amplifier gives no current (its brake's flows
         // through the contactor): nothing to compare.
@@ -153,8 +152,7 @@ impl Supervisor {
             0
         };
         if track.mismatches >= c.samples {
-            self.latch.raise(
-                t,
+            f.raise(
                 FaultCode::DriveCurrentMismatch,
                 s.joint,
                 s.torque_nm - asked,

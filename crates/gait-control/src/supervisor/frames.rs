@@ -45,6 +45,12 @@ enum Kind {
 /// Counts moved since the last accepted frame, and ticks since it.
 pub(super) type Motion = (i16, u32);
 
+impl Default for EncoderFrame {
+    fn default() -> Self {
+        Self::NONE
+    }
+}
+
 impl EncoderFrame {
     /// No frame: rejected, nothing to log.
     pub(crate) const NONE: Self = Self {
@@ -135,7 +141,7 @@ impl Supervisor {
     /// frame the supervisor drops (a jump) is not, nor are an ankle's found
     /// stuck (0x0207) until its counts move.
     pub fn accepts_encoder(&self, channel: usize, sense: &EncoderSense) -> bool {
-        let cfg = &self.cfg;
+        let cfg = &self.windowed.cfg;
         let (track, max_jump) = match channel.checked_sub(JOINTS) {
             None => (
                 self.joints.get(channel).map(|j| &j.encoder),
@@ -179,7 +185,7 @@ impl Supervisor {
     /// [`Supervisor::check_frames`].
     #[inline(always)]
     pub fn take_encoder(&mut self, channel: usize, sense: &EncoderSense) -> EncoderFrame {
-        let cfg = &self.cfg;
+        let cfg = &self.windowed.cfg;
         let offsets = self.encoder_offsets;
         let (track, max_jump, stuck) = match channel.checked_sub(JOINTS) {
             None => (

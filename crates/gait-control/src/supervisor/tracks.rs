@@ -282,16 +282,21 @@ fn wrap_pi(x: f32) -> f32 {
     }
 }
 
-/// Per-joint history.
+/// Per-joint history of the tick's own checks.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct JointTrack {
     pub(super) encoder: EncoderTrack,
+    pub(super) saturated_ticks: u32,
+}
+
+/// Per-joint history of the windowed checks.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct JointMotion {
     pub(super) velocity_rad_s: f32,
     pub(super) velocity_valid: bool,
     pub(super) tracking_ticks: u32,
     pub(super) frozen_ticks: u32,
     pub(super) still_ticks: u32,
-    pub(super) saturated_ticks: u32,
     pub(super) residual: super::response::Residual,
 }
 

@@ -165,7 +165,7 @@ fn the_cell_splitter_keeps_escaped_pipes() {
 }
 
 #[test]
-fn only_safe_holds_land_first_and_only_for_missed_deadlines_jumps_and_balance() {
+fn only_safe_holds_land_first_and_only_for_missed_deadlines_late_checks_jumps_and_balance() {
     use gait_control::faults::InSwing;
     let landing: Vec<FaultCode> = FaultCode::ALL
         .into_iter()
@@ -174,7 +174,7 @@ fn only_safe_holds_land_first_and_only_for_missed_deadlines_jumps_and_balance() 
     assert!(landing.iter().all(|c| c.reaction() == Reaction::SafeHold));
     assert_eq!(
         landing.iter().map(|c| c.code()).collect::<Vec<_>>(),
-        [0x0205, 0x0601, 0x0701]
+        [0x0205, 0x0601, 0x0608, 0x0701]
     );
     // A set lands first only if every safe-hold fault in it does.
     let mut set: gait_control::faults::FaultSet = [FaultCode::DeadlineMissed, FaultCode::ForceOpen]

@@ -37,6 +37,7 @@ use firmware::{board_config, model_task, qemu_rig};
 use gait_control::controller::Controller;
 use gait_control::feedforward::ModelTask;
 use gait_control::replan::{ReplanOutcome, ReplanSlot};
+use gait_control::supervisor::WindowedChecks;
 
 use crate::{INSTR_PER_TICK, Out, SYST_MAX, checked, line, print_phases};
 
@@ -244,7 +245,7 @@ pub(crate) fn check(out: &mut Out, scb: &mut SCB) -> usize {
         return 1;
     };
     let tables = board_config::flash_tables();
-    let Some(ticking) = ticking(&device, &segment) else {
+    let Some((ticking, checks)) = ticking(&device, &segment) else {
         out.put(&mut line(
             "FAIL replanning: the controller or its drivers were refused",
         ));
@@ -253,7 +254,8 @@ pub(crate) fn check(out: &mut Out, scb: &mut SCB) -> usize {
     // SAFETY: PendSV has not run yet; lowering its priority breaks no
     // critical section (nothing relies on PendSV being masked).
     unsafe { scb.set_priority(SystemHandler::PendSV, model_task::PRIORITY) };
-    let model = ModelTask::new(ticking.controller.config().model, &model_task::SLOT);
+    let model =
+        ModelTask::new(ticking.controller.config().model, &model_task::SLOT).with_checks(checks);
     if !model_task::install(model) {
         out.put(&mut line("FAIL replanning: the model task is in use"));
         return 1;
@@ -303,13 +305,16 @@ pub(crate) fn check(out: &mut Out, scb: &mut SCB) -> usize {
 
 /// The controller the board builds for the recorded gait, its re-planner
 /// on; its drivers over the rig.
-fn ticking(device: &DeviceConfig, segment: &Segment<'static>) -> Option<Ticking> {
+fn ticking(
+    device: &DeviceConfig,
+    segment: &Segment<'static>,
+) -> Option<(Ticking, Option<WindowedChecks>)> {
     let mut controller =
         build_controller(device, board_config::flash_tables(), segment.gait).ok()?;
     controller.set_replanner(&SLOT, REPLAN);
-    controller.set_model_task(&model_task::SLOT);
+    let checks = controller.set_model_task(&model_task::SLOT);
     let hw = board_config::hardware(device, qemu_rig::peripherals()).ok()?;
-    Some(Ticking {
+    let ticking = Ticking {
         device: *device,
         controller,
         hw,
@@ -320,7 +325,8 @@ fn ticking(device: &DeviceConfig, segment: &Segment<'static>) -> Option<Ticking>
             ..Replay::default()
         },
         overruns: 0,
-    })
+    };
+    Some((ticking, checks))
 }
 
 /// Prints the re-plans and the ticks; the number of failures.

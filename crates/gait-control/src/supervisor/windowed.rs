@@ -1,0 +1,532 @@
+//! The windowed checks: the rules that judge a channel over many ticks
+//! (a joint's velocity, frozen counts, tracking and torque residual; an
+//! ankle's heel-off, balance and stuck readings; the force sensors' and
+//! drive monitors' debounces). None of them can trip on one tick's facts
+//! alone, and together they are most of the supervisor's work.
+//!
+//! So the controller runs them a tick late, off the tick: it hands each
+//! tick's facts over as a [`WindowedJob`] and applies the [`Findings`] of
+//! the last one at the next tick's guard, before that tick's own checks.
+//! On the board the model task works them out between the two ticks
+//! ([`crate::feedforward::ModelTask`], through a
+//! [`CheckSlot`](crate::check_slot::CheckSlot)); without a task (the
+//! simulator, tests) the controller works them out itself at the end of
+//! its guard. The same arithmetic on the same facts: the verdicts are
+//! equal bit for bit. What needs one tick to be seen (an e-stop, a bad or
+//! out-of-range frame, a motor's flags, the deadline) stays in the tick.
+//!
+//! [`Supervisor::check`] runs both on the same tick's facts (the rules'
+//! own tests).
+
+use super::tracks::{ForceTrack, JointMotion};
+use super::*;
+
+/// Most faults one tick's windowed checks can raise (every rule of every
+/// channel at once: 4 joints × 4, 2 ankles × 4, 8 forces × 2, 2 for the
+/// drive monitor).
+pub const MAX_RAISES: usize = 42;
+
+/// What the latch had marked when the job was handed over: which joints
+/// are braked, blind, or were held in place once (0x0404's rule for a
+/// joint dragged by a braked one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Marks {
+    pub(super) braked: [bool; JOINTS],
+    pub(super) angle_lost: [bool; JOINTS],
+    pub(super) held_once: [bool; JOINTS],
+}
+
+/// One tick's facts for the windowed checks.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct WindowedJob {
+    /// The tick's facts, as its guard saw them.
+    pub input: SupervisorInput,
+    /// Its encoder frames, joints then ankles.
+    pub frames: [EncoderFrame; ENCODERS],
+    /// The latch's marks after the guard ([`Supervisor::mark`]).
+    pub(super) marks: Marks,
+}
+
+impl WindowedJob {
+    /// The tick the facts are from.
+    pub const fn tick(&self) -> u32 {
+        self.input.tick
+    }
+}
+
+/// One fault the windowed checks found present.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Raise {
+    pub(super) code: FaultCode,
+    pub(super) channel: u8,
+    pub(super) value: f32,
+    /// 0x0404 on a joint dragged by a braked one: held where it is, not
+    /// braked ([`Verdict::rehold_joints`]).
+    pub(super) hold: bool,
+}
+
+const NO_RAISE: Raise = Raise {
+    code: FaultCode::DeadlineMissed,
+    channel: NO_CHANNEL,
+    value: 0.0,
+    hold: false,
+};
+
+/// What the windowed checks found in one tick's facts: the faults present
+/// (the latch takes them as its own checks' at the next guard) and the
+/// ankles whose readings control must stop or start taking again
+/// (0x0207's stuck ankle).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Findings {
+    pub(super) tick: u32,
+    pub(super) raises: [Raise; MAX_RAISES],
+    pub(super) len: u8,
+    /// `Some(stuck)` where an ankle's stuck state changed.
+    pub(super) ankle_stuck: [Option<bool>; ANKLES],
+    /// The latch's marks as the raises so far left them (read by later
+    /// raises, as the latch's own would be).
+    marks: Marks,
+}
+
+impl Findings {
+    /// Nothing found in the facts of `tick`, the latch marked `marks`.
+    pub(super) const fn new(tick: u32, marks: Marks) -> Self {
+        Self {
+            tick,
+            raises: [NO_RAISE; MAX_RAISES],
+            len: 0,
+            ankle_stuck: [None; ANKLES],
+            marks,
+        }
+    }
+
+    /// Nothing found (before the first job).
+    pub const NONE: Self = Self::new(
+        0,
+        Marks {
+            braked: [false; JOINTS],
+            angle_lost: [false; JOINTS],
+            held_once: [false; JOINTS],
+        },
+    );
+
+    /// The tick whose facts these are.
+    pub const fn tick(&self) -> u32 {
+        self.tick
+    }
+
+    /// The faults found, in the order raised.
+    pub fn raises(&self) -> &[Raise] {
+        self.raises.get(..usize::from(self.len)).unwrap_or(&[])
+    }
+
+    /// Whether `code` was found (on any channel).
+    pub fn contains(&self, code: FaultCode) -> bool {
+        self.raises().iter().any(|r| r.code == code)
+    }
+
+    fn push(&mut self, r: Raise) {
+        if let Some(slot) = self.raises.get_mut(usize::from(self.len)) {
+            *slot = r;
+            self.len += 1;
+        }
+        let mark = !r.hold;
+        let marks = if !mark {
+            None
+        } else if r.code.loses_angle() {
+            Some(&mut self.marks.angle_lost)
+        } else if r.code.brakes_joint() {
+            Some(&mut self.marks.braked)
+        } else {
+            None
+        };
+        if let Some(b) = marks.and_then(|m| m.get_mut(usize::from(r.channel))) {
+            *b = true;
+        }
+    }
+
+    /// `code`'s condition holds on `channel` (as [`Latch::raise`]).
+    pub(super) fn raise(&mut self, code: FaultCode, channel: u8, value: f32) {
+        self.push(Raise {
+            code,
+            channel,
+            value,
+            hold: false,
+        });
+    }
+
+    /// `code` on `joint`, held in place instead of braked where the latch
+    /// would ([`Latch::raise_on_joint`]'s rule, on the marks); returns
+    /// whether it is.
+    fn raise_on_joint(&mut self, code: FaultCode, joint: usize, value: f32) -> bool {
+        let m = &self.marks;
+        let other_braked = m
+            .braked
+            .iter()
+            .zip(&m.angle_lost)
+            .enumerate()
+            .any(|(k, (&b, &l))| k != joint && (b || l));
+        let first = m.held_once.get(joint) == Some(&false);
+        let hold = code.held_in_place_first() && other_braked && first;
+        if hold {
+            if let Some(once) = self.marks.held_once.get_mut(joint) {
+                *once = true;
+            }
+        }
+        self.push(Raise {
+            code,
+            channel: u8::try_from(joint).unwrap_or(NO_CHANNEL),
+            value,
+            hold,
+        });
+        hold
+    }
+}
+
+/// The windowed checks' memory of each channel.
+#[derive(Debug, Clone)]
+pub struct WindowedChecks {
+    pub(super) cfg: SupervisorConfig,
+    /// 0x0404's observer constants, from `cfg.response`.
+    observer: response::Observer,
+    pub(super) joints: [JointMotion; JOINTS],
+    /// Consecutive ticks each ankle has rested on its stop unplanned.
+    heel_off_ticks: [u32; ANKLES],
+    /// Consecutive frames each ankle has read its dorsiflexion stop,
+    /// unchanged, with its foot in the air (0x0207's stuck ankle).
+    stuck_in_air_ticks: [u32; ANKLES],
+    /// The plan of each stance ankle when its counts last changed (NaN
+    /// outside a swing's stance): 0x0207's frozen stance ankle.
+    plan_since_moved: [f32; ANKLES],
+    /// Each ankle's error from its plan, for 0x0701 and 0x0702.
+    balance: [balance::BalanceTrack; ANKLES],
+    forces: [ForceTrack; FORCES],
+    pub(super) drive_currents: [drive_current::DriveCurrentTrack; JOINTS],
+    previous_reference_rad: Option<[f32; JOINTS]>,
+}
+
+impl WindowedChecks {
+    /// Fresh memory for the checks of `cfg` (validated by the
+    /// [`Supervisor`] it belongs to).
+    pub(super) fn new(cfg: &SupervisorConfig) -> Self {
+        Self {
+            observer: response::Observer::new(&cfg.response, cfg.dt_s),
+            cfg: *cfg,
+            joints: [JointMotion::default(); JOINTS],
+            heel_off_ticks: [0; ANKLES],
+            stuck_in_air_ticks: [0; ANKLES],
+            plan_since_moved: [f32::NAN; ANKLES],
+            balance: [balance::BalanceTrack::default(); ANKLES],
+            forces: [ForceTrack::default(); FORCES],
+            drive_currents: Default::default(),
+            previous_reference_rad: None,
+        }
+    }
+
+    /// The checks of one tick's facts.
+    pub fn run(&mut self, job: &WindowedJob) -> Findings {
+        let mut f = Findings::new(job.input.tick, job.marks);
+        self.check_joints(&job.input, &job.frames, &mut f);
+        self.check_ankles(&job.input, &job.frames, &mut f);
+        self.check_forces(&job.input, &mut f);
+        self.check_drive_current(&job.input, &mut f);
+        self.previous_reference_rad = Some(job.input.joint_reference_rad);
+        f
+    }
+}
+
+/// `|x| ≤ limit`; false for NaN, so `!within(..)` trips on NaN.
+pub(super) fn within(x: f32, limit: f32) -> bool {
+    x.abs() <= limit
+}
+
+impl WindowedChecks {
+    fn check_joints(
+        &mut self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+        f: &mut Findings,
+    ) {
+        let cfg = &self.cfg;
+        for i in 0..JOINTS {
+            let ch = i as u8;
+            let (Some(taken), Some(&reference), Some(&vmax), Some(motor), Some(track)) = (
+                frames.get(i),
+                input.joint_reference_rad.get(i),
+                cfg.velocity_limit_rad_s.get(i),
+                input.motors.get(i),
+                self.joints.get_mut(i),
+            ) else {
+                continue;
+            };
+            let reference_speed = match self.previous_reference_rad.as_ref().and_then(|p| p.get(i))
+            {
+                Some(&previous) => (reference - previous).abs() / cfg.dt_s,
+                None => 0.0,
+            };
+            // NaN speed or command counts as driven.
+            let driven = !(reference_speed < cfg.frozen_reference_speed_rad_s
+                && motor.commanded_nm.abs() < cfg.frozen_command_fraction * motor.limit_nm);
+            if let Some((angle_rad, delta, previous_angle_rad)) = taken.accepted() {
+                match delta {
+                    Some((counts, elapsed)) => {
+                        let elapsed_s = cfg.dt_s * elapsed.max(1) as f32;
+                        let raw_velocity = (angle_rad - previous_angle_rad) / elapsed_s;
+                        // Starts from 0 after a (re-)seed, so one noisy
+                        // difference cannot trip the limit alone.
+                        if !track.velocity_rad_s.is_finite() {
+                            track.velocity_rad_s = 0.0;
+                        }
+                        track.velocity_rad_s +=
+                            cfg.velocity_filter_alpha * (raw_velocity - track.velocity_rad_s);
+                        track.velocity_valid = true;
+                        // A still stretch is timed only while there is a
+                        // count to restart (a driven tick starts it at 0).
+                        if counts != 0 {
+                            track.frozen_ticks = 0;
+                        } else if driven {
+                            track.frozen_ticks = track.frozen_ticks.saturating_add(1);
+                            track.still_ticks = 0;
+                        } else if track.frozen_ticks > 0 {
+                            track.still_ticks = track.still_ticks.saturating_add(1);
+                            if track.still_ticks >= cfg.frozen_still_reset_ticks {
+                                track.frozen_ticks = 0;
+                            }
+                        }
+                    }
+                    None => {
+                        // (Re-)seeded: no velocity from a single sample.
+                        track.velocity_rad_s = 0.0;
+                        track.velocity_valid = false;
+                        track.frozen_ticks = 0;
+                    }
+                }
+                // A lost encoder's frames (a frozen one still sends valid
+                // ones) say nothing of the joint's motion: no tracking or
+                // residual check on them.
+                let trusted = !f.marks.angle_lost.get(i).copied().unwrap_or(true);
+                let error = angle_rad - reference;
+                if !trusted || error.abs() <= cfg.tracking_error_limit_rad {
+                    track.tracking_ticks = 0;
+                } else {
+                    track.tracking_ticks = track.tracking_ticks.saturating_add(1);
+                }
+                if track.tracking_ticks >= cfg.tracking_error_ticks {
+                    f.raise(FaultCode::TrackingError, ch, error);
+                }
+                // A reference faster than the joint can go is a jump of the
+                // plan (a hold's start, a reset), not a motion to check
+                // against: the observer restarts from it.
+                if trusted && motor.enabled && delta.is_some() && reference_speed <= vmax {
+                    let o = &self.observer;
+                    let swing = input.swing_leg.is_some_and(|leg| leg.has_joint(i));
+                    let d = track.residual.update(
+                        o,
+                        error,
+                        motor.applied_nm,
+                        motor.feedforward_nm,
+                        o.inertia(i, swing),
+                    );
+                    if within(d, o.limit_nm) {
+                        track.residual.over_ticks = 0;
+                    } else {
+                        track.residual.over_ticks = track.residual.over_ticks.saturating_add(1);
+                    }
+                    if track.residual.over_ticks >= o.ticks
+                        && f.raise_on_joint(FaultCode::MotorResponse, i, d)
+                    {
+                        // Held in place: 10 more ticks over the limit brake
+                        // it (the observer restarted there measured the
+                        // same on the campaign's drive and encoder runs).
+                        track.residual.over_ticks = 0;
+                    }
+                    if !d.is_finite() {
+                        track.residual.stop(motor.feedforward_nm);
+                    }
+                } else {
+                    track.residual.stop(motor.feedforward_nm);
+                }
+            } else {
+                track.residual.stop(motor.feedforward_nm);
+            }
+            // Conditions that persist while frames are rejected.
+            if track.velocity_valid && !within(track.velocity_rad_s, vmax) {
+                f.raise(FaultCode::JointVelocityLimit, ch, track.velocity_rad_s);
+            }
+            if track.frozen_ticks >= cfg.frozen_ticks {
+                f.raise(FaultCode::EncoderFrozen, ch, track.frozen_ticks as f32);
+            }
+        }
+    }
+}
+
+impl WindowedChecks {
+    fn check_ankles(
+        &mut self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+        f: &mut Findings,
+    ) {
+        let cfg = &self.cfg;
+        // Both ankles' balance check reads the crutches: summed once.
+        let crutches = crutch_sum_n(input);
+        for i in 0..ANKLES {
+            let ch = i as u8;
+            let Some((angle_rad, delta, _)) = frames.get(JOINTS + i).and_then(|t| t.accepted())
+            else {
+                continue;
+            };
+            // Resting on the stop while the plan is well below it (a NaN
+            // plan never counts; a rejected frame neither counts nor
+            // resets).
+            let plan = input.ankle_plan_rad.get(i).copied().unwrap_or(f32::NAN);
+            let on_stop = angle_rad >= cfg.heel_off_rad - cfg.heel_off_reading_tolerance_rad;
+            let unplanned = plan < cfg.heel_off_rad - cfg.heel_off_plan_margin_rad;
+            if let Some(n) = self.heel_off_ticks.get_mut(i) {
+                *n = if on_stop && unplanned {
+                    n.saturating_add(1)
+                } else {
+                    0
+                };
+                if *n >= cfg.heel_off_ticks {
+                    f.raise(FaultCode::UnplannedHeelOff, ch, angle_rad);
+                }
+            }
+            // The pilot losing balance: the error from the plan growing
+            // away from it. Not on the stop: with the heel up the encoder
+            // no longer sees the shank. With both feet down, only a foot
+            // planned flat (a trailing foot's plan past the stop is its
+            // shank's angle, heel up); in a swing, a plan past the stop is
+            // the stop for the reading, which cannot go further.
+            let swing = input.swing_leg.is_some();
+            let watched = plan.is_finite() && (swing || plan <= cfg.heel_off_rad);
+            if let Some(track) = self.balance.get_mut(i) {
+                if watched && !on_stop {
+                    let sample = balance::BalanceSample {
+                        angle_rad,
+                        plan_rad: plan.min(cfg.heel_off_rad),
+                        swing,
+                        crutches_n: crutches,
+                        elapsed_ticks: delta.map(|(_, n)| n),
+                    };
+                    if let Some(e) = track.update(&cfg.balance, &sample, cfg.dt_s) {
+                        let code = if e > 0.0 {
+                            FaultCode::PilotFallingForward
+                        } else {
+                            FaultCode::PilotFallingBack
+                        };
+                        f.raise(code, ch, e);
+                    }
+                } else {
+                    track.restart();
+                }
+            }
+            // Only a toe pushed up by the ground holds an ankle on its
+            // dorsiflexion stop: in the air its spring takes it off within
+            // tens of milliseconds. Counts that stay on the stop, unchanged,
+            // with the foot in the air are an encoder stuck where the foot
+            // left the ground (read as a lean, it set a stair descent's
+            // landing on the stop and dropped the pilot); control stops
+            // taking them until they move.
+            let in_air = input.airborne_leg.is_some_and(|leg| leg.ankle() == i);
+            let moved = delta.is_some_and(|(counts, _)| counts != 0);
+            if let (Some(n), Some(stuck)) =
+                (self.stuck_in_air_ticks.get_mut(i), f.ankle_stuck.get_mut(i))
+            {
+                *n = if in_air && on_stop && delta.is_some() && !moved {
+                    n.saturating_add(1)
+                } else {
+                    0
+                };
+                if moved {
+                    *stuck = Some(false);
+                }
+                if *n >= cfg.frozen_ticks {
+                    *stuck = Some(true);
+                    f.raise(FaultCode::AnkleEncoder, ch, *n as f32);
+                }
+            }
+            // A stance ankle in a swing turns with its shank: counts that
+            // do not change once while the plan turns it by
+            // `frozen_ankle_plan_rad` are a frozen encoder (its stale
+            // reading set the posture a walk's step played on with past its
+            // table's end, and the residual braked the stance knee). Off
+            // the stop only: a heel up rests there; and within one swing,
+            // whose plan is continuous.
+            let stance_in_swing = input.swing_leg.is_some_and(|leg| leg.other().ankle() == i);
+            let planned = stance_in_swing && plan.is_finite() && !on_stop;
+            if let Some(from) = self.plan_since_moved.get_mut(i) {
+                if !planned {
+                    *from = f32::NAN;
+                } else if moved || from.is_nan() {
+                    *from = plan;
+                } else if delta.is_some() && (plan - *from).abs() >= cfg.frozen_ankle_plan_rad {
+                    if let Some(stuck) = f.ankle_stuck.get_mut(i) {
+                        *stuck = Some(true);
+                    }
+                    f.raise(FaultCode::AnkleEncoder, ch, plan - *from);
+                }
+            }
+        }
+    }
+
+    fn check_forces(&mut self, input: &SupervisorInput, f: &mut Findings) {
+        let cfg = &self.cfg;
+        for i in 0..FORCES {
+            let ch = i as u8;
+            let (Some(sense), Some(track)) = (input.forces.get(i), self.forces.get_mut(i)) else {
+                continue;
+            };
+            let mut immediate = false;
+            let bad = match sense.status {
+                ForceStatus::BusError => Some(FaultCode::ForceBusError),
+                ForceStatus::Open => Some(FaultCode::ForceOpen),
+                ForceStatus::Shorted => Some(FaultCode::ForceShorted),
+                ForceStatus::OutOfRange => Some(FaultCode::ForceOutOfRange),
+                ForceStatus::Ok => {
+                    if !sense.newtons.is_finite() {
+                        immediate = true;
+                        Some(FaultCode::ForceOutOfRange)
+                    } else if cfg.force_min_n <= sense.newtons && sense.newtons <= cfg.force_max_n {
+                        None
+                    } else {
+                        Some(FaultCode::ForceOutOfRange)
+                    }
+                }
+            };
+            track
+                .window
+                .push(bad.is_some(), cfg.force_debounce.window_ticks);
+            if bad.is_some() {
+                track.last_bad = bad;
+            }
+            let n = track.window.count();
+            let tripped = if n >= u32::from(cfg.force_debounce.count) {
+                track.last_bad
+            } else {
+                None
+            };
+            if immediate {
+                f.raise(FaultCode::ForceOutOfRange, ch, sense.newtons);
+            }
+            if let Some(code) = tripped {
+                let value = if bad.is_some() {
+                    sense.newtons
+                } else {
+                    n as f32
+                };
+                f.raise(code, ch, value);
+            }
+        }
+    }
+}
+
+/// Both crutches' load, N; NaN unless both sensors read.
+fn crutch_sum_n(input: &SupervisorInput) -> f32 {
+    use crate::layout::force::{LEFT_CRUTCH, RIGHT_CRUTCH};
+    let read = |c: usize| match input.forces.get(c) {
+        Some(f) if f.status == ForceStatus::Ok => f.newtons,
+        _ => f32::NAN,
+    };
+    read(LEFT_CRUTCH) + read(RIGHT_CRUTCH)
+}
