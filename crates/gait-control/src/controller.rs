@@ -203,9 +203,6 @@ pub struct Controller<'t> {
     seq: Sequencer<'t>,
     /// Its log of steps is written once a step.
     crutch: CrutchLoad,
-    /// With a model task: the tick whose facts were last handed to its
-    /// windowed checks (`supervisor/windowed.rs`); 0 before the first.
-    handed_over: u32,
     /// Last, past the fields a tick reads on the board (4 KiB, see
     /// `firmware/src/lib.rs`): without a model task, what the windowed
     /// checks found in the last tick's facts.
@@ -247,7 +244,6 @@ impl<'t> Controller<'t> {
         };
         Ok(Self {
             cfg,
-            handed_over: 0,
             checks_in_task: false,
             findings: Findings::NONE,
             seq: Sequencer::new(cfg.sequencer, tables, [0.0; JOINTS]).with_model(cfg.model),
@@ -291,8 +287,9 @@ impl<'t> Controller<'t> {
     /// the tick: the same torques and verdicts, off the tick. Returns the
     /// windowed checks for the task
     /// ([`crate::feedforward::ModelTask::with_checks`]); a task without
-    /// them leaves every tick's facts unchecked, and the next tick latches
-    /// [`FaultCode::ChecksLate`]. Call before the first tick.
+    /// them leaves every tick's facts unchecked, each counted as a missed
+    /// deadline ([`FaultCode::DeadlineMissed`] from the third). Call before the first tick.
+    #[must_use = "the model task runs the windowed checks only when given them"]
     pub fn set_model_task(&mut self, slot: &'t ModelSlot) -> Option<WindowedChecks> {
         self.model_slot = Some(slot);
         self.checks_in_task = true;

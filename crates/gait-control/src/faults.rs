@@ -516,14 +516,14 @@ fault_table! {
     },
     /// The windowed checks (`supervisor/windowed.rs`: velocities, frozen
     /// counts, tracking, the torque residual, the ankles' and forces'
-    /// rules), which run between two ticks, had not answered the last
-    /// tick's facts by the next tick: those rules are a tick blind. Only a
-    /// tick that overran or a model task held off can cause it.
+    /// rules), which run between two ticks, fell behind by more than the
+    /// findings of two ticks hold (`check_slot`): some of their faults were
+    /// dropped. A single late answer is a missed deadline (0x0601).
     ChecksLate = 0x0608 {
-        name: "windowed checks late",
+        name: "windowed checks behind",
         reaction: Reaction::SafeHold,
-        detection_bound: "the tick after the one whose facts were not checked",
-        reset_allowed_when: "the checks answer again",
+        detection_bound: "the tick that finds the findings overflowed",
+        reset_allowed_when: "the findings fit again",
         in_swing: InSwing::LandFirst,
     },
     /// A planned ankle's shank tips forward of its plan ever faster: the

@@ -30,7 +30,9 @@ mod balance;
 mod checks;
 mod config;
 mod drive_current;
+mod findings;
 mod frames;
+mod latch;
 mod response;
 mod tracks;
 mod windowed;
@@ -40,10 +42,12 @@ pub use config::{
     AngleRange, ConfigError, Debounce, EnvelopeMargins, ResetRefused, SupervisorConfig,
 };
 pub use drive_current::{DriveCurrentCheck, DriveCurrentSense};
+pub use findings::{Findings, MAX_RAISES, Marks, Raise};
 pub use frames::EncoderFrame;
+use latch::Latch;
 pub use response::ResponseCheck;
 use tracks::{Class, EncoderTrack, JointTrack};
-pub use windowed::{Findings, MAX_RAISES, Marks, Raise, WindowedChecks, WindowedJob};
+pub use windowed::{WindowedChecks, WindowedJob};
 /// Records kept in the post-mortem log (the newest ones).
 pub const LOG_LEN: usize = 32;
 /// Channel of a [`FaultRecord`] for faults that belong to no channel.
@@ -232,9 +236,6 @@ pub struct Supervisor {
     /// Faults found at boot in flash data ([`Supervisor::report_boot_fault`]):
     /// present at every check.
     boot_faults: FaultSet,
-    /// [`Supervisor::report_checks_late`] since the last check: 0x0608 is
-    /// present at the next one.
-    checks_late: bool,
 }
 
 /// Collects what one check raised.
@@ -253,7 +254,6 @@ impl Supervisor {
             calls: 0,
             present: FaultSet::EMPTY,
             boot_faults: FaultSet::EMPTY,
-            checks_late: false,
             latch: Latch {
                 latched: FaultSet::EMPTY,
                 logged_channels: [0; FaultCode::COUNT],
@@ -422,7 +422,7 @@ impl Supervisor {
         frames: &[EncoderFrame; ENCODERS],
     ) -> Verdict {
         let mut t = self.begin(input);
-        self.check_tick(input, frames, &mut t);
+        self.check_tick(input, frames, false, &mut t);
         let found = self.run_windowed(&self.windowed_job(input, frames));
         self.apply(&found, &mut t);
         self.end(input, t)
@@ -430,33 +430,23 @@ impl Supervisor {
 
     /// The controller's check of one tick: the windowed checks' `found` in
     /// the last tick's facts, then this tick's own checks
-    /// (`supervisor/windowed.rs`). Hand this tick's facts
-    /// ([`Supervisor::windowed_job`]) to the windowed checks next.
+    /// (`supervisor/windowed.rs`). `late`: the windowed checks had not
+    /// answered the last tick's facts (a task the last tick left no time):
+    /// counted as a missed deadline (0x0601), once with this tick's own
+    /// miss. Hand this tick's facts ([`Supervisor::windowed_job`]) to the
+    /// windowed checks next.
     #[inline(always)]
     pub fn check_after(
         &mut self,
         input: &SupervisorInput,
         frames: &[EncoderFrame; ENCODERS],
         found: &Findings,
+        late: bool,
     ) -> Verdict {
         let mut t = self.begin(input);
         self.apply(found, &mut t);
-        self.check_tick(input, frames, &mut t);
+        self.check_tick(input, frames, late, &mut t);
         self.end(input, t)
-    }
-
-    /// Latches [`FaultCode::ChecksLate`]: the windowed checks did not
-    /// answer the last tick's facts before this tick's guard. Call before
-    /// [`Supervisor::check_after`], whose verdict then has it.
-    pub fn report_checks_late(&mut self, tick: u32) {
-        let mut t = Tick {
-            tick,
-            present: FaultSet::EMPTY,
-            new: FaultSet::EMPTY,
-        };
-        self.latch
-            .raise(&mut t, FaultCode::ChecksLate, NO_CHANNEL, 1.0);
-        self.checks_late = true;
     }
 
     /// The facts of the tick just checked, for the windowed checks, with
@@ -502,26 +492,24 @@ impl Supervisor {
     #[inline(always)]
     fn begin(&mut self, input: &SupervisorInput) -> Tick {
         self.calls = self.calls.wrapping_add(1);
-        let mut present = FaultSet::EMPTY;
-        if core::mem::take(&mut self.checks_late) {
-            present.insert(FaultCode::ChecksLate);
-        }
         Tick {
             tick: input.tick,
-            present,
+            present: FaultSet::EMPTY,
             new: FaultSet::EMPTY,
         }
     }
 
+    /// The tick's own checks; `late`: see [`Supervisor::check_after`].
     #[inline(always)]
     fn check_tick(
         &mut self,
         input: &SupervisorInput,
         frames: &[EncoderFrame; ENCODERS],
+        late: bool,
         t: &mut Tick,
     ) {
         self.check_operator_inputs(input, t);
-        self.check_deadline(input, t);
+        self.check_deadline(input.deadline_missed || late, t);
         self.check_motors(input, t);
         self.check_joints(input, frames, t);
         self.check_ankles(frames, t);
@@ -536,23 +524,30 @@ impl Supervisor {
             }
         }
         let raises = found.raises();
-        if raises.is_empty() {
+        if raises.is_empty() && !found.overflowed() {
             return;
         }
         let now = core::mem::replace(&mut t.tick, found.tick);
         for r in raises {
-            if r.hold {
+            // Held in place only if the latch still holds the reason (a
+            // reset since the facts may have released the other joint).
+            let hold = r.hold && self.latch.holds_in_place(r.code, usize::from(r.channel));
+            if hold {
                 let j = usize::from(r.channel);
-                if let (Some(once), Some(hold)) = (
+                if let (Some(once), Some(now)) = (
                     self.latch.held_in_place_once.get_mut(j),
                     self.latch.hold_in_place.get_mut(j),
                 ) {
                     *once = true;
-                    *hold = true;
+                    *now = true;
                 }
             }
             self.latch
-                .raise_marking(t, r.code, r.channel, r.value, !r.hold);
+                .raise_marking(t, r.code, r.channel, r.value, !hold);
+        }
+        if found.overflowed() {
+            self.latch
+                .raise(t, FaultCode::ChecksLate, NO_CHANNEL, found.tick as f32);
         }
         t.tick = now;
     }
@@ -566,90 +561,6 @@ impl Supervisor {
             new: t.new,
             braked_joints: self.braked_joints(&input.chain_closed),
             rehold_joints: core::mem::take(&mut self.latch.hold_in_place),
-        }
-    }
-}
-
-/// What latched, and the post-mortem log: apart from the channels' tracks
-/// so that a check can raise while it holds one of them and reads the
-/// configuration in place.
-#[derive(Debug, Clone)]
-struct Latch {
-    latched: FaultSet,
-    /// Per fault (by index), channels already logged since it latched.
-    logged_channels: [u8; FaultCode::COUNT],
-    /// Whether a no-channel record was logged since the fault latched.
-    logged_none: FaultSet,
-    log: RingLog<FaultRecord, LOG_LEN>,
-    /// Joints whose drive a fault has disabled ([`FaultCode::brakes_joint`]),
-    /// until a reset.
-    braked: [bool; JOINTS],
-    /// Joints whose encoder a fault has lost ([`FaultCode::loses_angle`]),
-    /// until a reset.
-    angle_lost: [bool; JOINTS],
-    /// Joints 0x0404 has held in place instead of braking, until a reset.
-    held_in_place_once: [bool; JOINTS],
-    /// Those of them this tick ([`Verdict::rehold_joints`]).
-    hold_in_place: [bool; JOINTS],
-}
-
-impl Latch {
-    /// Records that `code`'s condition holds now on `channel`: latches it,
-    /// and logs it once per channel while latched.
-    pub(super) fn raise(&mut self, t: &mut Tick, code: FaultCode, channel: u8, value: f32) {
-        self.raise_marking(t, code, channel, value, true);
-    }
-
-    /// [`Latch::raise`]; a joint's brake or lost angle marked only with
-    /// `mark`.
-    fn raise_marking(
-        &mut self,
-        t: &mut Tick,
-        code: FaultCode,
-        channel: u8,
-        value: f32,
-        mark: bool,
-    ) {
-        t.present.insert(code);
-        let marks = if !mark {
-            None
-        } else if code.loses_angle() {
-            Some(&mut self.angle_lost)
-        } else if code.brakes_joint() {
-            Some(&mut self.braked)
-        } else {
-            None
-        };
-        if let Some(b) = marks.and_then(|m| m.get_mut(usize::from(channel))) {
-            *b = true;
-        }
-        if !self.latched.contains(code) {
-            self.latched.insert(code);
-            t.new.insert(code);
-        }
-        let index = usize::from(code.index());
-        let first_time = if channel == NO_CHANNEL {
-            let first = !self.logged_none.contains(code);
-            self.logged_none.insert(code);
-            first
-        } else {
-            let bit = 1u8.checked_shl(u32::from(channel)).unwrap_or(0);
-            match self.logged_channels.get_mut(index) {
-                Some(mask) => {
-                    let first = *mask & bit == 0;
-                    *mask |= bit;
-                    first
-                }
-                None => false,
-            }
-        };
-        if first_time {
-            self.log.push(FaultRecord {
-                tick: t.tick,
-                code,
-                channel,
-                value,
-            });
         }
     }
 }

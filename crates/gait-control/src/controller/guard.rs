@@ -5,6 +5,7 @@
 //! place (a copy of them would cost the tick some 300 instructions), or
 //! the controller itself at the end of this stage.
 
+use crate::check_slot::Answer;
 use crate::faults::Reaction;
 use crate::feedforward::ModelSlot;
 use crate::layout::Side;
@@ -42,13 +43,7 @@ impl Controller<'_> {
             airborne_leg,
         };
         let task = self.model_slot.filter(|_| self.checks_in_task);
-        let mut verdict = check(
-            &mut self.supervisor,
-            task,
-            &mut self.handed_over,
-            &mut self.findings,
-            &facts,
-        );
+        let mut verdict = check(&mut self.supervisor, task, &mut self.findings, &facts);
         let estop_hold = self.stop_for_estop(&mut verdict, status);
         if verdict.reaction == Reaction::None && !estop_hold {
             // Nothing to order (most ticks): no fault latched re-holds a
@@ -70,32 +65,30 @@ impl Controller<'_> {
 /// The supervisor's verdict: what the windowed checks found in the last
 /// tick's facts and this tick's own checks; this tick's facts then go to
 /// the windowed checks: the model task's (`task`, written in place in its
-/// slot, `handed_over` the tick they are from), or run here
-/// (`findings`, for the next tick).
+/// slot), or run here (`findings`, for the next tick).
 #[inline(always)]
 fn check(
     sup: &mut Supervisor,
     task: Option<&ModelSlot>,
-    handed_over: &mut u32,
     findings: &mut Findings,
     facts: &Facts<'_>,
 ) -> Verdict {
     let Some(slot) = task else {
         let mut job = WindowedJob::default();
         facts.write(&mut job);
-        let verdict = sup.check_after(&job.input, &job.frames, findings);
+        let verdict = sup.check_after(&job.input, &job.frames, findings, false);
         sup.mark(&mut job);
         *findings = sup.run_windowed(&job);
         return verdict;
     };
-    let expected = *handed_over;
-    *handed_over = facts.tick;
-    slot.checks().exchange(expected, |found, job| {
+    slot.checks().exchange(|answer, job| {
         facts.write(job);
-        if found.is_none() && expected != 0 {
-            sup.report_checks_late(expected);
-        }
-        let verdict = sup.check_after(&job.input, &job.frames, found.unwrap_or(&Findings::NONE));
+        let (found, late) = match answer {
+            Answer::Found(f) => (f, false),
+            Answer::NoneAsked => (&Findings::NONE, false),
+            Answer::Late(_) => (&Findings::NONE, true),
+        };
+        let verdict = sup.check_after(&job.input, &job.frames, found, late);
         sup.mark(job);
         verdict
     })

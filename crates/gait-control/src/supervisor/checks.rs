@@ -22,8 +22,11 @@ impl Supervisor {
         }
     }
 
-    pub(super) fn check_deadline(&mut self, input: &SupervisorInput, t: &mut Tick) {
-        if input.deadline_missed {
+    /// `missed`: the last tick overran, or the windowed checks had not
+    /// answered its facts (which only a tick that left the task no time
+    /// causes: one miss).
+    pub(super) fn check_deadline(&mut self, missed: bool, t: &mut Tick) {
+        if missed {
             self.deadline_misses_total = self.deadline_misses_total.saturating_add(1);
             if let Some(slot) = self.misses.get_mut(usize::from(self.miss_next)) {
                 *slot = self.calls;

@@ -18,8 +18,9 @@
 //! against the motor's back-EMF: moving fast in the direction of its
 //! torque. Under-delivery there is not counted.
 
+use super::findings::Findings;
 use super::tracks::SampleWindow;
-use super::windowed::{Findings, WindowedChecks};
+use super::windowed::WindowedChecks;
 use super::*;
 
 /// Settings of the drive-current check.

@@ -18,23 +18,9 @@
 //! [`Supervisor::check`] runs both on the same tick's facts (the rules'
 //! own tests).
 
+use super::findings::{Findings, Marks};
 use super::tracks::{ForceTrack, JointMotion};
 use super::*;
-
-/// Most faults one tick's windowed checks can raise (every rule of every
-/// channel at once: 4 joints × 4, 2 ankles × 4, 8 forces × 2, 2 for the
-/// drive monitor).
-pub const MAX_RAISES: usize = 42;
-
-/// What the latch had marked when the job was handed over: which joints
-/// are braked, blind, or were held in place once (0x0404's rule for a
-/// joint dragged by a braked one).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Marks {
-    pub(super) braked: [bool; JOINTS],
-    pub(super) angle_lost: [bool; JOINTS],
-    pub(super) held_once: [bool; JOINTS],
-}
 
 /// One tick's facts for the windowed checks.
 #[derive(Debug, Clone, Copy, Default)]
@@ -51,135 +37,6 @@ impl WindowedJob {
     /// The tick the facts are from.
     pub const fn tick(&self) -> u32 {
         self.input.tick
-    }
-}
-
-/// One fault the windowed checks found present.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Raise {
-    pub(super) code: FaultCode,
-    pub(super) channel: u8,
-    pub(super) value: f32,
-    /// 0x0404 on a joint dragged by a braked one: held where it is, not
-    /// braked ([`Verdict::rehold_joints`]).
-    pub(super) hold: bool,
-}
-
-const NO_RAISE: Raise = Raise {
-    code: FaultCode::DeadlineMissed,
-    channel: NO_CHANNEL,
-    value: 0.0,
-    hold: false,
-};
-
-/// What the windowed checks found in one tick's facts: the faults present
-/// (the latch takes them as its own checks' at the next guard) and the
-/// ankles whose readings control must stop or start taking again
-/// (0x0207's stuck ankle).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Findings {
-    pub(super) tick: u32,
-    pub(super) raises: [Raise; MAX_RAISES],
-    pub(super) len: u8,
-    /// `Some(stuck)` where an ankle's stuck state changed.
-    pub(super) ankle_stuck: [Option<bool>; ANKLES],
-    /// The latch's marks as the raises so far left them (read by later
-    /// raises, as the latch's own would be).
-    marks: Marks,
-}
-
-impl Findings {
-    /// Nothing found in the facts of `tick`, the latch marked `marks`.
-    pub(super) const fn new(tick: u32, marks: Marks) -> Self {
-        Self {
-            tick,
-            raises: [NO_RAISE; MAX_RAISES],
-            len: 0,
-            ankle_stuck: [None; ANKLES],
-            marks,
-        }
-    }
-
-    /// Nothing found (before the first job).
-    pub const NONE: Self = Self::new(
-        0,
-        Marks {
-            braked: [false; JOINTS],
-            angle_lost: [false; JOINTS],
-            held_once: [false; JOINTS],
-        },
-    );
-
-    /// The tick whose facts these are.
-    pub const fn tick(&self) -> u32 {
-        self.tick
-    }
-
-    /// The faults found, in the order raised.
-    pub fn raises(&self) -> &[Raise] {
-        self.raises.get(..usize::from(self.len)).unwrap_or(&[])
-    }
-
-    /// Whether `code` was found (on any channel).
-    pub fn contains(&self, code: FaultCode) -> bool {
-        self.raises().iter().any(|r| r.code == code)
-    }
-
-    fn push(&mut self, r: Raise) {
-        if let Some(slot) = self.raises.get_mut(usize::from(self.len)) {
-            *slot = r;
-            self.len += 1;
-        }
-        let mark = !r.hold;
-        let marks = if !mark {
-            None
-        } else if r.code.loses_angle() {
-            Some(&mut self.marks.angle_lost)
-        } else if r.code.brakes_joint() {
-            Some(&mut self.marks.braked)
-        } else {
-            None
-        };
-        if let Some(b) = marks.and_then(|m| m.get_mut(usize::from(r.channel))) {
-            *b = true;
-        }
-    }
-
-    /// `code`'s condition holds on `channel` (as [`Latch::raise`]).
-    pub(super) fn raise(&mut self, code: FaultCode, channel: u8, value: f32) {
-        self.push(Raise {
-            code,
-            channel,
-            value,
-            hold: false,
-        });
-    }
-
-    /// `code` on `joint`, held in place instead of braked where the latch
-    /// would ([`Latch::raise_on_joint`]'s rule, on the marks); returns
-    /// whether it is.
-    fn raise_on_joint(&mut self, code: FaultCode, joint: usize, value: f32) -> bool {
-        let m = &self.marks;
-        let other_braked = m
-            .braked
-            .iter()
-            .zip(&m.angle_lost)
-            .enumerate()
-            .any(|(k, (&b, &l))| k != joint && (b || l));
-        let first = m.held_once.get(joint) == Some(&false);
-        let hold = code.held_in_place_first() && other_braked && first;
-        if hold {
-            if let Some(once) = self.marks.held_once.get_mut(joint) {
-                *once = true;
-            }
-        }
-        self.push(Raise {
-            code,
-            channel: u8::try_from(joint).unwrap_or(NO_CHANNEL),
-            value,
-            hold,
-        });
-        hold
     }
 }
 
@@ -529,4 +386,68 @@ fn crutch_sum_n(input: &SupervisorInput) -> f32 {
         _ => f32::NAN,
     };
     read(LEFT_CRUTCH) + read(RIGHT_CRUTCH)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn supervisor() -> Supervisor {
+        Supervisor::new(SupervisorConfig::paper()).unwrap()
+    }
+
+    /// A tick's facts whose left-foot sensor reads Ok but not finite:
+    /// 0x0304 at once (the windowed checks' force rule).
+    fn bad_force(tick: u32) -> WindowedJob {
+        let mut job = WindowedJob::default();
+        job.input.tick = tick;
+        job.input.forces[0] = ForceSense {
+            status: ForceStatus::Ok,
+            newtons: f32::NAN,
+        };
+        job
+    }
+
+    #[test]
+    fn findings_latch_at_the_next_check_with_their_own_tick_in_the_log() {
+        let mut sup = supervisor();
+        let job = bad_force(7);
+        let found = sup.run_windowed(&job);
+        assert!(found.contains(FaultCode::ForceOutOfRange));
+        let mut now = job;
+        now.input.tick = 8;
+        now.input.forces[0].newtons = 100.0;
+        let v = sup.check_after(&now.input, &now.frames, &found, false);
+        assert!(v.new.contains(FaultCode::ForceOutOfRange));
+        // Logged with the tick of the facts it was found in.
+        let record = sup
+            .log()
+            .find(|r| r.code == FaultCode::ForceOutOfRange)
+            .copied()
+            .unwrap();
+        assert_eq!(record.tick, 7);
+    }
+
+    #[test]
+    fn overflowed_findings_latch_0x0608_and_a_late_answer_is_a_missed_deadline() {
+        let mut sup = supervisor();
+        let job = bad_force(1);
+        let one = sup.run_windowed(&job);
+        let mut many = one;
+        for _ in 0..MAX_RAISES {
+            many.merge(&one);
+        }
+        assert!(many.overflowed());
+        let v = sup.check_after(&job.input, &job.frames, &many, false);
+        assert!(v.new.contains(FaultCode::ChecksLate));
+        assert_eq!(v.reaction, crate::faults::Reaction::SafeHold);
+        // Late answers count as deadline misses: the third latches 0x0601.
+        let mut sup = supervisor();
+        let quiet = WindowedJob::default();
+        for n in 1..=3 {
+            let v = sup.check_after(&quiet.input, &quiet.frames, &Findings::NONE, true);
+            assert_eq!(sup.deadline_misses(), n);
+            assert_eq!(v.latched.contains(FaultCode::DeadlineMissed), n == 3);
+        }
+    }
 }
