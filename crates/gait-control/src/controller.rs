@@ -51,7 +51,7 @@ use crate::replan::{ReplanConfig, ReplanSlot};
 use crate::sequencer::{
     GaitTables, Orders, Phase, SeqInput, SeqRequest, SeqStatus, Sequencer, SequencerConfig,
 };
-use crate::supervisor::{Findings, MotorSense, Supervisor, WindowedChecks};
+use crate::supervisor::{Findings, Lent, MotorSense, Supervisor, WindowedChecks};
 
 use sense::Senses;
 
@@ -158,7 +158,7 @@ pub struct Controller<'t> {
     cfg: ControllerConfig,
     loops: [JointLoop; JOINTS],
     operator: Operator,
-    supervisor: Supervisor,
+    supervisor: Supervisor<Lent>,
     last_raw: [u16; ENCODERS],
     last_angle: [f32; ENCODERS],
     /// Consecutive frames of each encoder (joints, then ankles) that
@@ -205,8 +205,9 @@ pub struct Controller<'t> {
     crutch: CrutchLoad,
     /// Last, past the fields a tick reads on the board (4 KiB, see
     /// `firmware/src/lib.rs`): without a model task, what the windowed
-    /// checks found in the last tick's facts.
+    /// checks found in the last tick's facts, and their memory.
     findings: Findings,
+    windowed: WindowedChecks,
 }
 
 /// Bytes of the controller's state that a tick reads on the board: every
@@ -242,8 +243,10 @@ impl<'t> Controller<'t> {
             enabled: false,
             feedforward_nm: 0.0,
         };
+        let (supervisor, windowed) = supervisor.lend();
         Ok(Self {
             cfg,
+            windowed,
             checks_in_task: false,
             findings: Findings::NONE,
             seq: Sequencer::new(cfg.sequencer, tables, [0.0; JOINTS]).with_model(cfg.model),
@@ -318,7 +321,7 @@ impl<'t> Controller<'t> {
     }
 
     /// The supervisor (latched faults, post-mortem log).
-    pub fn supervisor(&self) -> &Supervisor {
+    pub fn supervisor(&self) -> &Supervisor<Lent> {
         &self.supervisor
     }
 

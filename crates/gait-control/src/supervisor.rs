@@ -30,6 +30,7 @@ mod balance;
 mod checks;
 mod config;
 mod drive_current;
+mod facts;
 mod findings;
 mod frames;
 mod latch;
@@ -42,6 +43,9 @@ pub use config::{
     AngleRange, ConfigError, Debounce, EnvelopeMargins, ResetRefused, SupervisorConfig,
 };
 pub use drive_current::{DriveCurrentCheck, DriveCurrentSense};
+pub use facts::{
+    EncoderSense, EncoderStatus, ForceSense, ForceStatus, MotorSense, SupervisorInput,
+};
 pub use findings::{Findings, MAX_RAISES, Marks, Raise};
 pub use frames::EncoderFrame;
 use latch::Latch;
@@ -60,110 +64,6 @@ pub const MAX_DEADLINE_MISSES: u8 = 8;
 /// Largest |angle| an AS5048A reading can give after calibration, rad
 /// (the driver's range is (−π, π]; a little slack for rounding).
 const MAX_ENCODER_ANGLE_RAD: f32 = core::f32::consts::PI + 1e-3;
-
-/// Outcome of one encoder read: the driver's own error kind.
-pub use crate::drivers::as5048a::ReadStatus as EncoderStatus;
-
-/// One encoder sample. When `status` is not `Ok` the other fields are
-/// ignored (the controller may fill them with anything, NaN included).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct EncoderSense {
-    /// What the driver reported.
-    pub status: EncoderStatus,
-    /// Raw 14-bit counts from the ANGLE register.
-    pub raw_counts: u16,
-    /// Calibrated angle, rad, in (−π, π].
-    pub angle_rad: f32,
-}
-
-/// Outcome of one force conversion: the driver's own error kind.
-pub use crate::drivers::mcp3208::ReadStatus as ForceStatus;
-
-/// One force sample. `newtons` is ignored unless `status` is `Ok`.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct ForceSense {
-    /// What the driver reported.
-    pub status: ForceStatus,
-    /// Calibrated force, N.
-    pub newtons: f32,
-}
-
-/// One motor output, as computed this tick and reported by the driver.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct MotorSense {
-    /// Torque the controller computed this tick, before any limiting, N·m.
-    pub commanded_nm: f32,
-    /// Torque the driver applied at the last tick, N·m.
-    pub applied_nm: f32,
-    /// Current magnitude limit, N·m: `Motor::thermal_limit_nm()` (the
-    /// I²t-derated limit, not scaled by the soft start); must be > 0.
-    pub limit_nm: f32,
-    /// The driver has latched a thermal (I²t) fault.
-    pub thermal_fault: bool,
-    /// The driver has latched an output-stage fault (a write failed).
-    pub output_fault: bool,
-    /// The drive is enabled and past its soft start: it gave the torque
-    /// asked for, `applied_nm` (0x0404 checks only then).
-    pub enabled: bool,
-    /// The feed-forward part of `commanded_nm`: the model's torque for the
-    /// reference motion, N·m (0x0404 checks the rest against the motion).
-    pub feedforward_nm: f32,
-}
-
-/// Everything the supervisor needs for one tick. Plain data, filled by the
-/// controller after sensing and computing, before writing.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct SupervisorInput {
-    /// Tick number, copied into log records.
-    pub tick: u32,
-    /// Actuated joint encoders.
-    pub joints: [EncoderSense; JOINTS],
-    /// Reference angle of each actuated joint this tick, rad. While the
-    /// motors are disabled it must follow the measured angle.
-    pub joint_reference_rad: [f32; JOINTS],
-    /// Ankle encoders.
-    pub ankles: [EncoderSense; ANKLES],
-    /// Foot and crutch force sensors.
-    pub forces: [ForceSense; FORCES],
-    /// Motor outputs, one per actuated joint.
-    pub motors: [MotorSense; JOINTS],
-    /// The emergency-stop input reads pressed.
-    pub e_stop_pressed: bool,
-    /// The emergency-stop input could not be read.
-    pub e_stop_read_error: bool,
-    /// The previous tick overran its 1 ms budget.
-    pub deadline_missed: bool,
-    /// A step is being taken (for the record; the reaction is the
-    /// controller's to apply).
-    pub step_in_progress: bool,
-    /// The button driver reports a wiring or read fault.
-    pub button_input_fault: bool,
-    /// The dorsiflexion the gait plans for each ankle this tick, rad: the
-    /// stance ankle's φ1 during a swing; NaN where nothing is planned (the
-    /// swing ankle, standing). For the unplanned heel-off rule (0x0105)
-    /// and the pilot's balance (0x0701, 0x0702).
-    pub ankle_plan_rad: [f32; ANKLES],
-    /// The leg in the air (`None` while both feet are down): its joints
-    /// move only their own links (0x0404's swing inertias).
-    pub swing_leg: Option<Side>,
-    /// The swing leg once its foot is surely in the air (the table's
-    /// landing window, no contact yet; `Sequencer::airborne_leg`): an
-    /// ankle its spring must have taken off the dorsiflexion stop.
-    pub airborne_leg: Option<Side>,
-    /// Joints whose angle control takes this tick from the closed chain of
-    /// double support, not from their own encoder
-    /// ([`crate::posture::joint_through_closed_chain`]): a joint whose
-    /// encoder is lost ([`FaultCode::loses_angle`]) is then held by its
-    /// drive, not braked.
-    pub chain_closed: [bool; JOINTS],
-    /// The drive whose current monitor was sampled this tick, if any (one
-    /// drive a tick, in turn).
-    pub drive_current: Option<DriveCurrentSense>,
-}
 
 /// The supervisor's decision for one tick.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -209,11 +109,14 @@ pub struct FaultRecord {
 }
 
 /// The safety supervisor. See the module docs and `docs/safety.md`.
+///
+/// `W`: where its windowed checks' memory is. [`WindowedChecks`] (made by
+/// [`Supervisor::new`]): here, and [`Supervisor::check`] runs them;
+/// [`Lent`] ([`Supervisor::lend`]): elsewhere (the controller's, or its
+/// model task's), and the tick's state keeps only what the tick reads.
 #[derive(Debug, Clone)]
-pub struct Supervisor {
-    /// The windowed checks' memory, which [`Supervisor::check`] and a
-    /// controller without a model task run, and the configuration.
-    windowed: WindowedChecks,
+pub struct Supervisor<W = WindowedChecks> {
+    cfg: SupervisorConfig,
     /// Calls of `check` so far (the supervisor's own clock).
     calls: u32,
     /// Faults whose condition held at the last check.
@@ -236,7 +139,16 @@ pub struct Supervisor {
     /// Faults found at boot in flash data ([`Supervisor::report_boot_fault`]):
     /// present at every check.
     boot_faults: FaultSet,
+    /// Each ankle's error from its plan, for 0x0701 and 0x0702: checked
+    /// in the tick, so that a pilot losing balance is held without the
+    /// windowed checks' lag.
+    balance: [balance::BalanceTrack; ANKLES],
+    windowed: W,
 }
+
+/// A supervisor's windowed checks run elsewhere ([`Supervisor::lend`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Lent;
 
 /// Collects what one check raised.
 struct Tick {
@@ -251,6 +163,8 @@ impl Supervisor {
         cfg.validate()?;
         Ok(Self {
             windowed: WindowedChecks::new(&cfg),
+            cfg,
+            balance: [balance::BalanceTrack::default(); ANKLES],
             calls: 0,
             present: FaultSet::EMPTY,
             boot_faults: FaultSet::EMPTY,
@@ -274,9 +188,91 @@ impl Supervisor {
         })
     }
 
+    /// The tick's part, and the windowed checks' memory for whoever runs
+    /// them in its stead ([`Supervisor::check_after`]).
+    pub fn lend(self) -> (Supervisor<Lent>, WindowedChecks) {
+        let Self {
+            cfg,
+            calls,
+            present,
+            latch,
+            joints,
+            ankles,
+            ankle_stuck,
+            misses,
+            miss_next,
+            deadline_misses_total,
+            encoder_offsets,
+            boot_faults,
+            balance,
+            windowed,
+        } = self;
+        let tick = Supervisor {
+            cfg,
+            calls,
+            present,
+            latch,
+            joints,
+            ankles,
+            ankle_stuck,
+            misses,
+            miss_next,
+            deadline_misses_total,
+            encoder_offsets,
+            boot_faults,
+            balance,
+            windowed: Lent,
+        };
+        (tick, windowed)
+    }
+
+    /// The windowed checks of `job` on the supervisor's own memory of them
+    /// (for [`Supervisor::check_after`] at the next check).
+    pub fn run_windowed(&mut self, job: &WindowedJob) -> Findings {
+        self.windowed.run(job)
+    }
+
+    /// The per-tick check: updates every detector with `input`, latches
+    /// what tripped, and returns the reaction over all latched faults.
+    pub fn check(&mut self, input: &SupervisorInput) -> Verdict {
+        let [j0, j1, j2, j3] = &input.joints;
+        let [left, right] = &input.ankles;
+        let frames = [j0, j1, j2, j3, left, right];
+        let mut n = 0;
+        let frames = frames.map(|sense| {
+            n += 1;
+            self.take_encoder(n - 1, sense)
+        });
+        self.check_frames(input, &frames)
+    }
+
+    /// [`Supervisor::check`] with this tick's encoder frames already
+    /// taken ([`Supervisor::take_encoder`], joints then ankles, from the
+    /// senses in `input`): the tick's own checks, then the windowed checks
+    /// on the same facts.
+    pub fn check_frames(
+        &mut self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+    ) -> Verdict {
+        let mut t = self.begin(input);
+        self.check_tick(input, frames, false, &mut t);
+        let found = self.windowed.run(&self.windowed_job(input, frames));
+        self.apply(&found, &mut t);
+        self.end(input, t)
+    }
+}
+
+impl<W> Supervisor<W> {
+    /// Fresh windowed checks of this configuration, for a model task to run
+    /// in the supervisor's stead.
+    pub fn windowed_checks(&self) -> WindowedChecks {
+        WindowedChecks::new(&self.cfg)
+    }
+
     /// The configuration in use.
     pub const fn config(&self) -> &SupervisorConfig {
-        &self.windowed.cfg
+        &self.cfg
     }
 
     /// Every latched fault.
@@ -398,36 +394,6 @@ impl Supervisor {
         }
     }
 
-    /// The per-tick check: updates every detector with `input`, latches
-    /// what tripped, and returns the reaction over all latched faults.
-    pub fn check(&mut self, input: &SupervisorInput) -> Verdict {
-        let [j0, j1, j2, j3] = &input.joints;
-        let [left, right] = &input.ankles;
-        let frames = [j0, j1, j2, j3, left, right];
-        let mut n = 0;
-        let frames = frames.map(|sense| {
-            n += 1;
-            self.take_encoder(n - 1, sense)
-        });
-        self.check_frames(input, &frames)
-    }
-
-    /// [`Supervisor::check`] with this tick's encoder frames already
-    /// taken ([`Supervisor::take_encoder`], joints then ankles, from the
-    /// senses in `input`): the tick's own checks, then the windowed checks
-    /// on the same facts.
-    pub fn check_frames(
-        &mut self,
-        input: &SupervisorInput,
-        frames: &[EncoderFrame; ENCODERS],
-    ) -> Verdict {
-        let mut t = self.begin(input);
-        self.check_tick(input, frames, false, &mut t);
-        let found = self.run_windowed(&self.windowed_job(input, frames));
-        self.apply(&found, &mut t);
-        self.end(input, t)
-    }
-
     /// The controller's check of one tick: the windowed checks' `found` in
     /// the last tick's facts, then this tick's own checks
     /// (`supervisor/windowed.rs`). `late`: the windowed checks had not
@@ -477,18 +443,6 @@ impl Supervisor {
         };
     }
 
-    /// The windowed checks of `job`, on the supervisor's own memory of
-    /// them: a controller without a model task runs them so.
-    pub fn run_windowed(&mut self, job: &WindowedJob) -> Findings {
-        self.windowed.run(job)
-    }
-
-    /// Fresh windowed checks of this configuration, for a model task to run
-    /// in the supervisor's stead (then only the task's memory moves on).
-    pub fn windowed_checks(&self) -> WindowedChecks {
-        WindowedChecks::new(&self.windowed.cfg)
-    }
-
     #[inline(always)]
     fn begin(&mut self, input: &SupervisorInput) -> Tick {
         self.calls = self.calls.wrapping_add(1);
@@ -512,7 +466,7 @@ impl Supervisor {
         self.check_deadline(input.deadline_missed || late, t);
         self.check_motors(input, t);
         self.check_joints(input, frames, t);
-        self.check_ankles(frames, t);
+        self.check_ankles(input, frames, t);
     }
 
     /// Latches what the windowed checks found, as found in their tick.

@@ -13,7 +13,9 @@ use crate::position_loop::{JointGains, JointLoop};
 use crate::posture::JOINTS;
 use crate::reference::Reference;
 use crate::sequencer::Orders;
-use crate::supervisor::{Findings, MotorSense, Supervisor, Verdict, WindowedJob};
+use crate::supervisor::{
+    Findings, Lent, MotorSense, Supervisor, Verdict, WindowedChecks, WindowedJob,
+};
 
 use super::Controller;
 use super::act::Actuation;
@@ -43,7 +45,12 @@ impl Controller<'_> {
             airborne_leg,
         };
         let task = self.model_slot.filter(|_| self.checks_in_task);
-        let mut verdict = check(&mut self.supervisor, task, &mut self.findings, &facts);
+        let mut verdict = check(
+            &mut self.supervisor,
+            task,
+            (&mut self.windowed, &mut self.findings),
+            &facts,
+        );
         let estop_hold = self.stop_for_estop(&mut verdict, status);
         if verdict.reaction == Reaction::None && !estop_hold {
             // Nothing to order (most ticks): no fault latched re-holds a
@@ -68,9 +75,9 @@ impl Controller<'_> {
 /// slot), or run here (`findings`, for the next tick).
 #[inline(always)]
 fn check(
-    sup: &mut Supervisor,
+    sup: &mut Supervisor<Lent>,
     task: Option<&ModelSlot>,
-    findings: &mut Findings,
+    (windowed, findings): (&mut WindowedChecks, &mut Findings),
     facts: &Facts<'_>,
 ) -> Verdict {
     let Some(slot) = task else {
@@ -78,7 +85,7 @@ fn check(
         facts.write(&mut job);
         let verdict = sup.check_after(&job.input, &job.frames, findings, false);
         sup.mark(&mut job);
-        *findings = sup.run_windowed(&job);
+        *findings = windowed.run(&job);
         return verdict;
     };
     slot.checks().exchange(|answer, job| {

@@ -1,12 +1,13 @@
 //! The tick's own checks, one method per group of the fault table
-//! (operator inputs, deadline, motors, the encoders' frames): what one
-//! tick's facts show. Each raises the codes `docs/safety.md` lists for it;
+//! (operator inputs, deadline, motors, the encoders' frames, the pilot's
+//! balance): what one tick's facts show, and the balance, which must not
+//! wait a tick. Each raises the codes `docs/safety.md` lists for it;
 //! the rules that judge a channel over many ticks are the windowed checks
 //! (`windowed.rs`).
 
 use super::*;
 
-impl Supervisor {
+impl<W> Supervisor<W> {
     pub(super) fn check_operator_inputs(&mut self, input: &SupervisorInput, t: &mut Tick) {
         if input.e_stop_pressed {
             self.latch
@@ -37,7 +38,7 @@ impl Supervisor {
             return;
         }
         let now = self.calls;
-        let window = self.windowed.cfg.deadline_window_ticks;
+        let window = self.cfg.deadline_window_ticks;
         // The newest miss outside the window: none to count (most ticks).
         let newest = usize::from((self.miss_next + MAX_DEADLINE_MISSES - 1) % MAX_DEADLINE_MISSES);
         if self
@@ -56,14 +57,14 @@ impl Supervisor {
             .take(held)
             .filter(|&&at| now.wrapping_sub(at) < window)
             .count();
-        if recent >= usize::from(self.windowed.cfg.deadline_miss_count) {
+        if recent >= usize::from(self.cfg.deadline_miss_count) {
             self.latch
                 .raise(t, FaultCode::DeadlineMissed, NO_CHANNEL, recent as f32);
         }
     }
 
     pub(super) fn check_motors(&mut self, input: &SupervisorInput, t: &mut Tick) {
-        let limit_ticks = self.windowed.cfg.saturation_ticks;
+        let limit_ticks = self.cfg.saturation_ticks;
         for (i, m) in input.motors.iter().enumerate() {
             let ch = i as u8;
             let finite = m.commanded_nm.is_finite() && m.applied_nm.is_finite();
@@ -106,7 +107,7 @@ impl Supervisor {
         frames: &[EncoderFrame; ENCODERS],
         t: &mut Tick,
     ) {
-        let cfg = &self.windowed.cfg;
+        let cfg = &self.cfg;
         for i in 0..JOINTS {
             let ch = i as u8;
             let (Some(taken), Some(&reference), Some(range), Some(track)) = (
@@ -139,8 +140,15 @@ impl Supervisor {
         }
     }
 
-    pub(super) fn check_ankles(&mut self, frames: &[EncoderFrame; ENCODERS], t: &mut Tick) {
-        let cfg = &self.windowed.cfg;
+    pub(super) fn check_ankles(
+        &mut self,
+        input: &SupervisorInput,
+        frames: &[EncoderFrame; ENCODERS],
+        t: &mut Tick,
+    ) {
+        let cfg = &self.cfg;
+        // Both ankles' balance check reads the crutches: summed once.
+        let crutches = crutch_sum_n(input);
         for i in 0..ANKLES {
             let ch = i as u8;
             let (Some(taken), Some(range), Some(track)) = (
@@ -156,15 +164,55 @@ impl Supervisor {
             if let Some((_, n)) = track.tripped(cfg.encoder_debounce) {
                 self.latch.raise(t, FaultCode::AnkleEncoder, ch, n as f32);
             }
-            match taken.accepted() {
-                Some((angle_rad, _, _)) => {
-                    if !range.contains(angle_rad) {
-                        self.latch
-                            .raise(t, FaultCode::AnklePositionLimit, ch, angle_rad);
+            let Some((angle_rad, delta, _)) = taken.accepted() else {
+                self.encoder_offsets |= track.offset_counts != 0;
+                continue;
+            };
+            if !range.contains(angle_rad) {
+                self.latch
+                    .raise(t, FaultCode::AnklePositionLimit, ch, angle_rad);
+            }
+            let plan = input.ankle_plan_rad.get(i).copied().unwrap_or(f32::NAN);
+            let on_stop = angle_rad >= cfg.heel_off_rad - cfg.heel_off_reading_tolerance_rad;
+            // The pilot losing balance: the error from the plan growing
+            // away from it. Not on the stop: with the heel up the encoder
+            // no longer sees the shank. With both feet down, only a foot
+            // planned flat (a trailing foot's plan past the stop is its
+            // shank's angle, heel up); in a swing, a plan past the stop is
+            // the stop for the reading, which cannot go further.
+            let swing = input.swing_leg.is_some();
+            let watched = plan.is_finite() && (swing || plan <= cfg.heel_off_rad);
+            if let Some(track) = self.balance.get_mut(i) {
+                if watched && !on_stop {
+                    let sample = balance::BalanceSample {
+                        angle_rad,
+                        plan_rad: plan.min(cfg.heel_off_rad),
+                        swing,
+                        crutches_n: crutches,
+                        elapsed_ticks: delta.map(|(_, n)| n),
+                    };
+                    if let Some(e) = track.update(&cfg.balance, &sample, cfg.dt_s) {
+                        let code = if e > 0.0 {
+                            FaultCode::PilotFallingForward
+                        } else {
+                            FaultCode::PilotFallingBack
+                        };
+                        self.latch.raise(t, code, ch, e);
                     }
+                } else {
+                    track.restart();
                 }
-                None => self.encoder_offsets |= track.offset_counts != 0,
             }
         }
     }
+}
+
+/// Both crutches' load, N; NaN unless both sensors read.
+fn crutch_sum_n(input: &SupervisorInput) -> f32 {
+    use crate::layout::force::{LEFT_CRUTCH, RIGHT_CRUTCH};
+    let read = |c: usize| match input.forces.get(c) {
+        Some(f) if f.status == ForceStatus::Ok => f.newtons,
+        _ => f32::NAN,
+    };
+    read(LEFT_CRUTCH) + read(RIGHT_CRUTCH)
 }

@@ -134,14 +134,14 @@ impl EncoderFrame {
     }
 }
 
-impl Supervisor {
+impl<W> Supervisor<W> {
     /// Whether [`Supervisor::take_encoder`] would find `sense` usable as
     /// encoder `channel`'s frame of this tick (joints in joint order, then
     /// the ankles), asked before it: the same rules, nothing changed. A
     /// frame the supervisor drops (a jump) is not, nor are an ankle's found
     /// stuck (0x0207) until its counts move.
     pub fn accepts_encoder(&self, channel: usize, sense: &EncoderSense) -> bool {
-        let cfg = &self.windowed.cfg;
+        let cfg = &self.cfg;
         let (track, max_jump) = match channel.checked_sub(JOINTS) {
             None => (
                 self.joints.get(channel).map(|j| &j.encoder),
@@ -185,7 +185,7 @@ impl Supervisor {
     /// [`Supervisor::check_frames`].
     #[inline(always)]
     pub fn take_encoder(&mut self, channel: usize, sense: &EncoderSense) -> EncoderFrame {
-        let cfg = &self.windowed.cfg;
+        let cfg = &self.cfg;
         let offsets = self.encoder_offsets;
         let (track, max_jump, stuck) = match channel.checked_sub(JOINTS) {
             None => (

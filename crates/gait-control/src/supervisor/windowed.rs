@@ -1,8 +1,10 @@
 //! The windowed checks: the rules that judge a channel over many ticks
 //! (a joint's velocity, frozen counts, tracking and torque residual; an
-//! ankle's heel-off, balance and stuck readings; the force sensors' and
-//! drive monitors' debounces). None of them can trip on one tick's facts
-//! alone, and together they are most of the supervisor's work.
+//! ankle's heel-off and stuck readings; the force sensors' and drive
+//! monitors' debounces). None of them can trip on one tick's facts alone,
+//! and together they are most of the supervisor's work. (The pilot's
+//! balance, 0x0701 and 0x0702, is judged over ticks too but stays in the
+//! tick: a pilot losing balance is held a millisecond sooner.)
 //!
 //! So the controller runs them a tick late, off the tick: it hands each
 //! tick's facts over as a [`WindowedJob`] and applies the [`Findings`] of
@@ -55,8 +57,6 @@ pub struct WindowedChecks {
     /// The plan of each stance ankle when its counts last changed (NaN
     /// outside a swing's stance): 0x0207's frozen stance ankle.
     plan_since_moved: [f32; ANKLES],
-    /// Each ankle's error from its plan, for 0x0701 and 0x0702.
-    balance: [balance::BalanceTrack; ANKLES],
     forces: [ForceTrack; FORCES],
     pub(super) drive_currents: [drive_current::DriveCurrentTrack; JOINTS],
     previous_reference_rad: Option<[f32; JOINTS]>,
@@ -73,7 +73,6 @@ impl WindowedChecks {
             heel_off_ticks: [0; ANKLES],
             stuck_in_air_ticks: [0; ANKLES],
             plan_since_moved: [f32::NAN; ANKLES],
-            balance: [balance::BalanceTrack::default(); ANKLES],
             forces: [ForceTrack::default(); FORCES],
             drive_currents: Default::default(),
             previous_reference_rad: None,
@@ -225,8 +224,6 @@ impl WindowedChecks {
         f: &mut Findings,
     ) {
         let cfg = &self.cfg;
-        // Both ankles' balance check reads the crutches: summed once.
-        let crutches = crutch_sum_n(input);
         for i in 0..ANKLES {
             let ch = i as u8;
             let Some((angle_rad, delta, _)) = frames.get(JOINTS + i).and_then(|t| t.accepted())
@@ -247,35 +244,6 @@ impl WindowedChecks {
                 };
                 if *n >= cfg.heel_off_ticks {
                     f.raise(FaultCode::UnplannedHeelOff, ch, angle_rad);
-                }
-            }
-            // The pilot losing balance: the error from the plan growing
-            // away from it. Not on the stop: with the heel up the encoder
-            // no longer sees the shank. With both feet down, only a foot
-            // planned flat (a trailing foot's plan past the stop is its
-            // shank's angle, heel up); in a swing, a plan past the stop is
-            // the stop for the reading, which cannot go further.
-            let swing = input.swing_leg.is_some();
-            let watched = plan.is_finite() && (swing || plan <= cfg.heel_off_rad);
-            if let Some(track) = self.balance.get_mut(i) {
-                if watched && !on_stop {
-                    let sample = balance::BalanceSample {
-                        angle_rad,
-                        plan_rad: plan.min(cfg.heel_off_rad),
-                        swing,
-                        crutches_n: crutches,
-                        elapsed_ticks: delta.map(|(_, n)| n),
-                    };
-                    if let Some(e) = track.update(&cfg.balance, &sample, cfg.dt_s) {
-                        let code = if e > 0.0 {
-                            FaultCode::PilotFallingForward
-                        } else {
-                            FaultCode::PilotFallingBack
-                        };
-                        f.raise(code, ch, e);
-                    }
-                } else {
-                    track.restart();
                 }
             }
             // Only a toe pushed up by the ground holds an ankle on its
@@ -376,16 +344,6 @@ impl WindowedChecks {
             }
         }
     }
-}
-
-/// Both crutches' load, N; NaN unless both sensors read.
-fn crutch_sum_n(input: &SupervisorInput) -> f32 {
-    use crate::layout::force::{LEFT_CRUTCH, RIGHT_CRUTCH};
-    let read = |c: usize| match input.forces.get(c) {
-        Some(f) if f.status == ForceStatus::Ok => f.newtons,
-        _ => f32::NAN,
-    };
-    read(LEFT_CRUTCH) + read(RIGHT_CRUTCH)
 }
 
 #[cfg(test)]
