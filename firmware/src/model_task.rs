@@ -1,9 +1,10 @@
-//! The model task on the board (`gait_control::feedforward`): the model's
+//! The model task on the board (`gait_control::feedforward`): the
+//! supervisor's windowed checks of the tick's facts and the model's
 //! feed-forward for the next tick, worked out in PendSV, which the tick's
 //! interrupt pends as it ends and preempts whenever it comes. PendSV is put
 //! below every interrupt, so it runs after the tick returns and before
 //! thread mode (the re-planner) goes on; the two share only the
-//! [`ModelSlot`]'s atomics.
+//! [`ModelSlot`] (atomics, and the check slot's critical sections).
 
 use cortex_m::peripheral::SCB;
 use gait_control::feedforward::{ModelSlot, ModelTask};

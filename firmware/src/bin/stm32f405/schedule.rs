@@ -1,10 +1,12 @@
 //! The motor board's three priorities: TIM2's update interrupt runs the
-//! control tick every 1 ms; PendSV, which the tick pends as it ends, works
-//! out the model's feed-forward for the next tick (`firmware::model_task`);
-//! thread mode runs the step re-planner when the sequencer asked for one
-//! (with `board_config::REPLANNING`, `firmware::idle_replan`), else sleeps
-//! (WFI). Each preempts the ones below it; they share only the slots'
-//! atomics, so the tick never waits for either.
+//! control tick every 1 ms; PendSV, which the tick pends as it ends, runs
+//! the supervisor's windowed checks of the tick's facts and works out the
+//! model's feed-forward for the next tick (`firmware::model_task`); thread
+//! mode runs the step re-planner when the sequencer asked for one (with
+//! `board_config::REPLANNING`, `firmware::idle_replan`), else sleeps (WFI).
+//! Each preempts the ones below it; they share only the slots (atomics, and
+//! the check slot's short critical sections), so the tick never waits for
+//! either's work.
 //!
 //! The watchdog is fed by the tick: a tick that stops coming resets the
 //! board, whatever thread mode is doing.
