@@ -96,6 +96,9 @@ impl AheadAsk {
 const SOLVE: u32 = 1;
 const HUMAN_RANGE: u32 = 2;
 const SHARE: u32 = 4;
+/// [`AheadSlot::at`] of an ask that is not a swing's share (a NaN's bits:
+/// no time's).
+const NOT_AT: u32 = 0x7FC0_0000;
 /// Flag bit of an answer: the IK found one.
 const FOUND: u32 = 1;
 
@@ -108,6 +111,9 @@ pub struct AheadSlot {
     flags: AtomicU32,
     cap: AtomicU32,
     input: [AtomicU32; 7],
+    /// The time the tick asked a swing's share for (its bits; NaN's for
+    /// other asks): [`AheadSlot::asked_posture`].
+    at: AtomicU32,
     answer_seq: AtomicU32,
     answered: AtomicU32,
     found: AtomicU32,
@@ -129,6 +135,7 @@ impl AheadSlot {
             flags: AtomicU32::new(0),
             cap: AtomicU32::new(0),
             input: [const { AtomicU32::new(0) }; 7],
+            at: AtomicU32::new(NOT_AT),
             answer_seq: AtomicU32::new(0),
             answered: AtomicU32::new(0),
             found: AtomicU32::new(0),
@@ -143,6 +150,29 @@ impl AheadSlot {
 
     /// The tick: asks for `ask`'s answer by the next tick.
     pub fn request(&self, ask: &AheadAsk) {
+        self.request_at(ask, NOT_AT);
+    }
+
+    /// The tick: asks for a swing's share at its posture `at_s` into the
+    /// swing ([`AheadJob::SwingShare`]); the next tick reads the posture
+    /// back ([`AheadSlot::asked_posture`]).
+    pub fn request_swing_share(&self, ask: &AheadAsk, at_s: f32) {
+        self.request_at(ask, at_s.to_bits());
+    }
+
+    /// The tick: the table posture it asked the share for at `at_s` into
+    /// the swing whose toe started at `start` (the table's interpolation
+    /// there, bit for bit), if that was its last ask.
+    pub fn asked_posture(&self, at_s: f32, start: [f32; 2]) -> Option<Phi<f32>> {
+        let [a, b, c, d, e, x, y] = self.input.each_ref().map(|w| w.load(Ordering::Relaxed));
+        let asked = self.flags.load(Ordering::Relaxed) & SHARE != 0
+            && self.at.load(Ordering::Relaxed) == at_s.to_bits()
+            && [x, y] == start.map(f32::to_bits);
+        asked.then(|| [a, b, c, d, e].map(f32::from_bits))
+    }
+
+    fn request_at(&self, ask: &AheadAsk, at: u32) {
+        self.at.store(at, Ordering::Relaxed);
         let (flags, cap, input) = ask.words();
         self.flags.store(flags, Ordering::Relaxed);
         self.cap.store(cap, Ordering::Relaxed);
@@ -317,6 +347,37 @@ mod tests {
         assert!(
             (half - 0.5).abs() < 1e-3,
             "halfway between 2 and 12 mm: {half}"
+        );
+    }
+
+    #[test]
+    fn the_posture_asked_with_a_share_is_read_back_for_its_time_and_swing_only() {
+        let slot = AheadSlot::new();
+        let phi = [0.1, 0.35, 0.05, 2.9, 3.3];
+        let start = [-0.3, 0.0];
+        let share = AheadAsk {
+            job: AheadJob::SwingShare(phi, start),
+            options: IkOptions::paper(),
+        };
+        slot.request_swing_share(&share, 0.125);
+        assert_eq!(slot.asked_posture(0.125, start), Some(phi));
+        assert_eq!(slot.asked_posture(0.126, start), None, "another time");
+        assert_eq!(
+            slot.asked_posture(0.125, [-0.2, 0.0]),
+            None,
+            "another swing"
+        );
+        // Any other ask replaces it.
+        slot.request(&AheadAsk {
+            job: AheadJob::Params(phi),
+            options: IkOptions::paper(),
+        });
+        assert_eq!(slot.asked_posture(0.125, start), None);
+        slot.request(&share);
+        assert_eq!(
+            slot.asked_posture(0.125, start),
+            None,
+            "asked without its time"
         );
     }
 

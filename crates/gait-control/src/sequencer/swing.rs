@@ -89,7 +89,15 @@ impl Sequencer<'_> {
             .unwrap_or(f32::NAN);
         // Past the table's end without a landing, the foot goes on down
         // looking for the ground.
-        let phi_t = step.map(|tb| self.searching_for_ground(&tb.at_time(t), t - duration));
+        // The table's posture: asked ahead with the share last tick (the
+        // same interpolation, bit for bit), else interpolated now.
+        let start = self.swing.start_m;
+        let phi_t = step.map(|tb| {
+            let table = ahead
+                .and_then(|slot| slot.asked_posture(t, start))
+                .unwrap_or_else(|| tb.at_time(t));
+            self.searching_for_ground(&table, t - duration)
+        });
         self.swing.phi1 = phi_t.map_or(f32::NAN, |p| p[0]);
         let share = phi_t.map_or(0.0, |p| self.swing_share(&p, ahead));
         if self.swing.lifted_at_s.is_none() && share <= 0.0 {
@@ -172,10 +180,11 @@ impl Sequencer<'_> {
         if searching.is_finite() && searching > 0.0 {
             return;
         }
-        slot.request(&AheadAsk {
+        let ask = AheadAsk {
             job: AheadJob::SwingShare(step.at_time(t_s), self.swing.start_m),
             options: table.ik_options(),
-        });
+        };
+        slot.request_swing_share(&ask, t_s);
     }
 
     /// From when in the present swing a safe hold lands the step first, s
