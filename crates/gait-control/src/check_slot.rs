@@ -12,7 +12,8 @@
 //!
 //! **A late task.** After a tick that overran, the next one comes before
 //! the task has run: it finds no findings for the facts it handed over
-//! ([`Answer::Late`]; the supervisor counts it, 0x0608) and replaces the
+//! ([`Answer::Late`]; the supervisor counts it as a missed deadline,
+//! 0x0601) and replaces the
 //! untaken job with its own (that tick's facts go unchecked by the windowed
 //! rules, whose windows count it as not seen). A task the tick preempted
 //! in the middle of a job finishes it and, its findings not yet taken, adds

@@ -207,7 +207,7 @@ pub struct Controller<'t> {
     /// `firmware/src/lib.rs`): without a model task, what the windowed
     /// checks found in the last tick's facts, and their memory.
     findings: Findings,
-    windowed: WindowedChecks,
+    windowed: Option<WindowedChecks>,
 }
 
 /// Bytes of the controller's state that a tick reads on the board: every
@@ -246,7 +246,7 @@ impl<'t> Controller<'t> {
         let (supervisor, windowed) = supervisor.lend();
         Ok(Self {
             cfg,
-            windowed,
+            windowed: Some(windowed),
             checks_in_task: false,
             findings: Findings::NONE,
             seq: Sequencer::new(cfg.sequencer, tables, [0.0; JOINTS]).with_model(cfg.model),
@@ -288,15 +288,16 @@ impl<'t> Controller<'t> {
     /// checks to a task that answers through `slot` between ticks
     /// ([`crate::feedforward::ModelTask`]), instead of working them out in
     /// the tick: the same torques and verdicts, off the tick. Returns the
-    /// windowed checks for the task
-    /// ([`crate::feedforward::ModelTask::with_checks`]); a task without
-    /// them leaves every tick's facts unchecked, each counted as a missed
-    /// deadline ([`FaultCode::DeadlineMissed`] from the third). Call before the first tick.
+    /// windowed checks' memory, for the task
+    /// ([`crate::feedforward::ModelTask::with_checks`]; `None` if already
+    /// lent); a task without it leaves every tick's facts unchecked, each
+    /// a missed deadline ([`FaultCode::DeadlineMissed`] from the third).
+    /// Call before the first tick.
     #[must_use = "the model task runs the windowed checks only when given them"]
     pub fn set_model_task(&mut self, slot: &'t ModelSlot) -> Option<WindowedChecks> {
         self.model_slot = Some(slot);
         self.checks_in_task = true;
-        Some(self.supervisor.windowed_checks())
+        self.windowed.take()
     }
 
     /// The configuration it was built with.

@@ -77,7 +77,7 @@ impl Controller<'_> {
 fn check(
     sup: &mut Supervisor<Lent>,
     task: Option<&ModelSlot>,
-    (windowed, findings): (&mut WindowedChecks, &mut Findings),
+    (windowed, findings): (&mut Option<WindowedChecks>, &mut Findings),
     facts: &Facts<'_>,
 ) -> Verdict {
     let Some(slot) = task else {
@@ -85,7 +85,10 @@ fn check(
         facts.write(&mut job);
         let verdict = sup.check_after(&job.input, &job.frames, findings, false);
         sup.mark(&mut job);
-        *findings = windowed.run(&job);
+        // Lent only with a task: always here without one.
+        if let Some(w) = windowed.as_mut() {
+            *findings = w.run(&job);
+        }
         return verdict;
     };
     slot.checks().exchange(|answer, job| {

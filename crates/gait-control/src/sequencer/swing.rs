@@ -90,7 +90,11 @@ impl Sequencer<'_> {
         // Past the table's end without a landing, the foot goes on down
         // looking for the ground.
         // The table's posture: asked ahead with the share last tick (the
-        // same interpolation, bit for bit), else interpolated now.
+        // same interpolation, bit for bit), else interpolated now. The ask
+        // names the time and the swing's start, not the step: it holds
+        // because every swing's step is set where its first tick is asked
+        // (`start.rs`), replacing any older ask, and stays set while it
+        // plays.
         let start = self.swing.start_m;
         let phi_t = step.map(|tb| {
             let table = ahead

@@ -6,10 +6,11 @@
 
 use super::*;
 
-/// Room for the faults of two ticks' windowed checks (at most 34 a tick:
-/// every rule of every channel at once, 4 joints × 4, 2 ankles × 4, 4 force
-/// sensors × 2, 2 for the drive monitor): a late task adds a tick's
-/// findings to those the tick has not taken yet (`check_slot`).
+/// Room for the faults of two ticks' windowed checks (at most 32 a tick:
+/// every rule of every channel at once, 4 joints × 4, 2 ankles × 3, 4 force
+/// sensors × 2, 2 for the drive monitor; a little more is kept): a late
+/// task adds a tick's findings to those the tick has not taken yet
+/// (`check_slot`).
 pub const MAX_RAISES: usize = 68;
 
 /// What the latch had marked when the job was handed over: which joints
