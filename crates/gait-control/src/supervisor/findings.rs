@@ -23,6 +23,26 @@ pub struct Marks {
     pub(super) held_once: [bool; JOINTS],
 }
 
+/// Whether `code` raised on `joint` holds it in place instead of braking
+/// it: [`FaultCode::held_in_place_first`], another joint already `braked`
+/// (or blind, `angle_lost`), this one not `held_once` before. The latch's
+/// rule, and the windowed checks' on their marks.
+pub(super) fn holds_in_place(
+    code: FaultCode,
+    joint: usize,
+    braked: [bool; JOINTS],
+    angle_lost: [bool; JOINTS],
+    held_once: [bool; JOINTS],
+) -> bool {
+    let other_braked = braked
+        .iter()
+        .zip(&angle_lost)
+        .enumerate()
+        .any(|(k, (&b, &l))| k != joint && (b || l));
+    let first = held_once.get(joint) == Some(&false);
+    code.held_in_place_first() && other_braked && first
+}
+
 /// One fault the windowed checks found present.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Raise {
@@ -168,14 +188,7 @@ impl Findings {
     /// whether it is.
     pub(super) fn raise_on_joint(&mut self, code: FaultCode, joint: usize, value: f32) -> bool {
         let m = &self.marks;
-        let other_braked = m
-            .braked
-            .iter()
-            .zip(&m.angle_lost)
-            .enumerate()
-            .any(|(k, (&b, &l))| k != joint && (b || l));
-        let first = m.held_once.get(joint) == Some(&false);
-        let hold = code.held_in_place_first() && other_braked && first;
+        let hold = holds_in_place(code, joint, m.braked, m.angle_lost, m.held_once);
         if hold {
             if let Some(once) = self.marks.held_once.get_mut(joint) {
                 *once = true;

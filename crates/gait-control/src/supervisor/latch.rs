@@ -37,14 +37,13 @@ impl Latch {
     /// braking it: [`FaultCode::held_in_place_first`], another joint
     /// already braked (or blind), this one not held in place before.
     pub(super) fn holds_in_place(&self, code: FaultCode, joint: usize) -> bool {
-        let other_braked = self
-            .braked
-            .iter()
-            .zip(&self.angle_lost)
-            .enumerate()
-            .any(|(k, (&b, &l))| k != joint && (b || l));
-        let first = self.held_in_place_once.get(joint) == Some(&false);
-        code.held_in_place_first() && other_braked && first
+        super::findings::holds_in_place(
+            code,
+            joint,
+            self.braked,
+            self.angle_lost,
+            self.held_in_place_once,
+        )
     }
 
     /// [`Latch::raise`]; a joint's brake or lost angle marked only with
