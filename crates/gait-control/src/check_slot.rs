@@ -157,9 +157,8 @@ mod tests {
     use crate::supervisor::{ForceSense, ForceStatus, Supervisor, SupervisorConfig};
 
     fn checks() -> WindowedChecks {
-        Supervisor::new(SupervisorConfig::paper())
-            .unwrap()
-            .windowed_checks()
+        let (_, checks) = Supervisor::new(SupervisorConfig::paper()).unwrap().lend();
+        checks
     }
 
     /// Tick `tick`'s facts into `job`: a force sensor that reads Ok but not

@@ -264,12 +264,6 @@ impl Supervisor {
 }
 
 impl<W> Supervisor<W> {
-    /// Fresh windowed checks of this configuration, for a model task to run
-    /// in the supervisor's stead.
-    pub fn windowed_checks(&self) -> WindowedChecks {
-        WindowedChecks::new(&self.cfg)
-    }
-
     /// The configuration in use.
     pub const fn config(&self) -> &SupervisorConfig {
         &self.cfg
