@@ -155,7 +155,8 @@ fn block_key(trace: &str) -> Option<(u64, u32)> {
 }
 
 /// Where an instruction came from: the innermost project source line it
-/// was inlined from (`line` 0 for [`OTHER`]).
+/// was inlined from, or, outside the project, [`OTHER`] and the innermost
+/// library line.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct Source {
     pub file: String,
@@ -166,7 +167,8 @@ pub struct Source {
 /// output (an address line, then its frames innermost first, each
 /// `path:line`, perhaps followed by ` (discriminator n)`), the path
 /// relative to the repository; frames outside the project (core, libm,
-/// builtins) are skipped, and an address with none is [`OTHER`].
+/// builtins) are skipped, and an address with none is [`OTHER`] with its
+/// innermost library frame.
 pub fn sources_of(addr2line: &str, repo: &str) -> HashMap<u32, Source> {
     let other = || Source {
         file: OTHER.to_string(),
@@ -185,20 +187,42 @@ pub fn sources_of(addr2line: &str, repo: &str) -> HashMap<u32, Source> {
         let Some(a) = current else { continue };
         let frame = line.split(" (").next().unwrap_or_default();
         let (file, number) = frame.rsplit_once(':').unwrap_or((frame, ""));
+        let number = number.trim().parse().unwrap_or(0);
+        if let Some(slot) = out.get_mut(&a).filter(|s| s.file == OTHER && s.line == 0) {
+            // The innermost frame outside the project names it, until a
+            // project frame takes over.
+            *slot = Source {
+                file: format!("{OTHER}: {}", outside_path(file)),
+                line: number,
+            };
+        }
         let ours = file
             .strip_prefix(repo)
             .map(|f| f.trim_start_matches('/'))
             .filter(|f| f.starts_with("crates/") || f.starts_with("firmware/"));
         if let (Some(f), Some(slot)) = (ours, out.get_mut(&a)) {
-            if slot.file == OTHER {
+            if slot.file.starts_with(OTHER) {
                 *slot = Source {
                     file: f.to_string(),
-                    line: number.trim().parse().unwrap_or(0),
+                    line: number,
                 };
             }
         }
     }
     out
+}
+
+/// A path outside the project, from its crate on (`core/src/ptr/mod.rs`,
+/// `compiler_builtins-0.1.x/src/mem/mod.rs`): which library's code it is.
+fn outside_path(file: &str) -> &str {
+    ["/library/", "/registry/src/", "/src/"]
+        .iter()
+        .find_map(|marker| file.rsplit_once(marker).map(|(_, rest)| rest))
+        .map_or(file, |rest| match rest.split_once('/') {
+            // A registry path starts with its index's directory.
+            Some((index, crate_path)) if index.starts_with("index.") => crate_path,
+            _ => rest,
+        })
 }
 
 const OTHER: &str = "other (core, libm, builtins)";
@@ -426,7 +450,14 @@ Trace 0: 0x7f4bc4000100 [00800408/00000400/00000110/ff020200] Reset
                 line: 140
             }
         );
-        assert_eq!(sources[&0x400].file, OTHER);
+        // Outside the project, the innermost frame names the library.
+        assert_eq!(
+            sources[&0x400],
+            Source {
+                file: format!("{OTHER}: core/src/ptr/mod.rs"),
+                line: 9
+            }
+        );
         // A line addr2line cannot tell still names its file.
         assert_eq!(
             sources[&0x402],
