@@ -131,17 +131,22 @@ impl Facts<'_> {
         input.joint_reference_rad = r.angle_rad;
         input.ankles = [left_ankle, right_ankle];
         input.forces = s.forces;
-        input.motors = *self.motors;
-        for (((m, &c), &f), g) in input
+        // Each motor's report with this tick's commands, built where it
+        // goes (not the reports copied whole, then patched).
+        for ((((m, last), &c), &f), g) in input
             .motors
             .iter_mut()
+            .zip(self.motors)
             .zip(&a.command_nm)
             .zip(&a.feedforward_nm)
             .zip(self.gains)
         {
-            m.commanded_nm = c;
-            m.feedforward_nm = f;
-            m.limit_nm = g.torque_limit_nm;
+            *m = MotorSense {
+                commanded_nm: c,
+                feedforward_nm: f,
+                limit_nm: g.torque_limit_nm,
+                ..*last
+            };
         }
         input.e_stop_pressed = s.e_stop_pressed;
         input.e_stop_read_error = s.e_stop_read_error;

@@ -66,6 +66,28 @@ impl SwingState {
     }
 }
 
+/// What a swing tick reads of [`super::SequencerConfig`].
+#[derive(Clone, Copy)]
+struct LandingSettings {
+    landing_window_fraction: f32,
+    blind_landing_settle_s: f32,
+    landing_timeout_s: f32,
+    landing_contact_n: f32,
+    landing_confirm_s: f32,
+}
+
+impl LandingSettings {
+    fn of(c: &super::SequencerConfig) -> Self {
+        Self {
+            landing_window_fraction: c.landing_window_fraction,
+            blind_landing_settle_s: c.blind_landing_settle_s,
+            landing_timeout_s: c.landing_timeout_s,
+            landing_contact_n: c.landing_contact_n,
+            landing_confirm_s: c.landing_confirm_s,
+        }
+    }
+}
+
 impl Sequencer<'_> {
     /// A swing tick `t_s + dt_s` into the swing: the reference, the table's
     /// posture while the swing goes on, and the other foot's share.
@@ -78,9 +100,11 @@ impl Sequencer<'_> {
         ahead: Option<&AheadSlot>,
         events: &mut SeqEvents,
     ) -> ([f32; JOINTS], Option<Playing>, f32) {
-        let cfg = self.cfg;
+        // The settings this tick reads, not the whole configuration (a copy
+        // of some 20 words a swing tick).
+        let cfg = LandingSettings::of(&self.cfg);
         let t = t_s + dt_s;
-        let step = self.step;
+        let step = self.step.as_ref();
         let duration = step.map_or(0.0, |tb| tb.duration_s());
         let swing_foot = sensed
             .feet_n
@@ -177,7 +201,7 @@ impl Sequencer<'_> {
     /// into it, while the table plays (the ground search past its end
     /// works its posture out only then).
     pub(super) fn ask_swing_share(&self, slot: &AheadSlot, t_s: f32) {
-        let (Some(step), Some(table)) = (self.step, self.table) else {
+        let (Some(step), Some(table)) = (self.step.as_ref(), self.table.as_ref()) else {
             return;
         };
         let searching = t_s - step.duration_s() - self.cfg.ground_search_after_s;
@@ -230,7 +254,7 @@ impl Sequencer<'_> {
         let Some(model) = self.model.as_ref() else {
             return *phi;
         };
-        let c = self.cfg;
+        let c = &self.cfg;
         let searching_s = since_end_s - c.ground_search_after_s;
         if !(searching_s.is_finite() && searching_s > 0.0) {
             return *phi;
@@ -249,7 +273,8 @@ impl Sequencer<'_> {
     /// start, and the landing window counts from the swing's start): the
     /// model task's answer when it gave it, else worked out now.
     fn swing_share(&self, phi: &Phi<f32>, ahead: Option<&AheadSlot>) -> f32 {
-        if let (Some(slot), Some(table), true) = (ahead, self.table, self.model.is_some()) {
+        if let (Some(slot), Some(table), true) = (ahead, self.table.as_ref(), self.model.is_some())
+        {
             let ask = AheadAsk {
                 job: AheadJob::SwingShare(*phi, self.swing.start_m),
                 options: table.ik_options(),
