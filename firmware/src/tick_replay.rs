@@ -175,7 +175,9 @@ pub fn replay_with<'t>(
         let slot = ModelSlot::new();
         let mut controller: Controller<'_> = controller(segment.gait)?;
         let checks = controller.set_model_task(&slot);
-        let mut task = ModelTask::new(controller.config().model, &slot).with_checks(checks);
+        let mut task = ModelTask::new(controller.config().model, &slot)
+            .with_checks(checks)
+            .with_steps(controller.steps());
         let mut hw = board_config::hardware(device, qemu_rig::peripherals())
             .map_err(|_| ReplayError::Config)?;
         out.segments += 1;

@@ -1,14 +1,15 @@
 //! Work a tick ahead, by the model task ([`crate::feedforward::ModelTask`]):
-//! the weight transfer's inverse kinematics and the swing foot's planned
-//! share.
+//! the weight transfer's inverse kinematics and the swing's table work.
 //!
 //! Between two steps the reference follows a path in the IK's parameters
 //! (`sequencer/transfer.rs`): each tick solves the IK once, the largest
-//! piece of a transfer tick. In a swing each tick works out where the
-//! table puts the swing foot's toe, for the share of the body it may carry
-//! (the landing window and the load sharing). Both are known a tick ahead
-//! (the transfer's path once the foot has landed, the table's next
-//! posture), so the tick asks for the next one and the model task answers
+//! piece of a transfer tick. In a swing each tick reads the step's table
+//! three times (its posture, and the two samples of its central
+//! differences: [`crate::reference::table_motion`]) and works out where
+//! the table puts the swing foot's toe, for the share of the body it may
+//! carry (the landing window and the load sharing). Both are known a tick
+//! ahead (the transfer's path once the foot has landed, the step's next
+//! time), so the tick asks for the next one and the model task answers
 //! between the two ticks; the next tick takes the answer if it is for
 //! exactly what it needs (the same job, bit for bit) and works it out
 //! itself otherwise. The answer is the very computation the tick would
@@ -22,7 +23,12 @@ use gait_core::ik::{IkOptions, IkSolver, KneeRange};
 use gait_core::kinematics::{Phi, Posture};
 use gait_core::playback::{other_foot_share, swing_toe_at};
 
-use crate::sequencer::transfer_params;
+use crate::reference::{TableMotion, table_motion};
+use crate::replan::ReplanSlot;
+use crate::sequencer::{GaitTables, StepTable, transfer_params};
+
+/// Words of an answer: a swing's Φ, Φ̇, Φ̈ and share; the IK's five.
+const OUTPUT_WORDS: usize = 16;
 
 /// One piece of work a tick needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,10 +38,115 @@ pub enum AheadJob {
     Params(Phi<f32>),
     /// The posture Φ at parameters (x5, y5, φ1, φ3, r2).
     Solve([f32; 5]),
-    /// The share of the body's weight a swing foot may carry at a table's
-    /// posture Φ, its toe having started at (x, y) (the stance foot's flat
-    /// frame; `gait_core::playback::other_foot_share`): the first value.
-    SwingShare(Phi<f32>, [f32; 2]),
+    /// A swing tick's table work ([`SwingAnswer`]).
+    Swing(SwingKey),
+}
+
+/// Which swing tick: the step (its table's slot, and a re-planned step's
+/// length, 0 for the table's own), its time, and where its swing toe
+/// started (the stance foot's flat frame, m), which tells one swing from
+/// the next.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwingKey {
+    /// The table's slot in the controller's tables.
+    pub slot: u32,
+    /// Samples of the re-planned step played; 0: the table as planned.
+    pub replanned_len: u32,
+    /// Time into the swing, s.
+    pub t_s: f32,
+    /// The swing toe at the step's start, m.
+    pub start_m: [f32; 2],
+}
+
+/// A swing tick's table work, as the tick would do it: the table's
+/// posture, its motion ([`table_motion`], `None` past the table's end)
+/// and the share of the body's weight the swing foot may carry there, its
+/// toe having started at the key's start
+/// (`gait_core::playback::other_foot_share`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwingAnswer {
+    /// Φ at the key's time, rad.
+    pub phi: Phi<f32>,
+    /// Its motion.
+    pub motion: Option<TableMotion>,
+    /// The swing foot's share.
+    pub share: f32,
+}
+
+/// The steps a swing plays, as the model task finds them from a
+/// [`SwingKey`]: the controller's tables and its re-planner's slot
+/// ([`crate::controller::Controller::steps`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Steps<'t> {
+    /// The controller's tables.
+    pub tables: GaitTables<'t>,
+    /// Where a re-planned step's samples are.
+    pub replanned: Option<&'t ReplanSlot>,
+}
+
+impl SwingAnswer {
+    /// Its words (Φ, Φ̇, Φ̈, the share) and flags.
+    fn words(&self) -> ([f32; OUTPUT_WORDS], u32) {
+        let mut out = [0.0; OUTPUT_WORDS];
+        let (dphi, ddphi, flags) = self.motion.map_or(([0.0; 5], [0.0; 5], FOUND), |m| {
+            (m.dphi, m.ddphi, FOUND | MOTION)
+        });
+        let words = self
+            .phi
+            .iter()
+            .chain(&dphi)
+            .chain(&ddphi)
+            .chain([&self.share]);
+        for (o, &v) in out.iter_mut().zip(words) {
+            *o = v;
+        }
+        (out, flags)
+    }
+
+    /// Read back from `words` and `flags`.
+    fn from_words(w: &[f32; OUTPUT_WORDS], flags: u32) -> Self {
+        let five = |k: usize| core::array::from_fn(|i| w.get(k + i).copied().unwrap_or(0.0));
+        let phi = five(0);
+        Self {
+            phi,
+            motion: (flags & MOTION != 0).then(|| TableMotion {
+                phi,
+                dphi: five(5),
+                ddphi: five(10),
+            }),
+            share: w.get(15).copied().unwrap_or(0.0),
+        }
+    }
+}
+
+impl<'t> Steps<'t> {
+    /// The step `key` names.
+    #[must_use]
+    pub fn step(&self, key: &SwingKey) -> Option<StepTable<'t>> {
+        let table = *self.tables.slot(key.slot as usize)?;
+        match key.replanned_len {
+            0 => Some(StepTable::Planned(table)),
+            len => Some(StepTable::Replanned {
+                slot: self.replanned?,
+                len: len as usize,
+                table,
+            }),
+        }
+    }
+
+    /// The work of the swing tick `key` on `model`.
+    #[must_use]
+    pub fn swing(&self, model: &BodyModel<f32>, key: &SwingKey) -> Option<SwingAnswer> {
+        let step = self.step(key)?;
+        let phi = step.at_time(key.t_s);
+        let foot = StanceFoot::for_model(model);
+        let toe = swing_toe_at(model, &foot, &Posture::new(&phi));
+        Some(SwingAnswer {
+            phi,
+            motion: table_motion(&step, key.t_s, phi),
+            share: other_foot_share(toe, key.start_m),
+        })
+    }
 }
 
 /// A job with the IK options of the table it is for.
@@ -48,17 +159,33 @@ pub struct AheadAsk {
 }
 
 impl AheadAsk {
-    /// The answer: five values, or `None` where the IK has none.
+    /// The answer's words and flags: the IK's five values, or a swing's
+    /// ([`SwingAnswer`]); `None` where the IK has none, or the step is not
+    /// among `steps`.
+    fn answer(
+        &self,
+        model: &BodyModel<f32>,
+        steps: Option<&Steps<'_>>,
+    ) -> Option<([f32; OUTPUT_WORDS], u32)> {
+        if let AheadJob::Swing(key) = &self.job {
+            return steps?.swing(model, key).map(|a| a.words());
+        }
+        let five = self.work(model)?;
+        let mut out = [0.0; OUTPUT_WORDS];
+        for (o, x) in out.iter_mut().zip(five) {
+            *o = x;
+        }
+        Some((out, FOUND))
+    }
+
+    /// An IK job's answer: five values, or `None` where the IK has none
+    /// (and for a swing's, which needs the steps: [`Steps::swing`]).
     #[must_use]
     pub fn work(&self, model: &BodyModel<f32>) -> Option<[f32; 5]> {
         let ik = || IkSolver::new(model).with_options(self.options);
         match &self.job {
             AheadJob::Params(phi) => transfer_params(model, &ik(), phi),
-            AheadJob::SwingShare(phi, start) => {
-                let foot = StanceFoot::for_model(model);
-                let toe = swing_toe_at(model, &foot, &Posture::new(phi));
-                Some([other_foot_share(toe, *start), 0.0, 0.0, 0.0, 0.0])
-            }
+            AheadJob::Swing(_) => None,
             AheadJob::Solve([x5, y5, phi1, phi3, r2]) => ik()
                 .solve(&gait_core::ik::IkTarget {
                     x5: *x5,
@@ -74,12 +201,15 @@ impl AheadAsk {
 
     /// Its words: the kind and the knee range as flags, the cap, the input.
     fn words(&self) -> (u32, u32, [u32; 7]) {
-        let (kind, input, [x, y]) = match &self.job {
-            AheadJob::Params(phi) => (0, *phi, [0.0; 2]),
-            AheadJob::Solve(p) => (SOLVE, *p, [0.0; 2]),
-            AheadJob::SwingShare(phi, start) => (SHARE, *phi, *start),
+        let (kind, [a, b, c, d, e], [x, y]) = match &self.job {
+            AheadJob::Params(phi) => (0, phi.map(f32::to_bits), [0.0; 2]),
+            AheadJob::Solve(p) => (SOLVE, p.map(f32::to_bits), [0.0; 2]),
+            AheadJob::Swing(k) => (
+                SWING,
+                [k.slot, k.replanned_len, k.t_s.to_bits(), 0, 0],
+                k.start_m,
+            ),
         };
-        let [a, b, c, d, e] = input.map(f32::to_bits);
         let range = match self.options.knee_range {
             KneeRange::Reach => 0,
             KneeRange::Human => HUMAN_RANGE,
@@ -95,12 +225,11 @@ impl AheadAsk {
 /// Flag bits of an ask.
 const SOLVE: u32 = 1;
 const HUMAN_RANGE: u32 = 2;
-const SHARE: u32 = 4;
-/// [`AheadSlot::at`] of an ask that is not a swing's share (a NaN's bits:
-/// no time's).
-const NOT_AT: u32 = 0x7FC0_0000;
-/// Flag bit of an answer: the IK found one.
+const SWING: u32 = 4;
+/// Flag bits of an answer: there is one (the IK found one, the step was
+/// found); a swing's has the table's motion.
 const FOUND: u32 = 1;
+const MOTION: u32 = 2;
 
 /// The hand-off of the work a tick ahead, one writer each way, as the
 /// feed-forward's
@@ -111,13 +240,10 @@ pub struct AheadSlot {
     flags: AtomicU32,
     cap: AtomicU32,
     input: [AtomicU32; 7],
-    /// The time the tick asked a swing's share for (its bits; NaN's for
-    /// other asks): [`AheadSlot::asked_posture`].
-    at: AtomicU32,
     answer_seq: AtomicU32,
     answered: AtomicU32,
     found: AtomicU32,
-    output: [AtomicU32; 5],
+    output: [AtomicU32; OUTPUT_WORDS],
 }
 
 impl Default for AheadSlot {
@@ -135,11 +261,10 @@ impl AheadSlot {
             flags: AtomicU32::new(0),
             cap: AtomicU32::new(0),
             input: [const { AtomicU32::new(0) }; 7],
-            at: AtomicU32::new(NOT_AT),
             answer_seq: AtomicU32::new(0),
             answered: AtomicU32::new(0),
             found: AtomicU32::new(0),
-            output: [const { AtomicU32::new(0) }; 5],
+            output: [const { AtomicU32::new(0) }; OUTPUT_WORDS],
         }
     }
 
@@ -150,29 +275,6 @@ impl AheadSlot {
 
     /// The tick: asks for `ask`'s answer by the next tick.
     pub fn request(&self, ask: &AheadAsk) {
-        self.request_at(ask, NOT_AT);
-    }
-
-    /// The tick: asks for a swing's share at its posture `at_s` into the
-    /// swing ([`AheadJob::SwingShare`]); the next tick reads the posture
-    /// back ([`AheadSlot::asked_posture`]).
-    pub fn request_swing_share(&self, ask: &AheadAsk, at_s: f32) {
-        self.request_at(ask, at_s.to_bits());
-    }
-
-    /// The tick: the table posture it asked the share for at `at_s` into
-    /// the swing whose toe started at `start` (the table's interpolation
-    /// there, bit for bit), if that was its last ask.
-    pub fn asked_posture(&self, at_s: f32, start: [f32; 2]) -> Option<Phi<f32>> {
-        let [a, b, c, d, e, x, y] = self.input.each_ref().map(|w| w.load(Ordering::Relaxed));
-        let asked = self.flags.load(Ordering::Relaxed) & SHARE != 0
-            && self.at.load(Ordering::Relaxed) == at_s.to_bits()
-            && [x, y] == start.map(f32::to_bits);
-        asked.then(|| [a, b, c, d, e].map(f32::from_bits))
-    }
-
-    fn request_at(&self, ask: &AheadAsk, at: u32) {
-        self.at.store(at, Ordering::Relaxed);
         let (flags, cap, input) = ask.words();
         self.flags.store(flags, Ordering::Relaxed);
         self.cap.store(cap, Ordering::Relaxed);
@@ -183,10 +285,9 @@ impl AheadSlot {
         self.request_seq.store(n, Ordering::Release);
     }
 
-    /// The tick: the answer to `ask` if its last request was `ask`, bit for
-    /// bit, and the task has answered it whole (`Some(None)`: the IK has
-    /// none); `None` otherwise (the tick works it out).
-    pub fn answer_to(&self, ask: &AheadAsk) -> Option<Option<[f32; 5]>> {
+    /// The answer's words and flags if the last request was `ask`, bit for
+    /// bit, and the task has answered it whole (flags 0: no answer).
+    fn answered_words(&self, ask: &AheadAsk) -> Option<([f32; OUTPUT_WORDS], u32)> {
         let seq = self.answer_seq.load(Ordering::Acquire);
         let last = self.request_seq.load(Ordering::Relaxed);
         if seq == 0 || seq % 2 == 1 || self.answered.load(Ordering::Relaxed) != last {
@@ -203,12 +304,36 @@ impl AheadSlot {
         if !same {
             return None;
         }
-        let found = self.found.load(Ordering::Relaxed) & FOUND != 0;
+        let found = self.found.load(Ordering::Relaxed);
         let out = self
             .output
             .each_ref()
             .map(|w| f32::from_bits(w.load(Ordering::Relaxed)));
-        Some(found.then_some(out))
+        Some((out, found))
+    }
+
+    /// The tick: the answer to `ask` (an IK job) if its last request was
+    /// `ask`, bit for bit, and the task has answered it whole
+    /// (`Some(None)`: the IK has none); `None` otherwise (the tick works
+    /// it out).
+    pub fn answer_to(&self, ask: &AheadAsk) -> Option<Option<[f32; 5]>> {
+        let (out, found) = self.answered_words(ask)?;
+        Some(
+            (found & FOUND != 0)
+                .then(|| core::array::from_fn(|i| out.get(i).copied().unwrap_or(0.0))),
+        )
+    }
+
+    /// The tick: the work of the swing tick `key` (the step's IK options
+    /// `options`) if it was the last ask and the task found the step;
+    /// `None` otherwise (the tick works it out).
+    pub fn swing_answer(&self, key: SwingKey, options: IkOptions<f32>) -> Option<SwingAnswer> {
+        let ask = AheadAsk {
+            job: AheadJob::Swing(key),
+            options,
+        };
+        let (out, found) = self.answered_words(&ask)?;
+        (found & FOUND != 0).then(|| SwingAnswer::from_words(&out, found))
     }
 
     /// The task: the newest ask and its number, read whole; `None` before
@@ -229,8 +354,13 @@ impl AheadSlot {
                 continue;
             }
             let input = [a, b, c, d, e];
-            let job = if flags & SHARE != 0 {
-                AheadJob::SwingShare(input, [x, y])
+            let job = if flags & SWING != 0 {
+                AheadJob::Swing(SwingKey {
+                    slot: a.to_bits(),
+                    replanned_len: b.to_bits(),
+                    t_s: c,
+                    start_m: [x, y],
+                })
             } else if flags & SOLVE != 0 {
                 AheadJob::Solve(input)
             } else {
@@ -257,20 +387,19 @@ impl AheadSlot {
 
     /// The task: answers the newest ask if it has no answer yet; its
     /// number when it did.
-    pub(crate) fn serve(&self, model: &BodyModel<f32>) -> Option<u32> {
+    pub(crate) fn serve(&self, model: &BodyModel<f32>, steps: Option<&Steps<'_>>) -> Option<u32> {
         let (n, ask) = self.newest()?;
         let seq = self.answer_seq.load(Ordering::Relaxed);
         if seq != 0 && seq & 1 == 0 && self.answered.load(Ordering::Relaxed) == n {
             return None;
         }
-        let out = ask.work(model);
+        let (out, found) = ask.answer(model, steps).unwrap_or(([0.0; OUTPUT_WORDS], 0));
         let writing = seq.wrapping_add(1) | 1;
         self.answer_seq.store(writing, Ordering::Release);
-        for (w, v) in self.output.iter().zip(out.unwrap_or([0.0; 5])) {
+        for (w, v) in self.output.iter().zip(out) {
             w.store(v.to_bits(), Ordering::Relaxed);
         }
-        self.found
-            .store(if out.is_some() { FOUND } else { 0 }, Ordering::Relaxed);
+        self.found.store(found, Ordering::Relaxed);
         self.answered.store(n, Ordering::Relaxed);
         self.answer_seq
             .store(writing.wrapping_add(1).max(2), Ordering::Release);
@@ -299,8 +428,8 @@ mod tests {
         assert_eq!(slot.answer_to(&params), None, "nothing asked");
         slot.request(&params);
         assert_eq!(slot.answer_to(&params), None, "not answered yet");
-        assert!(slot.serve(&m).is_some());
-        assert!(slot.serve(&m).is_none(), "answered once");
+        assert!(slot.serve(&m, None).is_some());
+        assert!(slot.serve(&m, None).is_none(), "answered once");
         let answer = slot.answer_to(&params).unwrap();
         assert_eq!(answer, params.work(&m));
         let p = answer.unwrap();
@@ -324,23 +453,49 @@ mod tests {
         // Asked, the solve comes back as the tick would work it out.
         slot.request(&solve);
         assert_eq!(slot.answer_to(&params), None, "a newer ask replaced it");
-        slot.serve(&m);
+        slot.serve(&m, None);
         assert_eq!(slot.answer_to(&solve), Some(solve.work(&m)));
+    }
+
+    /// Samples of the test table.
+    const N: usize = 20;
+
+    /// A table of [`N`] samples 10 ms apart, moving from a standing walk
+    /// posture at 0.5 rad/s on every link.
+    fn table_image() -> [u8; gait_core::tables::image_len(N)] {
+        use gait_core::tables::{GaitKind, encode};
+        let phis: [[f32; 5]; N] =
+            core::array::from_fn(|k| [0.1, 0.35, 0.05, 2.9, 3.3].map(|p| p + 0.005 * k as f32));
+        let mut buf = [0u8; gait_core::tables::image_len(N)];
+        encode(GaitKind::Walk, 10_000, IkOptions::paper(), &phis, &mut buf).unwrap();
+        buf
+    }
+
+    fn steps(image: &[u8]) -> Steps<'_> {
+        let table = gait_core::tables::GaitTable::parse(image).unwrap();
+        Steps {
+            tables: GaitTables::by_kind(Some(table), None, None),
+            replanned: None,
+        }
+    }
+
+    fn key(t_s: f32, start_m: [f32; 2]) -> SwingKey {
+        SwingKey {
+            slot: 0,
+            replanned_len: 0,
+            t_s,
+            start_m,
+        }
     }
 
     #[test]
     fn a_swing_foot_carries_the_body_only_near_where_its_toe_started() {
         let m = model();
-        let phi = [0.1, 0.35, 0.05, 2.9, 3.3];
+        let image = table_image();
+        let steps = steps(&image);
+        let phi = steps.step(&key(0.0, [0.0; 2])).unwrap().at_time(0.0);
         let toe = swing_toe_at(&m, &StanceFoot::for_model(&m), &Posture::new(&phi));
-        let share = |start: [f32; 2]| {
-            AheadAsk {
-                job: AheadJob::SwingShare(phi, start),
-                options: IkOptions::paper(),
-            }
-            .work(&m)
-            .map(|[s, ..]| s)
-        };
+        let share = |start: [f32; 2]| steps.swing(&m, &key(0.0, start)).map(|a| a.share);
         assert_eq!(share(toe), Some(1.0), "still where it started");
         assert_eq!(share([toe[0] - 0.05, toe[1]]), Some(0.0), "5 cm on");
         let half = share([toe[0] - 0.007, toe[1]]).unwrap();
@@ -351,34 +506,55 @@ mod tests {
     }
 
     #[test]
-    fn the_posture_asked_with_a_share_is_read_back_for_its_time_and_swing_only() {
+    fn a_swing_answer_is_the_ticks_own_table_work_for_its_step_time_and_swing_only() {
+        let m = model();
+        let image = table_image();
+        let steps = steps(&image);
+        let step = steps.step(&key(0.0, [0.0; 2])).unwrap();
         let slot = AheadSlot::new();
-        let phi = [0.1, 0.35, 0.05, 2.9, 3.3];
         let start = [-0.3, 0.0];
-        let share = AheadAsk {
-            job: AheadJob::SwingShare(phi, start),
-            options: IkOptions::paper(),
+        let opts = IkOptions::paper();
+        let ask = |k: SwingKey| AheadAsk {
+            job: AheadJob::Swing(k),
+            options: opts,
         };
-        slot.request_swing_share(&share, 0.125);
-        assert_eq!(slot.asked_posture(0.125, start), Some(phi));
-        assert_eq!(slot.asked_posture(0.126, start), None, "another time");
-        assert_eq!(
-            slot.asked_posture(0.125, [-0.2, 0.0]),
-            None,
-            "another swing"
-        );
-        // Any other ask replaces it.
-        slot.request(&AheadAsk {
-            job: AheadJob::Params(phi),
-            options: IkOptions::paper(),
-        });
-        assert_eq!(slot.asked_posture(0.125, start), None);
-        slot.request(&share);
-        assert_eq!(
-            slot.asked_posture(0.125, start),
-            None,
-            "asked without its time"
-        );
+        // Asked, answered between two ticks: what the tick would work out.
+        slot.request(&ask(key(0.125, start)));
+        assert_eq!(slot.swing_answer(key(0.125, start), opts), None, "not yet");
+        assert!(slot.serve(&m, Some(&steps)).is_some());
+        let a = slot.swing_answer(key(0.125, start), opts).unwrap();
+        let phi = step.at_time(0.125);
+        assert_eq!(a.phi, phi);
+        assert_eq!(a.motion, table_motion(&step, 0.125, phi));
+        assert!(a.motion.is_some_and(|mo| (mo.dphi[0] - 0.5).abs() < 1e-3));
+        assert_eq!(a.share, steps.swing(&m, &key(0.125, start)).unwrap().share);
+        // Only for that time, that swing, that step and those options.
+        assert_eq!(slot.swing_answer(key(0.126, start), opts), None);
+        assert_eq!(slot.swing_answer(key(0.125, [-0.2, 0.0]), opts), None);
+        let replanned = SwingKey {
+            replanned_len: 20,
+            ..key(0.125, start)
+        };
+        assert_eq!(slot.swing_answer(replanned, opts), None);
+        let human = IkOptions {
+            knee_range: KneeRange::Human,
+            ..opts
+        };
+        assert_eq!(slot.swing_answer(key(0.125, start), human), None);
+        // Past the table's end: its last posture and no motion.
+        slot.request(&ask(key(0.5, start)));
+        slot.serve(&m, Some(&steps));
+        let past = slot.swing_answer(key(0.5, start), opts).unwrap();
+        assert_eq!(past.phi, step.at_time(0.19));
+        assert_eq!(past.motion, None);
+        // A task without the steps, or a step it does not hold, answers
+        // nothing the tick takes.
+        slot.request(&ask(key(0.13, start)));
+        slot.serve(&m, None);
+        assert_eq!(slot.swing_answer(key(0.13, start), opts), None);
+        slot.request(&ask(replanned));
+        slot.serve(&m, Some(&steps));
+        assert_eq!(slot.swing_answer(replanned, opts), None, "no re-planner");
     }
 
     #[test]
@@ -390,7 +566,7 @@ mod tests {
             options: IkOptions::paper(),
         };
         slot.request(&far);
-        slot.serve(&m);
+        slot.serve(&m, None);
         assert_eq!(slot.answer_to(&far), Some(None), "out of reach");
         slot.answer_seq.fetch_add(1, Ordering::Release);
         assert_eq!(slot.answer_to(&far), None, "being written");

@@ -32,6 +32,7 @@ use embedded_hal::pwm::SetDutyCycle;
 use embedded_hal::spi::SpiDevice;
 use gait_core::BodyModel;
 
+use crate::ahead::Steps;
 use crate::crutch_load::CrutchLoad;
 use crate::drivers::as5048a::As5048a;
 use crate::drivers::buttons::Button;
@@ -298,6 +299,18 @@ impl<'t> Controller<'t> {
         self.model_slot = Some(slot);
         self.checks_in_task = true;
         self.windowed.take()
+    }
+
+    /// The steps its swings play, for a model task that does their table
+    /// work a tick ahead ([`ModelTask::with_steps`]). Call after
+    /// [`Controller::set_replanner`], if at all.
+    ///
+    /// [`ModelTask::with_steps`]: crate::feedforward::ModelTask::with_steps
+    pub fn steps(&self) -> Steps<'t> {
+        Steps {
+            tables: *self.seq.tables(),
+            replanned: self.seq.replan_slot(),
+        }
     }
 
     /// The configuration it was built with.

@@ -30,7 +30,7 @@ use gait_core::foot::StanceFoot;
 use gait_core::kinematics::{Phi, Posture, joint_torques};
 use gait_core::model::BodyModel;
 
-use crate::ahead::AheadSlot;
+use crate::ahead::{AheadSlot, Steps};
 use crate::check_slot::CheckSlot;
 use crate::posture::{JOINTS, Side, joint_torques_from_theta_torques};
 use crate::supervisor::WindowedChecks;
@@ -289,6 +289,7 @@ pub struct ModelTask<'t> {
     model: BodyModel<f32>,
     slot: &'t ModelSlot,
     checks: Option<WindowedChecks>,
+    steps: Option<Steps<'t>>,
 }
 
 impl<'t> ModelTask<'t> {
@@ -299,6 +300,7 @@ impl<'t> ModelTask<'t> {
             model,
             slot,
             checks: None,
+            steps: None,
         }
     }
 
@@ -310,6 +312,18 @@ impl<'t> ModelTask<'t> {
         Self { checks, ..self }
     }
 
+    /// The task that also does a swing's table work a tick ahead
+    /// ([`crate::ahead::Steps`], the controller's:
+    /// [`crate::controller::Controller::steps`]); without them the tick
+    /// does it itself.
+    #[must_use]
+    pub fn with_steps(self, steps: Steps<'t>) -> Self {
+        Self {
+            steps: Some(steps),
+            ..self
+        }
+    }
+
     /// Runs the windowed checks of the newest tick's facts if they have not
     /// been run (its tick when they were), the newest ask of the work a
     /// tick ahead ([`crate::ahead`]), and answers the newest request for
@@ -318,7 +332,7 @@ impl<'t> ModelTask<'t> {
         if let Some(c) = self.checks.as_mut() {
             self.slot.checks.serve(c);
         }
-        self.slot.ahead.serve(&self.model);
+        self.slot.ahead.serve(&self.model, self.steps.as_ref());
         let (n, req) = self.slot.newest_request()?;
         if self.slot.answer().is_some_and(|(a, _)| a == n) {
             return None;

@@ -225,6 +225,11 @@ impl<'t> Sequencer<'t> {
         &self.tables
     }
 
+    /// Where its re-planned steps are, with a re-planner.
+    pub fn replan_slot(&self) -> Option<&'t ReplanSlot> {
+        self.replanner.map(|(slot, _)| slot)
+    }
+
     /// The gait being played, or last played (walking before the first
     /// start).
     #[must_use]
@@ -357,12 +362,15 @@ impl<'t> Sequencer<'t> {
         }
         self.reference = next_reference;
         let step = self.step.as_ref();
-        let motion = swing.and_then(|(_, t, phi)| table_motion(step?, t, phi?));
+        let motion = swing.and_then(|(_, t, phi, ahead)| match ahead {
+            Some(known) => known,
+            None => table_motion(step?, t, phi?),
+        });
         self.ankle_plan = match self.phase {
             Phase::SafeHold { .. } => self.ankle_plan,
             // The first tick of a swing plans nothing yet (as before the
             // table is read).
-            Phase::Swing { .. } => swing.map_or([f32::NAN; 2], |(s, t, phi)| {
+            Phase::Swing { .. } => swing.map_or([f32::NAN; 2], |(s, t, phi, _)| {
                 let phi1 = match (step, phi) {
                     (Some(tb), Some(p)) if t <= tb.duration_s() => p[0],
                     (Some(tb), _) => tb.at_time(tb.duration_s())[0],

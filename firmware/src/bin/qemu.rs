@@ -376,7 +376,9 @@ fn control_tick_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
     let slot = ModelSlot::new();
     let mut controller: gait_control::controller::Controller<'_> = controller;
     let checks = controller.set_model_task(&slot);
-    let mut task = ModelTask::new(controller.config().model, &slot).with_checks(checks);
+    let mut task = ModelTask::new(controller.config().model, &slot)
+        .with_checks(checks)
+        .with_steps(controller.steps());
     let base = ctr.once(|| black_box(0u32)).0;
     let mut total: u64 = 0;
     let mut worst = 0u32;

@@ -363,7 +363,9 @@ fn main() -> ! {
         cp.SCB
             .set_priority(SystemHandler::PendSV, model_task::PRIORITY);
     }
-    let model = ModelTask::new(controller.config().model, &model_task::SLOT).with_checks(checks);
+    let model = ModelTask::new(controller.config().model, &model_task::SLOT)
+        .with_checks(checks)
+        .with_steps(controller.steps());
     if !model_task::install(model) {
         halt("the model task's state is in use: motors stay disabled");
     }

@@ -30,7 +30,9 @@ fn walk_with(slot: Option<&'static ModelSlot>, fault: Option<Injection>) -> Vec<
     }
     let mut task = slot.map(|s| {
         let checks = rig.controller.set_model_task(s);
-        ModelTask::new(rig.controller.config().model, s).with_checks(checks)
+        ModelTask::new(rig.controller.config().model, s)
+            .with_checks(checks)
+            .with_steps(rig.controller.steps())
     });
     Rig::press(&rig.go, sim::scenario::GO_AT_TICK, sim::scenario::GO_TICKS);
     let mut requests = Vec::new();

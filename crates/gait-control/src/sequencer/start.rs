@@ -82,7 +82,7 @@ impl<'t> Sequencer<'t> {
         let lands_first_from_s = self.lands_first_from_s();
         self.swing.begin(start_m, lands_first_from_s);
         if let Some(slot) = ahead {
-            self.ask_swing_share(slot, dt_s);
+            self.ask_swing(slot, dt_s);
         }
         events.push(SeqEvent::SwingStarted(self.gait, stance));
         joints_from_phi(&start, stance)

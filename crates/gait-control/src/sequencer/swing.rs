@@ -7,8 +7,9 @@
 
 use gait_core::kinematics::{Phi, Posture};
 
-use crate::ahead::{AheadAsk, AheadJob, AheadSlot};
+use crate::ahead::{AheadAsk, AheadJob, AheadSlot, SwingKey};
 use crate::posture::{Side, joints_from_phi};
+use crate::reference::TableMotion;
 
 use super::{
     JOINTS, Phase, Sensed, SeqEvent, SeqEvents, Sequencer, StepTable, smoothstep, transfer,
@@ -18,8 +19,10 @@ use super::{
 /// flexion, rad (6°): a leg locked straight takes the landing on its stop.
 pub(super) const SEARCH_MIN_KNEE_FLEXION_RAD: f32 = 0.1;
 
-/// The table's posture at the swing's time while it plays: (stance, t, Φ).
-pub(super) type Playing = (Side, f32, Option<Phi<f32>>);
+/// The table's posture at the swing's time while it plays: (stance, t, Φ,
+/// and its motion when the model task worked it out ahead: `Some(None)`
+/// past the table's end).
+pub(super) type Playing = (Side, f32, Option<Phi<f32>>, Option<Option<TableMotion>>);
 
 /// The present swing's landing detection.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,6 +67,12 @@ impl SwingState {
         self.in_landing_window = false;
         self.contact_s = 0.0;
     }
+}
+
+/// Whether `a` and `b` are the same posture bit for bit (compared word by
+/// word: an array's `==` calls `memcmp`, some 120 instructions on the M4).
+fn same_bits(a: &Phi<f32>, b: &Phi<f32>) -> bool {
+    a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
 /// What a swing tick reads of [`super::SequencerConfig`].
@@ -111,23 +120,31 @@ impl Sequencer<'_> {
             .get(stance.other().foot())
             .copied()
             .unwrap_or(f32::NAN);
-        // Past the table's end without a landing, the foot goes on down
-        // looking for the ground.
-        // The table's posture: asked ahead with the share last tick (the
-        // same interpolation, bit for bit), else interpolated now. The ask
-        // names the time and the swing's start, not the step: it holds
-        // because every swing's step is set where its first tick is asked
-        // (`start.rs`), replacing any older ask, and stays set while it
-        // plays.
-        let start = self.swing.start_m;
+        // The table's work (its posture, its motion, the swing foot's
+        // share there): asked ahead last tick (the same arithmetic on the
+        // same step, time and start, bit for bit), else done now. Past the
+        // table's end without a landing, the foot goes on down looking for
+        // the ground.
+        let answer = ahead.and_then(|slot| {
+            let options = self.table.as_ref()?.ik_options();
+            slot.swing_answer(self.swing_key(t)?, options)
+        });
         let phi_t = step.map(|tb| {
-            let table = ahead
-                .and_then(|slot| slot.asked_posture(t, start))
-                .unwrap_or_else(|| tb.at_time(t));
+            let table = answer.map_or_else(|| tb.at_time(t), |a| a.phi);
             self.searching_for_ground(&table, t - duration)
         });
         self.swing.phi1 = phi_t.map_or(f32::NAN, |p| p[0]);
-        let share = phi_t.map_or(0.0, |p| self.swing_share(&p, ahead));
+        // The answer is for the table's posture: taken where the ground
+        // search has not moved it.
+        let taken = match (phi_t, answer) {
+            (Some(p), Some(a)) if same_bits(&p, &a.phi) => Some(a),
+            _ => None,
+        };
+        let share = match (phi_t, taken) {
+            (_, Some(a)) => a.share,
+            (Some(p), None) => self.swing_share(&p),
+            (None, None) => 0.0,
+        };
         if self.swing.lifted_at_s.is_none() && share <= 0.0 {
             self.swing.lifted_at_s = Some(t);
         }
@@ -189,30 +206,46 @@ impl Sequencer<'_> {
             events.push(SeqEvent::Stopped);
         } else {
             self.phase = Phase::Swing { stance, t_s: t };
-            playing = Some((stance, t, phi_t));
+            playing = Some((stance, t, phi_t, taken.map(|a| a.motion)));
             if let Some(slot) = ahead {
-                self.ask_swing_share(slot, t + dt_s);
+                self.ask_swing(slot, t + dt_s);
             }
         }
         (reference, playing, share)
     }
 
-    /// Asks the model task for the share at the swing's next tick, `t_s`
-    /// into it, while the table plays (the ground search past its end
-    /// works its posture out only then).
-    pub(super) fn ask_swing_share(&self, slot: &AheadSlot, t_s: f32) {
-        let (Some(step), Some(table)) = (self.step.as_ref(), self.table.as_ref()) else {
+    /// The present swing's tick `t_s` into it, as the model task finds it
+    /// ([`SwingKey`]); `None` without a step.
+    fn swing_key(&self, t_s: f32) -> Option<SwingKey> {
+        let replanned_len = match self.step.as_ref()? {
+            StepTable::Planned(_) => 0,
+            StepTable::Replanned { len, .. } => u32::try_from(*len).ok()?,
+        };
+        Some(SwingKey {
+            slot: u32::try_from(self.slot).ok()?,
+            replanned_len,
+            t_s,
+            start_m: self.swing.start_m,
+        })
+    }
+
+    /// Asks the model task for the table's work at the swing's next tick,
+    /// `t_s` into it, while the table plays (the ground search past its
+    /// end works its posture out only then).
+    pub(super) fn ask_swing(&self, slot: &AheadSlot, t_s: f32) {
+        let (Some(step), Some(table), Some(key)) =
+            (self.step.as_ref(), self.table.as_ref(), self.swing_key(t_s))
+        else {
             return;
         };
         let searching = t_s - step.duration_s() - self.cfg.ground_search_after_s;
         if searching.is_finite() && searching > 0.0 {
             return;
         }
-        let ask = AheadAsk {
-            job: AheadJob::SwingShare(step.at_time(t_s), self.swing.start_m),
+        slot.request(&AheadAsk {
+            job: AheadJob::Swing(key),
             options: table.ik_options(),
-        };
-        slot.request_swing_share(&ask, t_s);
+        });
     }
 
     /// From when in the present swing a safe hold lands the step first, s
@@ -270,19 +303,8 @@ impl Sequencer<'_> {
 
     /// The other foot's share at the table's posture `phi` in the present
     /// swing (0 without a model: the foot is taken as lifted from the
-    /// start, and the landing window counts from the swing's start): the
-    /// model task's answer when it gave it, else worked out now.
-    fn swing_share(&self, phi: &Phi<f32>, ahead: Option<&AheadSlot>) -> f32 {
-        if let (Some(slot), Some(table), true) = (ahead, self.table.as_ref(), self.model.is_some())
-        {
-            let ask = AheadAsk {
-                job: AheadJob::SwingShare(*phi, self.swing.start_m),
-                options: table.ik_options(),
-            };
-            if let Some(Some([share, ..])) = slot.answer_to(&ask) {
-                return share;
-            }
-        }
+    /// start, and the landing window counts from the swing's start).
+    fn swing_share(&self, phi: &Phi<f32>) -> f32 {
         self.planned_swing_toe(Some(&Posture::new(phi)))
             .map_or(0.0, |p| {
                 gait_core::playback::other_foot_share(p, self.swing.start_m)

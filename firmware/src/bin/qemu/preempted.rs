@@ -255,7 +255,9 @@ pub(crate) fn check(out: &mut Out, scb: &mut SCB) -> usize {
     // critical section (nothing relies on PendSV being masked).
     unsafe { scb.set_priority(SystemHandler::PendSV, model_task::PRIORITY) };
     let model =
-        ModelTask::new(ticking.controller.config().model, &model_task::SLOT).with_checks(checks);
+        ModelTask::new(ticking.controller.config().model, &model_task::SLOT)
+        .with_checks(checks)
+        .with_steps(ticking.controller.steps());
     if !model_task::install(model) {
         out.put(&mut line("FAIL replanning: the model task is in use"));
         return 1;
