@@ -254,8 +254,7 @@ pub(crate) fn check(out: &mut Out, scb: &mut SCB) -> usize {
     // SAFETY: PendSV has not run yet; lowering its priority breaks no
     // critical section (nothing relies on PendSV being masked).
     unsafe { scb.set_priority(SystemHandler::PendSV, model_task::PRIORITY) };
-    let model =
-        ModelTask::new(ticking.controller.config().model, &model_task::SLOT)
+    let model = ModelTask::new(ticking.controller.config().model, &model_task::SLOT)
         .with_checks(checks)
         .with_steps(ticking.controller.steps());
     if !model_task::install(model) {
