@@ -27,8 +27,8 @@ use crate::reference::{TableMotion, table_motion};
 use crate::replan::ReplanSlot;
 use crate::sequencer::{GaitTables, StepTable, transfer_params};
 
-/// Words of an answer: a swing's Φ, Φ̇, Φ̈ and share; the IK's five.
-const OUTPUT_WORDS: usize = 16;
+/// Words of an answer: a swing's Φ, Φ̇, Φ̈, start and share; the IK's five.
+const OUTPUT_WORDS: usize = 18;
 
 /// One piece of work a tick needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,9 +43,9 @@ pub enum AheadJob {
 }
 
 /// Which swing tick: the step (its table's slot, and a re-planned step's
-/// length, 0 for the table's own), its time, and where its swing toe
-/// started (the stance foot's flat frame, m), which tells one swing from
-/// the next.
+/// length, 0 for the table's own) and its time. An answer is taken only
+/// for the tick's newest ask, so a later swing of the same step asks
+/// again.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SwingKey {
     /// The table's slot in the controller's tables.
@@ -54,14 +54,13 @@ pub struct SwingKey {
     pub replanned_len: u32,
     /// Time into the swing, s.
     pub t_s: f32,
-    /// The swing toe at the step's start, m.
-    pub start_m: [f32; 2],
 }
 
 /// A swing tick's table work, as the tick would do it: the table's
-/// posture, its motion ([`table_motion`], `None` past the table's end)
-/// and the share of the body's weight the swing foot may carry there, its
-/// toe having started at the key's start
+/// posture, its motion ([`table_motion`], `None` past the table's end),
+/// where the step's first posture puts the swing toe (the stance foot's
+/// flat frame, m), and the share of the body's weight the swing foot may
+/// carry at the posture, its toe having started there
 /// (`gait_core::playback::other_foot_share`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SwingAnswer {
@@ -69,6 +68,8 @@ pub struct SwingAnswer {
     pub phi: Phi<f32>,
     /// Its motion.
     pub motion: Option<TableMotion>,
+    /// The swing toe at the step's start, m.
+    pub start_m: [f32; 2],
     /// The swing foot's share.
     pub share: f32,
 }
@@ -85,7 +86,7 @@ pub struct Steps<'t> {
 }
 
 impl SwingAnswer {
-    /// Its words (Φ, Φ̇, Φ̈, the share) and flags.
+    /// Its words (Φ, Φ̇, Φ̈, the start, the share) and flags.
     fn words(&self) -> ([f32; OUTPUT_WORDS], u32) {
         let mut out = [0.0; OUTPUT_WORDS];
         let (dphi, ddphi, flags) = self.motion.map_or(([0.0; 5], [0.0; 5], FOUND), |m| {
@@ -96,6 +97,7 @@ impl SwingAnswer {
             .iter()
             .chain(&dphi)
             .chain(&ddphi)
+            .chain(&self.start_m)
             .chain([&self.share]);
         for (o, &v) in out.iter_mut().zip(words) {
             *o = v;
@@ -114,7 +116,8 @@ impl SwingAnswer {
                 dphi: five(5),
                 ddphi: five(10),
             }),
-            share: w.get(15).copied().unwrap_or(0.0),
+            start_m: [15, 16].map(|k| w.get(k).copied().unwrap_or(0.0)),
+            share: w.get(17).copied().unwrap_or(0.0),
         }
     }
 }
@@ -140,11 +143,13 @@ impl<'t> Steps<'t> {
         let step = self.step(key)?;
         let phi = step.at_time(key.t_s);
         let foot = StanceFoot::for_model(model);
-        let toe = swing_toe_at(model, &foot, &Posture::new(&phi));
+        let toe = |p: &Phi<f32>| swing_toe_at(model, &foot, &Posture::new(p));
+        let start_m = toe(&step.at_time(0.0));
         Some(SwingAnswer {
             phi,
             motion: table_motion(&step, key.t_s, phi),
-            share: other_foot_share(toe, key.start_m),
+            start_m,
+            share: other_foot_share(toe(&phi), start_m),
         })
     }
 }
@@ -200,15 +205,11 @@ impl AheadAsk {
     }
 
     /// Its words: the kind and the knee range as flags, the cap, the input.
-    fn words(&self) -> (u32, u32, [u32; 7]) {
-        let (kind, [a, b, c, d, e], [x, y]) = match &self.job {
-            AheadJob::Params(phi) => (0, phi.map(f32::to_bits), [0.0; 2]),
-            AheadJob::Solve(p) => (SOLVE, p.map(f32::to_bits), [0.0; 2]),
-            AheadJob::Swing(k) => (
-                SWING,
-                [k.slot, k.replanned_len, k.t_s.to_bits(), 0, 0],
-                k.start_m,
-            ),
+    fn words(&self) -> (u32, u32, [u32; 5]) {
+        let (kind, input) = match &self.job {
+            AheadJob::Params(phi) => (0, phi.map(f32::to_bits)),
+            AheadJob::Solve(p) => (SOLVE, p.map(f32::to_bits)),
+            AheadJob::Swing(k) => (SWING, [k.slot, k.replanned_len, k.t_s.to_bits(), 0, 0]),
         };
         let range = match self.options.knee_range {
             KneeRange::Reach => 0,
@@ -217,7 +218,7 @@ impl AheadAsk {
         (
             kind | range,
             self.options.stance_knee_max_rad.to_bits(),
-            [a, b, c, d, e, x.to_bits(), y.to_bits()],
+            input,
         )
     }
 }
@@ -239,7 +240,7 @@ pub struct AheadSlot {
     request_seq: AtomicU32,
     flags: AtomicU32,
     cap: AtomicU32,
-    input: [AtomicU32; 7],
+    input: [AtomicU32; 5],
     answer_seq: AtomicU32,
     answered: AtomicU32,
     found: AtomicU32,
@@ -260,7 +261,7 @@ impl AheadSlot {
             request_seq: AtomicU32::new(0),
             flags: AtomicU32::new(0),
             cap: AtomicU32::new(0),
-            input: [const { AtomicU32::new(0) }; 7],
+            input: [const { AtomicU32::new(0) }; 5],
             answer_seq: AtomicU32::new(0),
             answered: AtomicU32::new(0),
             found: AtomicU32::new(0),
@@ -346,20 +347,17 @@ impl AheadSlot {
             }
             let flags = self.flags.load(Ordering::Relaxed);
             let cap = f32::from_bits(self.cap.load(Ordering::Relaxed));
-            let [a, b, c, d, e, x, y] = self
-                .input
-                .each_ref()
-                .map(|w| f32::from_bits(w.load(Ordering::Relaxed)));
+            let words = self.input.each_ref().map(|w| w.load(Ordering::Relaxed));
             if self.request_seq.load(Ordering::Acquire) != before {
                 continue;
             }
-            let input = [a, b, c, d, e];
+            let input = words.map(f32::from_bits);
             let job = if flags & SWING != 0 {
+                let [slot, replanned_len, t, ..] = words;
                 AheadJob::Swing(SwingKey {
-                    slot: a.to_bits(),
-                    replanned_len: b.to_bits(),
-                    t_s: c,
-                    start_m: [x, y],
+                    slot,
+                    replanned_len,
+                    t_s: f32::from_bits(t),
                 })
             } else if flags & SOLVE != 0 {
                 AheadJob::Solve(input)
@@ -479,12 +477,11 @@ mod tests {
         }
     }
 
-    fn key(t_s: f32, start_m: [f32; 2]) -> SwingKey {
+    fn key(t_s: f32) -> SwingKey {
         SwingKey {
             slot: 0,
             replanned_len: 0,
             t_s,
-            start_m,
         }
     }
 
@@ -493,65 +490,70 @@ mod tests {
         let m = model();
         let image = table_image();
         let steps = steps(&image);
-        let phi = steps.step(&key(0.0, [0.0; 2])).unwrap().at_time(0.0);
-        let toe = swing_toe_at(&m, &StanceFoot::for_model(&m), &Posture::new(&phi));
-        let share = |start: [f32; 2]| steps.swing(&m, &key(0.0, start)).map(|a| a.share);
-        assert_eq!(share(toe), Some(1.0), "still where it started");
-        assert_eq!(share([toe[0] - 0.05, toe[1]]), Some(0.0), "5 cm on");
-        let half = share([toe[0] - 0.007, toe[1]]).unwrap();
-        assert!(
-            (half - 0.5).abs() < 1e-3,
-            "halfway between 2 and 12 mm: {half}"
-        );
+        let step = steps.step(&key(0.0)).unwrap();
+        let foot = StanceFoot::for_model(&m);
+        let toe = |t: f32| swing_toe_at(&m, &foot, &Posture::new(&step.at_time(t)));
+        let answer = |t: f32| steps.swing(&m, &key(t)).unwrap();
+        assert_eq!(answer(0.1).start_m, toe(0.0), "the step's first posture's");
+        assert_eq!(answer(0.0).share, 1.0, "still where it started");
+        // The test table moves the toe on: the share is gone once it is
+        // 12 mm from where it started.
+        let moved = |t: f32| {
+            let ([x, y], [x0, y0]) = (toe(t), toe(0.0));
+            libm::sqrtf((x - x0) * (x - x0) + (y - y0) * (y - y0))
+        };
+        let far = (1..N)
+            .map(|k| 0.01 * k as f32)
+            .find(|&t| moved(t) > 0.012)
+            .expect("the table moves the toe 12 mm");
+        assert_eq!(answer(far).share, 0.0, "{far} s: {} m", moved(far));
     }
 
     #[test]
-    fn a_swing_answer_is_the_ticks_own_table_work_for_its_step_time_and_swing_only() {
+    fn a_swing_answer_is_the_ticks_own_table_work_for_its_step_and_time_only() {
         let m = model();
         let image = table_image();
         let steps = steps(&image);
-        let step = steps.step(&key(0.0, [0.0; 2])).unwrap();
+        let step = steps.step(&key(0.0)).unwrap();
         let slot = AheadSlot::new();
-        let start = [-0.3, 0.0];
         let opts = IkOptions::paper();
         let ask = |k: SwingKey| AheadAsk {
             job: AheadJob::Swing(k),
             options: opts,
         };
         // Asked, answered between two ticks: what the tick would work out.
-        slot.request(&ask(key(0.125, start)));
-        assert_eq!(slot.swing_answer(key(0.125, start), opts), None, "not yet");
+        slot.request(&ask(key(0.125)));
+        assert_eq!(slot.swing_answer(key(0.125), opts), None, "not yet");
         assert!(slot.serve(&m, Some(&steps)).is_some());
-        let a = slot.swing_answer(key(0.125, start), opts).unwrap();
+        let a = slot.swing_answer(key(0.125), opts).unwrap();
         let phi = step.at_time(0.125);
         assert_eq!(a.phi, phi);
         assert_eq!(a.motion, table_motion(&step, 0.125, phi));
         assert!(a.motion.is_some_and(|mo| (mo.dphi[0] - 0.5).abs() < 1e-3));
-        assert_eq!(a.share, steps.swing(&m, &key(0.125, start)).unwrap().share);
-        // Only for that time, that swing, that step and those options.
-        assert_eq!(slot.swing_answer(key(0.126, start), opts), None);
-        assert_eq!(slot.swing_answer(key(0.125, [-0.2, 0.0]), opts), None);
+        assert_eq!(Some(a), steps.swing(&m, &key(0.125)));
+        // Only for that time, that step and those options.
+        assert_eq!(slot.swing_answer(key(0.126), opts), None);
         let replanned = SwingKey {
             replanned_len: 20,
-            ..key(0.125, start)
+            ..key(0.125)
         };
         assert_eq!(slot.swing_answer(replanned, opts), None);
         let human = IkOptions {
             knee_range: KneeRange::Human,
             ..opts
         };
-        assert_eq!(slot.swing_answer(key(0.125, start), human), None);
+        assert_eq!(slot.swing_answer(key(0.125), human), None);
         // Past the table's end: its last posture and no motion.
-        slot.request(&ask(key(0.5, start)));
+        slot.request(&ask(key(0.5)));
         slot.serve(&m, Some(&steps));
-        let past = slot.swing_answer(key(0.5, start), opts).unwrap();
+        let past = slot.swing_answer(key(0.5), opts).unwrap();
         assert_eq!(past.phi, step.at_time(0.19));
         assert_eq!(past.motion, None);
         // A task without the steps, or a step it does not hold, answers
         // nothing the tick takes.
-        slot.request(&ask(key(0.13, start)));
+        slot.request(&ask(key(0.13)));
         slot.serve(&m, None);
-        assert_eq!(slot.swing_answer(key(0.13, start), opts), None);
+        assert_eq!(slot.swing_answer(key(0.13), opts), None);
         slot.request(&ask(replanned));
         slot.serve(&m, Some(&steps));
         assert_eq!(slot.swing_answer(replanned, opts), None, "no re-planner");

@@ -4,8 +4,6 @@
 //! once the pilot is ready (both crutches loaded, weight on the feet, the
 //! stance shank at the table's planned lean).
 
-use gait_core::kinematics::Posture;
-
 use crate::ahead::AheadSlot;
 use crate::posture::{Side, joints_from_phi};
 
@@ -76,11 +74,8 @@ impl<'t> Sequencer<'t> {
         self.step = Some(step);
         self.phase = Phase::Swing { stance, t_s: 0.0 };
         let start = step.at_time(0.0);
-        let start_m = self
-            .planned_swing_toe(Some(&Posture::new(&start)))
-            .unwrap_or([0.0; 2]);
         let lands_first_from_s = self.lands_first_from_s();
-        self.swing.begin(start_m, lands_first_from_s);
+        self.swing.begin(lands_first_from_s);
         if let Some(slot) = ahead {
             self.ask_swing(slot, dt_s);
         }

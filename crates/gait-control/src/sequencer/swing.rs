@@ -58,10 +58,10 @@ impl SwingState {
         lands_first_from_s: f32::INFINITY,
     };
 
-    /// A swing begins with its swing toe at `start_m` (φ1 stays the last
-    /// swing's until the table is first read).
-    pub(super) fn begin(&mut self, start_m: [f32; 2], lands_first_from_s: f32) {
-        self.start_m = start_m;
+    /// A swing begins; its swing toe's start is worked out at its first
+    /// tick (φ1 stays the last swing's until the table is first read).
+    pub(super) fn begin(&mut self, lands_first_from_s: f32) {
+        self.start_m = [f32::NAN; 2];
         self.lands_first_from_s = lands_first_from_s;
         self.lifted_at_s = None;
         self.in_landing_window = false;
@@ -125,10 +125,21 @@ impl Sequencer<'_> {
         // same step, time and start, bit for bit), else done now. Past the
         // table's end without a landing, the foot goes on down looking for
         // the ground.
-        let answer = ahead.and_then(|slot| {
+        let answer = ahead.filter(|_| self.model.is_some()).and_then(|slot| {
             let options = self.table.as_ref()?.ik_options();
             slot.swing_answer(self.swing_key(t)?, options)
         });
+        // The swing toe's start, at the swing's first tick: the answer's,
+        // or worked out now.
+        if self.swing.start_m[0].is_nan() {
+            self.swing.start_m = match (answer, step) {
+                (Some(a), _) => a.start_m,
+                (None, Some(tb)) => self
+                    .planned_swing_toe(Some(&Posture::new(&tb.at_time(0.0))))
+                    .unwrap_or([0.0; 2]),
+                (None, None) => [0.0; 2],
+            };
+        }
         let phi_t = step.map(|tb| {
             let table = answer.map_or_else(|| tb.at_time(t), |a| a.phi);
             self.searching_for_ground(&table, t - duration)
@@ -225,7 +236,6 @@ impl Sequencer<'_> {
             slot: u32::try_from(self.slot).ok()?,
             replanned_len,
             t_s,
-            start_m: self.swing.start_m,
         })
     }
 
