@@ -29,9 +29,12 @@ use critical_section::Mutex;
 use crate::supervisor::MAX_RAISES;
 use crate::supervisor::{Findings, WindowedChecks, WindowedJob};
 
-/// The last job and whether the task has still to take it.
+/// The last job, whether the tick has handed one over and whether the
+/// task has still to take it. The job's room is made before the first
+/// tick ([`CheckSlot::make_room`]), so no tick pays for making it.
 struct JobCell {
     pending: bool,
+    asked: bool,
     job: Option<WindowedJob>,
 }
 
@@ -72,6 +75,7 @@ impl CheckSlot {
         Self {
             job: Mutex::new(RefCell::new(JobCell {
                 pending: false,
+                asked: false,
                 job: None,
             })),
             found: Mutex::new(RefCell::new(FoundCell {
@@ -92,6 +96,7 @@ impl CheckSlot {
             let mut job = self.job.borrow(cs).try_borrow_mut().ok();
             let asked = job
                 .as_ref()
+                .filter(|c| c.asked)
                 .and_then(|c| c.job.as_ref())
                 .map(WindowedJob::tick);
             let mut found = self.found.borrow(cs).try_borrow_mut().ok();
@@ -110,8 +115,19 @@ impl CheckSlot {
             };
             let out = f(answer, cell.job.get_or_insert_with(WindowedJob::default));
             cell.pending = true;
+            cell.asked = true;
             out
         })
+    }
+
+    /// Makes the job's room (a job's worth of zeros written once), before
+    /// the first tick: [`crate::controller::Controller::set_model_task`].
+    pub fn make_room(&self) {
+        critical_section::with(|cs| {
+            if let Ok(mut cell) = self.job.borrow(cs).try_borrow_mut() {
+                cell.job.get_or_insert_with(WindowedJob::default);
+            }
+        });
     }
 
     /// The task: checks the newest job with `checks` and leaves the
@@ -193,6 +209,16 @@ mod tests {
                 Answer::Late(t) => Err(t),
             }
         })
+    }
+
+    #[test]
+    fn room_made_before_the_first_tick_is_no_job_handed_over() {
+        let slot = CheckSlot::new();
+        slot.make_room();
+        assert_eq!(slot.serve(&mut checks()), None, "no job for the task");
+        assert_eq!(tick(&slot, 1, false), Ok(None), "nothing asked yet");
+        assert_eq!(slot.serve(&mut checks()), Some(1));
+        assert_eq!(tick(&slot, 2, false), Ok(Some((1, 0))));
     }
 
     #[test]

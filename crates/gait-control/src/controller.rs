@@ -298,6 +298,7 @@ impl<'t> Controller<'t> {
     pub fn set_model_task(&mut self, slot: &'t ModelSlot) -> Option<WindowedChecks> {
         self.model_slot = Some(slot);
         self.checks_in_task = true;
+        slot.checks().make_room();
         self.windowed.take()
     }
 
