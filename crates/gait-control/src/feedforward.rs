@@ -152,7 +152,8 @@ pub struct ModelSlot {
     torques_nm: Words4,
     other_foot_n: AtomicU32,
     per_other_foot_newton: Words4,
-    /// The work asked a tick ahead (the transfer's IK, the swing's share).
+    /// The work asked a tick ahead (the transfer's IK, the swing's table
+    /// work).
     ahead: AheadSlot,
     /// The supervisor's windowed checks of the last tick's facts.
     checks: CheckSlot,
