@@ -245,6 +245,8 @@ pub struct AheadSlot {
     answered: AtomicU32,
     found: AtomicU32,
     output: [AtomicU32; OUTPUT_WORDS],
+    /// Swing answers the tick took (for observers).
+    taken: AtomicU32,
 }
 
 impl Default for AheadSlot {
@@ -266,12 +268,19 @@ impl AheadSlot {
             answered: AtomicU32::new(0),
             found: AtomicU32::new(0),
             output: [const { AtomicU32::new(0) }; OUTPUT_WORDS],
+            taken: AtomicU32::new(0),
         }
     }
 
     /// Asks made so far (for observers).
     pub fn asked(&self) -> u32 {
         self.request_seq.load(Ordering::Relaxed)
+    }
+
+    /// Swing answers the tick has taken so far (for observers: the table
+    /// work a swing tick did not do itself).
+    pub fn taken(&self) -> u32 {
+        self.taken.load(Ordering::Relaxed)
     }
 
     /// The tick: asks for `ask`'s answer by the next tick.
@@ -334,7 +343,13 @@ impl AheadSlot {
             options,
         };
         let (out, found) = self.answered_words(&ask)?;
-        (found & FOUND != 0).then(|| SwingAnswer::from_words(&out, found))
+        if found & FOUND == 0 {
+            return None;
+        }
+        // The tick is the one writer.
+        let n = self.taken.load(Ordering::Relaxed).wrapping_add(1);
+        self.taken.store(n, Ordering::Relaxed);
+        Some(SwingAnswer::from_words(&out, found))
     }
 
     /// The task: the newest ask and its number, read whole; `None` before

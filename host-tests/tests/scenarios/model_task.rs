@@ -73,6 +73,20 @@ fn walk_with(slot: Option<&'static ModelSlot>, fault: Option<Injection>) -> Vec<
         slot.is_none() || !healthy || swing_ticks > 1_000,
         "{swing_ticks} swing ticks"
     );
+    // Every healthy swing tick but each swing's first (asked by the tick
+    // that starts it, answered before it) takes its table work from the
+    // task.
+    let swing_reports = reports
+        .iter()
+        .filter(|r| matches!(r.phase, Phase::Swing { .. }))
+        .count();
+    if let (Some(s), true) = (slot, healthy) {
+        let taken = s.ahead().taken() as usize;
+        assert!(
+            taken + 10 >= swing_reports && taken <= swing_reports,
+            "{taken} of {swing_reports} swing ticks"
+        );
+    }
     reports
 }
 
