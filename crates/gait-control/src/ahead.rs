@@ -18,14 +18,14 @@
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use gait_core::BodyModel;
-use gait_core::foot::StanceFoot;
 use gait_core::ik::{IkOptions, IkSolver, KneeRange};
-use gait_core::kinematics::{Phi, Posture};
-use gait_core::playback::{other_foot_share, swing_toe_at};
+use gait_core::kinematics::Phi;
+use gait_core::reach::place_swing_ankle_from;
 
-use crate::reference::{TableMotion, table_motion};
-use crate::replan::ReplanSlot;
-use crate::sequencer::{GaitTables, StepTable, transfer_params};
+use crate::sequencer::{SEARCH_MIN_KNEE_FLEXION_RAD, transfer_params};
+
+mod swing;
+pub use swing::{Steps, SwingAnswer, SwingKey};
 
 /// Words of an answer: a swing's Φ, Φ̇, Φ̈, start and share; the IK's five.
 const OUTPUT_WORDS: usize = 18;
@@ -40,118 +40,10 @@ pub enum AheadJob {
     Solve([f32; 5]),
     /// A swing tick's table work ([`SwingAnswer`]).
     Swing(SwingKey),
-}
-
-/// Which swing tick: the step (its table's slot, and a re-planned step's
-/// length, 0 for the table's own) and its time. An answer is taken only
-/// for the tick's newest ask, so a later swing of the same step asks
-/// again.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SwingKey {
-    /// The table's slot in the controller's tables.
-    pub slot: u32,
-    /// Samples of the re-planned step played; 0: the table as planned.
-    pub replanned_len: u32,
-    /// Time into the swing, s.
-    pub t_s: f32,
-}
-
-/// A swing tick's table work, as the tick would do it: the table's
-/// posture, its motion ([`table_motion`], `None` past the table's end),
-/// where the step's first posture puts the swing toe (the stance foot's
-/// flat frame, m), and the share of the body's weight the swing foot may
-/// carry at the posture, its toe having started there
-/// (`gait_core::playback::other_foot_share`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SwingAnswer {
-    /// Φ at the key's time, rad.
-    pub phi: Phi<f32>,
-    /// Its motion.
-    pub motion: Option<TableMotion>,
-    /// The swing toe at the step's start, m.
-    pub start_m: [f32; 2],
-    /// The swing foot's share.
-    pub share: f32,
-}
-
-/// The steps a swing plays, as the model task finds them from a
-/// [`SwingKey`]: the controller's tables and its re-planner's slot
-/// ([`crate::controller::Controller::steps`]).
-#[derive(Clone, Copy, Debug)]
-pub struct Steps<'t> {
-    /// The controller's tables.
-    pub tables: GaitTables<'t>,
-    /// Where a re-planned step's samples are.
-    pub replanned: Option<&'t ReplanSlot>,
-}
-
-impl SwingAnswer {
-    /// Its words (Φ, Φ̇, Φ̈, the start, the share) and flags.
-    fn words(&self) -> ([f32; OUTPUT_WORDS], u32) {
-        let mut out = [0.0; OUTPUT_WORDS];
-        let (dphi, ddphi, flags) = self.motion.map_or(([0.0; 5], [0.0; 5], FOUND), |m| {
-            (m.dphi, m.ddphi, FOUND | MOTION)
-        });
-        let words = self
-            .phi
-            .iter()
-            .chain(&dphi)
-            .chain(&ddphi)
-            .chain(&self.start_m)
-            .chain([&self.share]);
-        for (o, &v) in out.iter_mut().zip(words) {
-            *o = v;
-        }
-        (out, flags)
-    }
-
-    /// Read back from `words` and `flags`.
-    fn from_words(w: &[f32; OUTPUT_WORDS], flags: u32) -> Self {
-        let five = |k: usize| core::array::from_fn(|i| w.get(k + i).copied().unwrap_or(0.0));
-        let phi = five(0);
-        Self {
-            phi,
-            motion: (flags & MOTION != 0).then(|| TableMotion {
-                phi,
-                dphi: five(5),
-                ddphi: five(10),
-            }),
-            start_m: [15, 16].map(|k| w.get(k).copied().unwrap_or(0.0)),
-            share: w.get(17).copied().unwrap_or(0.0),
-        }
-    }
-}
-
-impl<'t> Steps<'t> {
-    /// The step `key` names.
-    #[must_use]
-    pub fn step(&self, key: &SwingKey) -> Option<StepTable<'t>> {
-        let table = *self.tables.slot(key.slot as usize)?;
-        match key.replanned_len {
-            0 => Some(StepTable::Planned(table)),
-            len => Some(StepTable::Replanned {
-                slot: self.replanned?,
-                len: len as usize,
-                table,
-            }),
-        }
-    }
-
-    /// The work of the swing tick `key` on `model`.
-    #[must_use]
-    pub fn swing(&self, model: &BodyModel<f32>, key: &SwingKey) -> Option<SwingAnswer> {
-        let step = self.step(key)?;
-        let phi = step.at_time(key.t_s);
-        let foot = StanceFoot::for_model(model);
-        let toe = |p: &Phi<f32>| swing_toe_at(model, &foot, &Posture::new(p));
-        let start_m = toe(&step.at_time(0.0));
-        Some(SwingAnswer {
-            phi,
-            motion: table_motion(&step, key.t_s, phi),
-            start_m,
-            share: other_foot_share(toe(&phi), start_m),
-        })
-    }
+    /// A safe hold's set-down from the posture held: the posture with the
+    /// swing ankle placed at a target from the hip (both beside the ask:
+    /// [`AheadSlot::request_place`]; `gait_core::reach::place_swing_ankle_from`).
+    Place(Phi<f32>),
 }
 
 /// A job with the IK options of the table it is for.
@@ -171,11 +63,15 @@ impl AheadAsk {
         &self,
         model: &BodyModel<f32>,
         steps: Option<&Steps<'_>>,
+        [hx, hy, tx, ty]: [f32; 4],
     ) -> Option<([f32; OUTPUT_WORDS], u32)> {
-        if let AheadJob::Swing(key) = &self.job {
-            return steps?.swing(model, key).map(|a| a.words());
-        }
-        let five = self.work(model)?;
+        let five = match &self.job {
+            AheadJob::Swing(key) => return steps?.swing(model, key).map(|a| a.words()),
+            AheadJob::Place(from) => {
+                place_swing_ankle_from(model, from, [hx, hy], [tx, ty], SEARCH_MIN_KNEE_FLEXION_RAD)
+            }
+            _ => self.work(model)?,
+        };
         let mut out = [0.0; OUTPUT_WORDS];
         for (o, x) in out.iter_mut().zip(five) {
             *o = x;
@@ -190,7 +86,7 @@ impl AheadAsk {
         let ik = || IkSolver::new(model).with_options(self.options);
         match &self.job {
             AheadJob::Params(phi) => transfer_params(model, &ik(), phi),
-            AheadJob::Swing(_) => None,
+            AheadJob::Swing(_) | AheadJob::Place(_) => None,
             AheadJob::Solve([x5, y5, phi1, phi3, r2]) => ik()
                 .solve(&gait_core::ik::IkTarget {
                     x5: *x5,
@@ -205,11 +101,13 @@ impl AheadAsk {
     }
 
     /// Its words: the kind and the knee range as flags, the cap, the input.
+    #[inline(always)]
     fn words(&self) -> (u32, u32, [u32; 5]) {
         let (kind, input) = match &self.job {
             AheadJob::Params(phi) => (0, phi.map(f32::to_bits)),
             AheadJob::Solve(p) => (SOLVE, p.map(f32::to_bits)),
             AheadJob::Swing(k) => (SWING, [k.slot, k.replanned_len, k.t_s.to_bits(), 0, 0]),
+            AheadJob::Place(from) => (PLACE, from.map(f32::to_bits)),
         };
         let range = match self.options.knee_range {
             KneeRange::Reach => 0,
@@ -223,10 +121,19 @@ impl AheadAsk {
     }
 }
 
+/// A set-down's ask (its hip and target beside it in the slot).
+fn place_ask(from: &Phi<f32>) -> AheadAsk {
+    AheadAsk {
+        job: AheadJob::Place(*from),
+        options: IkOptions::paper(),
+    }
+}
+
 /// Flag bits of an ask.
 const SOLVE: u32 = 1;
 const HUMAN_RANGE: u32 = 2;
 const SWING: u32 = 4;
+const PLACE: u32 = 8;
 /// Flag bits of an answer: there is one (the IK found one, the step was
 /// found); a swing's has the table's motion.
 const FOUND: u32 = 1;
@@ -241,6 +148,8 @@ pub struct AheadSlot {
     flags: AtomicU32,
     cap: AtomicU32,
     input: [AtomicU32; 5],
+    /// A set-down's hip and target, m ([`AheadJob::Place`]).
+    place: [AtomicU32; 4],
     answer_seq: AtomicU32,
     answered: AtomicU32,
     found: AtomicU32,
@@ -264,6 +173,7 @@ impl AheadSlot {
             flags: AtomicU32::new(0),
             cap: AtomicU32::new(0),
             input: [const { AtomicU32::new(0) }; 5],
+            place: [const { AtomicU32::new(0) }; 4],
             answer_seq: AtomicU32::new(0),
             answered: AtomicU32::new(0),
             found: AtomicU32::new(0),
@@ -283,7 +193,9 @@ impl AheadSlot {
         self.taken.load(Ordering::Relaxed)
     }
 
-    /// The tick: asks for `ask`'s answer by the next tick.
+    /// The tick: asks for `ask`'s answer by the next tick (inlined: each
+    /// caller's kind of ask then folds to its own words).
+    #[inline(always)]
     pub fn request(&self, ask: &AheadAsk) {
         let (flags, cap, input) = ask.words();
         self.flags.store(flags, Ordering::Relaxed);
@@ -295,8 +207,36 @@ impl AheadSlot {
         self.request_seq.store(n, Ordering::Release);
     }
 
+    /// The tick: asks for the set-down's posture from `from` with the
+    /// swing ankle placed at `target_m` from the hip at `hip_m` (the stance
+    /// foot's frame, m).
+    pub fn request_place(&self, from: &Phi<f32>, hip_m: [f32; 2], target_m: [f32; 2]) {
+        let [a, b] = hip_m;
+        let [c, d] = target_m;
+        for (w, v) in self.place.iter().zip([a, b, c, d]) {
+            w.store(v.to_bits(), Ordering::Relaxed);
+        }
+        self.request(&place_ask(from));
+    }
+
+    /// The tick: the set-down's posture if its last request was for
+    /// exactly these, and the task has answered it.
+    pub fn placed(&self, from: &Phi<f32>, hip_m: [f32; 2], target_m: [f32; 2]) -> Option<Phi<f32>> {
+        let (out, found) = self.answered_words(&place_ask(from))?;
+        let [a, b] = hip_m;
+        let [c, d] = target_m;
+        let same = self
+            .place
+            .iter()
+            .zip([a, b, c, d])
+            .all(|(w, v)| w.load(Ordering::Relaxed) == v.to_bits());
+        let [a, b, c, d, e, ..] = out;
+        (same && found & FOUND != 0).then_some([a, b, c, d, e])
+    }
+
     /// The answer's words and flags if the last request was `ask`, bit for
     /// bit, and the task has answered it whole (flags 0: no answer).
+    #[inline(always)]
     fn answered_words(&self, ask: &AheadAsk) -> Option<([f32; OUTPUT_WORDS], u32)> {
         let seq = self.answer_seq.load(Ordering::Acquire);
         let last = self.request_seq.load(Ordering::Relaxed);
@@ -354,7 +294,7 @@ impl AheadSlot {
 
     /// The task: the newest ask and its number, read whole; `None` before
     /// the first, or if ticks kept replacing it while it was read.
-    fn newest(&self) -> Option<(u32, AheadAsk)> {
+    fn newest(&self) -> Option<(u32, AheadAsk, [f32; 4])> {
         for _ in 0..4 {
             let before = self.request_seq.load(Ordering::Acquire);
             if before == 0 {
@@ -363,11 +303,17 @@ impl AheadSlot {
             let flags = self.flags.load(Ordering::Relaxed);
             let cap = f32::from_bits(self.cap.load(Ordering::Relaxed));
             let words = self.input.each_ref().map(|w| w.load(Ordering::Relaxed));
+            let place = self
+                .place
+                .each_ref()
+                .map(|w| f32::from_bits(w.load(Ordering::Relaxed)));
             if self.request_seq.load(Ordering::Acquire) != before {
                 continue;
             }
             let input = words.map(f32::from_bits);
-            let job = if flags & SWING != 0 {
+            let job = if flags & PLACE != 0 {
+                AheadJob::Place(input)
+            } else if flags & SWING != 0 {
                 let [slot, replanned_len, t, ..] = words;
                 AheadJob::Swing(SwingKey {
                     slot,
@@ -393,6 +339,7 @@ impl AheadSlot {
                         knee_range,
                     },
                 },
+                place,
             ));
         }
         None
@@ -401,12 +348,14 @@ impl AheadSlot {
     /// The task: answers the newest ask if it has no answer yet; its
     /// number when it did.
     pub(crate) fn serve(&self, model: &BodyModel<f32>, steps: Option<&Steps<'_>>) -> Option<u32> {
-        let (n, ask) = self.newest()?;
+        let (n, ask, place) = self.newest()?;
         let seq = self.answer_seq.load(Ordering::Relaxed);
         if seq != 0 && seq & 1 == 0 && self.answered.load(Ordering::Relaxed) == n {
             return None;
         }
-        let (out, found) = ask.answer(model, steps).unwrap_or(([0.0; OUTPUT_WORDS], 0));
+        let (out, found) = ask
+            .answer(model, steps, place)
+            .unwrap_or(([0.0; OUTPUT_WORDS], 0));
         let writing = seq.wrapping_add(1) | 1;
         self.answer_seq.store(writing, Ordering::Release);
         for (w, v) in self.output.iter().zip(out) {
@@ -470,108 +419,33 @@ mod tests {
         assert_eq!(slot.answer_to(&solve), Some(solve.work(&m)));
     }
 
-    /// Samples of the test table.
-    const N: usize = 20;
-
-    /// A table of [`N`] samples 10 ms apart, moving from a standing walk
-    /// posture at 0.5 rad/s on every link.
-    fn table_image() -> [u8; gait_core::tables::image_len(N)] {
-        use gait_core::tables::{GaitKind, encode};
-        let phis: [[f32; 5]; N] =
-            core::array::from_fn(|k| [0.1, 0.35, 0.05, 2.9, 3.3].map(|p| p + 0.005 * k as f32));
-        let mut buf = [0u8; gait_core::tables::image_len(N)];
-        encode(GaitKind::Walk, 10_000, IkOptions::paper(), &phis, &mut buf).unwrap();
-        buf
-    }
-
-    fn steps(image: &[u8]) -> Steps<'_> {
-        let table = gait_core::tables::GaitTable::parse(image).unwrap();
-        Steps {
-            tables: GaitTables::by_kind(Some(table), None, None),
-            replanned: None,
-        }
-    }
-
-    fn key(t_s: f32) -> SwingKey {
-        SwingKey {
-            slot: 0,
-            replanned_len: 0,
-            t_s,
-        }
-    }
-
     #[test]
-    fn a_swing_foot_carries_the_body_only_near_where_its_toe_started() {
+    fn a_set_down_is_answered_for_its_posture_hip_and_target_only() {
         let m = model();
-        let image = table_image();
-        let steps = steps(&image);
-        let step = steps.step(&key(0.0)).unwrap();
-        let foot = StanceFoot::for_model(&m);
-        let toe = |t: f32| swing_toe_at(&m, &foot, &Posture::new(&step.at_time(t)));
-        let answer = |t: f32| steps.swing(&m, &key(t)).unwrap();
-        assert_eq!(answer(0.1).start_m, toe(0.0), "the step's first posture's");
-        assert_eq!(answer(0.0).share, 1.0, "still where it started");
-        // The test table moves the toe on: the share is gone once it is
-        // 12 mm from where it started.
-        let moved = |t: f32| {
-            let ([x, y], [x0, y0]) = (toe(t), toe(0.0));
-            libm::sqrtf((x - x0) * (x - x0) + (y - y0) * (y - y0))
-        };
-        let far = (1..N)
-            .map(|k| 0.01 * k as f32)
-            .find(|&t| moved(t) > 0.012)
-            .expect("the table moves the toe 12 mm");
-        assert_eq!(answer(far).share, 0.0, "{far} s: {} m", moved(far));
-    }
-
-    #[test]
-    fn a_swing_answer_is_the_ticks_own_table_work_for_its_step_and_time_only() {
-        let m = model();
-        let image = table_image();
-        let steps = steps(&image);
-        let step = steps.step(&key(0.0)).unwrap();
         let slot = AheadSlot::new();
-        let opts = IkOptions::paper();
-        let ask = |k: SwingKey| AheadAsk {
-            job: AheadJob::Swing(k),
-            options: opts,
-        };
-        // Asked, answered between two ticks: what the tick would work out.
-        slot.request(&ask(key(0.125)));
-        assert_eq!(slot.swing_answer(key(0.125), opts), None, "not yet");
-        assert!(slot.serve(&m, Some(&steps)).is_some());
-        let a = slot.swing_answer(key(0.125), opts).unwrap();
-        let phi = step.at_time(0.125);
-        assert_eq!(a.phi, phi);
-        assert_eq!(a.motion, table_motion(&step, 0.125, phi));
-        assert!(a.motion.is_some_and(|mo| (mo.dphi[0] - 0.5).abs() < 1e-3));
-        assert_eq!(Some(a), steps.swing(&m, &key(0.125)));
-        // Only for that time, that step and those options.
-        assert_eq!(slot.swing_answer(key(0.126), opts), None);
-        let replanned = SwingKey {
-            replanned_len: 20,
-            ..key(0.125)
-        };
-        assert_eq!(slot.swing_answer(replanned, opts), None);
-        let human = IkOptions {
-            knee_range: KneeRange::Human,
-            ..opts
-        };
-        assert_eq!(slot.swing_answer(key(0.125), human), None);
-        // Past the table's end: its last posture and no motion.
-        slot.request(&ask(key(0.5)));
-        slot.serve(&m, Some(&steps));
-        let past = slot.swing_answer(key(0.5), opts).unwrap();
-        assert_eq!(past.phi, step.at_time(0.19));
-        assert_eq!(past.motion, None);
-        // A task without the steps, or a step it does not hold, answers
-        // nothing the tick takes.
-        slot.request(&ask(key(0.13)));
+        let from = [0.1, 0.35, 0.05, 2.9, 3.3];
+        let p = forward_kinematics(&m, &from);
+        let (hip, ankle) = (p[1], p[4]);
+        let target = [ankle[0], ankle[1] - 0.02];
+        slot.request_place(&from, hip, target);
+        assert_eq!(slot.placed(&from, hip, target), None, "not yet");
         slot.serve(&m, None);
-        assert_eq!(slot.swing_answer(key(0.13), opts), None);
-        slot.request(&ask(replanned));
-        slot.serve(&m, Some(&steps));
-        assert_eq!(slot.swing_answer(replanned, opts), None, "no re-planner");
+        let placed = slot.placed(&from, hip, target).unwrap();
+        let own = place_swing_ankle_from(&m, &from, hip, target, SEARCH_MIN_KNEE_FLEXION_RAD);
+        assert_eq!(placed, own, "the tick's own IK, bit for bit");
+        assert_ne!(placed, from, "the swing leg moved");
+        assert_eq!(
+            slot.placed(&from, hip, [target[0], target[1] - 0.001]),
+            None
+        );
+        assert_eq!(slot.placed(&from, [hip[0] + 0.001, hip[1]], target), None);
+        // Another ask with the same posture is not a set-down.
+        slot.request(&AheadAsk {
+            job: AheadJob::Params(from),
+            options: IkOptions::paper(),
+        });
+        slot.serve(&m, None);
+        assert_eq!(slot.placed(&from, hip, target), None);
     }
 
     #[test]

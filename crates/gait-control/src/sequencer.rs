@@ -45,6 +45,7 @@ pub use input::{
     SeqStatus,
 };
 pub use step::StepTable;
+pub(crate) use swing::SEARCH_MIN_KNEE_FLEXION_RAD;
 use swing::SwingState;
 pub use tables::{GaitTables, Selection, gait_of_kind};
 use transfer::TransferPlan;
@@ -336,7 +337,7 @@ impl<'t> Sequencer<'t> {
             Phase::Transfer { stance, t_s } => self.transfer_tick(stance, t_s, dt_s, ahead, events),
             Phase::SafeHold { t_s } => {
                 other_share = None;
-                self.hold_tick(sensed, t_s, dt_s)
+                self.hold_tick(sensed, t_s, dt_s, ahead)
             }
         };
         (next_reference, swing, other_share)

@@ -7,6 +7,8 @@
 use crate::faults::InSwing;
 use crate::posture::{Side, joints_from_phi};
 
+use crate::ahead::AheadSlot;
+
 use super::swing::SEARCH_MIN_KNEE_FLEXION_RAD;
 use super::{JOINTS, Measured, Order, Orders, Phase, Sensed, Sequencer, pick_finite, smoothstep};
 
@@ -83,8 +85,15 @@ impl Sequencer<'_> {
         self.stop_requested = true;
     }
 
-    /// A tick of the hold `t_s` into it: the ramp, with the set-down.
-    pub(super) fn hold_tick(&mut self, sensed: &Sensed, t_s: f32, dt_s: f32) -> [f32; JOINTS] {
+    /// A tick of the hold `t_s` into it: the ramp, with the set-down (its
+    /// next tick's IK asked of the model task through `ahead`).
+    pub(super) fn hold_tick(
+        &mut self,
+        sensed: &Sensed,
+        t_s: f32,
+        dt_s: f32,
+        ahead: Option<&AheadSlot>,
+    ) -> [f32; JOINTS] {
         let cfg = self.cfg;
         let t = t_s + dt_s;
         let frac = if cfg.hold_ramp_s > 0.0 {
@@ -96,8 +105,30 @@ impl Sequencer<'_> {
             t_s: t.min(cfg.hold_ramp_s.max(cfg.set_down_s).max(0.0) + 1.0),
         };
         let mut held = self.blended(frac.min(1.0));
-        self.set_down(sensed, t, dt_s, &mut held);
+        self.set_down(sensed, t, dt_s, ahead, &mut held);
+        // The next tick's set-down, at its time as it will work it out.
+        if let (Some(slot), Phase::SafeHold { t_s: now }, Some(sd)) =
+            (ahead, self.phase, self.set_down)
+        {
+            if let (false, Some((hip_m, start_m))) = (sd.done, sd.hip_and_ankle_m) {
+                let target = self.set_down_target(start_m, now + dt_s);
+                slot.request_place(&sd.from, hip_m, target);
+            }
+        }
         held
+    }
+
+    /// Where the set-down puts the swing ankle `t_s` into the hold: the
+    /// eased depth below where it was, m.
+    fn set_down_target(&self, start_m: [f32; 2], t_s: f32) -> [f32; 2] {
+        let cfg = &self.cfg;
+        let frac = if cfg.set_down_s > 0.0 {
+            t_s / cfg.set_down_s
+        } else {
+            1.0
+        };
+        let depth = cfg.set_down_depth_m * smoothstep(frac);
+        [start_m[0], start_m[1] - depth]
     }
 
     /// The supervisor's fatal reaction: ramp to `measured` and hold; in a
@@ -166,7 +197,14 @@ impl Sequencer<'_> {
     /// was in the posture held, while the swing foot's sensor reads less
     /// than a contact; from the first contact (or a sensor that cannot
     /// tell) on, where they were then. `held` itself without a set-down.
-    fn set_down(&mut self, sensed: &Sensed, t_s: f32, dt_s: f32, held: &mut [f32; JOINTS]) {
+    fn set_down(
+        &mut self,
+        sensed: &Sensed,
+        t_s: f32,
+        dt_s: f32,
+        ahead: Option<&AheadSlot>,
+        held: &mut [f32; JOINTS],
+    ) {
         let cfg = self.cfg;
         let (Some(mut sd), Some(model)) = (self.set_down, self.model.as_ref()) else {
             return;
@@ -187,20 +225,20 @@ impl Sequencer<'_> {
                 sd.done = true;
             }
         } else if let (false, Some((hip_m, start_m))) = (sd.done, sd.hip_and_ankle_m) {
-            let frac = if cfg.set_down_s > 0.0 {
-                t_s / cfg.set_down_s
-            } else {
-                1.0
-            };
-            let depth = cfg.set_down_depth_m * smoothstep(frac);
-            let target = [start_m[0], start_m[1] - depth];
-            let placed = gait_core::reach::place_swing_ankle_from(
-                model,
-                &sd.from,
-                hip_m,
-                target,
-                SEARCH_MIN_KNEE_FLEXION_RAD,
-            );
+            // Asked of the model task last tick (the same IK on the same
+            // posture and target, bit for bit), else worked out now.
+            let target = self.set_down_target(start_m, t_s);
+            let placed = ahead
+                .and_then(|slot| slot.placed(&sd.from, hip_m, target))
+                .unwrap_or_else(|| {
+                    gait_core::reach::place_swing_ankle_from(
+                        model,
+                        &sd.from,
+                        hip_m,
+                        target,
+                        SEARCH_MIN_KNEE_FLEXION_RAD,
+                    )
+                });
             let joints = joints_from_phi(&placed, sd.stance);
             let w = sd.stance.other().hip();
             if let (Some(&hip), Some(&knee)) = (joints.get(w), joints.get(w + 1)) {

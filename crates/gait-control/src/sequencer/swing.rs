@@ -17,7 +17,7 @@ use super::{
 
 /// The ground search stops where the swing knee would straighten past this
 /// flexion, rad (6°): a leg locked straight takes the landing on its stop.
-pub(super) const SEARCH_MIN_KNEE_FLEXION_RAD: f32 = 0.1;
+pub(crate) const SEARCH_MIN_KNEE_FLEXION_RAD: f32 = 0.1;
 
 /// The table's posture at the swing's time while it plays: (stance, t, Φ,
 /// and its motion when the model task worked it out ahead: `Some(None)`
