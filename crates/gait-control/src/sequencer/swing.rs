@@ -120,9 +120,10 @@ impl Sequencer<'_> {
             .get(stance.other().foot())
             .copied()
             .unwrap_or(f32::NAN);
-        // The table's work (its posture, its motion, the swing foot's
-        // share there): asked ahead last tick (the same arithmetic on the
-        // same step, time and start, bit for bit), else done now. Past the
+        // The table's work (its posture, its motion, the swing toe's start
+        // and the swing foot's share): asked ahead last tick (the same
+        // arithmetic on the same step and time, bit for bit), else done
+        // now. Past the
         // table's end without a landing, the foot goes on down looking for
         // the ground.
         let answer = ahead.filter(|_| self.model.is_some()).and_then(|slot| {
