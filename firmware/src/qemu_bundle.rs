@@ -186,7 +186,8 @@ fn press_go_standing(
     for i in 0..HOLD_TICKS {
         let go = (GO_FROM..GO_FROM + GO_TICKS).contains(&i);
         qemu_rig::PANEL.set_level(qemu_rig::Line::Go, go == pressed_high);
-        let r = controller.tick(&mut hw, false);
+        let frames = qemu_rig::acquire(&mut hw, controller);
+        let r = controller.tick_acquired(&mut hw, &frames, false);
         each(&r, hw.motors.iter().any(|m| m.is_enabled()));
     }
     Ok(())

@@ -18,6 +18,8 @@ use core::sync::atomic::{AtomicBool, AtomicU16, Ordering};
 use embedded_hal::digital::{self, InputPin, OutputPin};
 use embedded_hal::pwm::{self, SetDutyCycle};
 use embedded_hal::spi::{self, Operation, SpiDevice};
+use gait_control::acquisition::{self, Frames};
+use gait_control::controller::Controller;
 use gait_control::drivers::as5048a::{Calibration, Direction};
 use gait_control::drivers::buttons::ActiveLevel;
 
@@ -481,6 +483,13 @@ pub fn peripherals() -> RigIo {
         fault_led: FakeOutput { high: false },
         buzzer: FakeOutput { high: false },
     }
+}
+
+/// The acquisition before `controller`'s next tick, through the drivers
+/// and the rig's parts: what the motor board's DMA reads instead, before
+/// its tick, so the tick's count holds none of the buses' work.
+pub fn acquire(hw: &mut RigHardware, controller: &Controller<'_>) -> Frames {
+    acquisition::acquire(hw, controller.next_drive_joint())
 }
 
 /// A pilot standing still ([`stand`]) and the rig's peripherals.

@@ -9,6 +9,7 @@
 
 use exogait_device::DeviceConfig;
 use exogait_device::tick_record::{self, FileError};
+use gait_control::acquisition::Frames;
 use gait_control::controller::{Controller, TickReport};
 use gait_control::feedforward::{ModelSlot, ModelTask};
 use gait_control::operator::Gait;
@@ -59,6 +60,16 @@ pub struct PhaseCost {
 }
 
 impl PhaseCost {
+    /// Counts one more: `instr` at tick `k` of the `segments`-th run.
+    pub fn add(&mut self, segments: u32, k: u32, instr: u32) {
+        self.ticks += 1;
+        self.total += u64::from(instr);
+        if instr > self.worst {
+            self.worst = instr;
+            self.worst_at = (segments.saturating_sub(1), k);
+        }
+    }
+
     /// Average instructions per tick.
     #[must_use]
     pub fn average(&self) -> u64 {
@@ -78,6 +89,9 @@ pub struct Replay {
     /// The model task's answers between the ticks
     /// ([`gait_control::feedforward`]), all phases together.
     pub model: PhaseCost,
+    /// The acquisitions before the ticks, through the rig's parts
+    /// ([`qemu_rig::acquire`]): the work the board's DMA does instead.
+    pub acquisition: PhaseCost,
     /// The largest |target − host| motor command, N·m.
     pub max_command_diff_nm: f32,
     /// Ticks whose commands differ from the host's at all.
@@ -129,7 +143,7 @@ mod marks {
 
 /// Replays [`TICK_RECORDS`] on `device`; `time` runs one tick and says how
 /// many instructions it took, `time_model` the same of the model task's
-/// answer after it.
+/// answer after it and of the acquisition before it.
 pub fn replay(
     device: &DeviceConfig,
     mut time: impl FnMut(&mut dyn FnMut() -> TickReport) -> (u32, TickReport),
@@ -162,7 +176,8 @@ pub fn replay(
 /// Replays the recording `file` on `device`, each run through the
 /// controller `controller` builds for its gait, with the model task the
 /// board runs answering between two ticks, as its lower-priority
-/// interrupt does.
+/// interrupt does, and each tick's sensors acquired before it, as the
+/// board's DMA does.
 pub fn replay_with<'t>(
     file: &[u8],
     device: &DeviceConfig,
@@ -183,17 +198,18 @@ pub fn replay_with<'t>(
         out.segments += 1;
         for (k, record) in (0u32..).zip(segment.ticks()) {
             qemu_rig::replay(device, &record);
-            let (instr, report) = time(&mut || controller.tick(&mut hw, record.deadline_missed));
+            let mut frames = Frames::MISSING;
+            let acquisition = time_model(&mut || {
+                frames = qemu_rig::acquire(&mut hw, &controller);
+            });
+            out.acquisition.add(out.segments, k, acquisition);
+            let (instr, report) =
+                time(&mut || controller.tick_acquired(&mut hw, &frames, record.deadline_missed));
             out.account(k, instr, &report, &record.host_command_nm);
             let model = time_model(&mut || {
                 task.serve();
             });
-            out.model.ticks += 1;
-            out.model.total += u64::from(model);
-            if model > out.model.worst {
-                out.model.worst = model;
-                out.model.worst_at = (out.segments.saturating_sub(1), k);
-            }
+            out.model.add(out.segments, k, model);
         }
     }
     Ok(out)
@@ -206,12 +222,7 @@ impl Replay {
         let run = self.segments.saturating_sub(1);
         self.ticks += 1;
         if let Some(p) = self.phases.get_mut(phase_index(&report.phase)) {
-            p.ticks += 1;
-            p.total += u64::from(instr);
-            if instr > p.worst {
-                p.worst = instr;
-                p.worst_at = (run, k);
-            }
+            p.add(self.segments, k, instr);
         }
         let diff = report
             .command_nm

@@ -1,9 +1,11 @@
 //! The 1 kHz control tick, in five stages, each a method of its own:
 //!
-//! 1. **sense** (`controller/sense.rs`) — read every encoder, force
-//!    sensor, button and the e-stop; decode, calibrate, check (a failed
-//!    read becomes a status, never a panic, and the last good angle is kept
-//!    for control);
+//! 1. **sense** (`controller/sense.rs`) — decode, calibrate and check
+//!    what the acquisition read of every encoder and force sensor
+//!    ([`crate::acquisition`]: through the drivers at the tick's start, or
+//!    by DMA before it), read the buttons and the e-stop (a failed read
+//!    becomes a status, never a panic, and the last good angle is kept for
+//!    control);
 //! 2. **plan** — the operator scheme turns button events into requests; the
 //!    sequencer's one update obeys them and the last verdict's orders and
 //!    hands over the whole [`Reference`] (one table interpolation);
@@ -32,6 +34,7 @@ use embedded_hal::pwm::SetDutyCycle;
 use embedded_hal::spi::SpiDevice;
 use gait_core::BodyModel;
 
+use crate::acquisition::{self, Frames};
 use crate::ahead::Steps;
 use crate::crutch_load::CrutchLoad;
 use crate::drivers::as5048a::As5048a;
@@ -365,8 +368,10 @@ impl<'t> Controller<'t> {
         self.supervisor.report_boot_fault(code);
     }
 
-    /// One control tick. `deadline_missed`: the previous tick overran its
-    /// budget (measured by the board's timer).
+    /// One control tick that reads its own sensors first
+    /// ([`acquisition::acquire`], through the drivers). `deadline_missed`:
+    /// the previous tick overran its budget (measured by the board's
+    /// timer).
     // Never inlined: the firmware check of panic paths (`cargo xtask panics`)
     // starts from this symbol, and one call a tick costs nothing measurable.
     #[inline(never)]
@@ -384,8 +389,52 @@ impl<'t> Controller<'t> {
         IN: InputPin,
         OUT: OutputPin,
     {
+        let acquired = acquisition::acquire(hw, self.next_drive_joint());
+        self.run_tick(hw, &acquired, deadline_missed)
+    }
+
+    /// One control tick on frames acquired before it (on the motor board,
+    /// by the buses' DMA): the tick reads no bus for its sensors. Its
+    /// acquisition must read the drive monitor of [`Self::next_drive_joint`]
+    /// (another's reading is still checked as that joint's).
+    #[inline(never)]
+    pub fn tick_acquired<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
+        &mut self,
+        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+        acquired: &Frames,
+        deadline_missed: bool,
+    ) -> TickReport
+    where
+        PWM: SetDutyCycle<Error = PwmE>,
+        DIR: OutputPin<Error = PinE>,
+        EN: OutputPin<Error = PinE>,
+        IN: InputPin,
+        OUT: OutputPin,
+    {
+        self.run_tick(hw, acquired, deadline_missed)
+    }
+
+    /// The drive whose current monitor the next tick's acquisition reads.
+    pub const fn next_drive_joint(&self) -> u8 {
+        acquisition::drive_joint_of(self.tick.wrapping_add(1))
+    }
+
+    #[inline(always)]
+    fn run_tick<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
+        &mut self,
+        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+        acquired: &Frames,
+        deadline_missed: bool,
+    ) -> TickReport
+    where
+        PWM: SetDutyCycle<Error = PwmE>,
+        DIR: OutputPin<Error = PinE>,
+        EN: OutputPin<Error = PinE>,
+        IN: InputPin,
+        OUT: OutputPin,
+    {
         self.tick = self.tick.wrapping_add(1);
-        let senses = self.sense(hw);
+        let senses = self.sense(hw, acquired);
         let plan = self.plan(hw, &senses);
         let actuation = self.act(&senses, &plan.reference);
         let verdict = self.guard(&senses, &plan.reference, &actuation, deadline_missed);

@@ -7,6 +7,7 @@
 //!   machine (described for clinicians in `docs/operation.md`).
 #![no_std]
 
+pub mod acquisition;
 pub mod ahead;
 pub mod check_slot;
 pub mod controller;

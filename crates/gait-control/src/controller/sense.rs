@@ -1,11 +1,13 @@
-//! *sense*: read every encoder, force sensor, button and the e-stop, and
-//! one drive's current monitor;
-//! decode, calibrate, check. A failed read becomes a status, never a
-//! panic, and the last good angle is kept for control.
+//! *sense*: decode, calibrate and check what the acquisition read of every
+//! encoder, force sensor and one drive's current monitor
+//! ([`crate::acquisition`]); read the buttons and the e-stop. A failed
+//! read becomes a status, never a panic, and the last good angle is kept
+//! for control.
 
 use embedded_hal::digital::InputPin;
-use embedded_hal::spi::SpiDevice;
 
+use crate::acquisition::Frames;
+use crate::drivers::as5048a;
 use crate::drivers::buttons::Sample;
 use crate::layout::{encoder, force};
 use crate::posture::JOINTS;
@@ -60,17 +62,16 @@ impl Controller<'_> {
     pub(super) fn sense<ENC, ADC, PWM, DIR, EN, IN, OUT>(
         &mut self,
         hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+        acquired: &Frames,
     ) -> Senses
     where
-        ENC: SpiDevice<u8>,
-        ADC: SpiDevice<u8>,
         IN: InputPin,
     {
         let lost = self.supervisor.angle_lost_joints();
         let alpha = self.rate_alpha;
-        let (encoders, frames) = self.read_encoders(hw, &lost, alpha);
-        let forces = self.read_forces(hw);
-        let drive_current = self.read_drive_current(hw);
+        let (encoders, frames) = self.read_encoders(hw, acquired, &lost, alpha);
+        let forces = self.read_forces(acquired);
+        let drive_current = self.read_drive_current(acquired);
         let forces_n = forces.map(|f| f.newtons);
         let (chain_closed, chain_hold) = self.close_chain(&forces_n, &lost, alpha);
         let mode = hw.mode.tick();
@@ -117,34 +118,35 @@ impl Controller<'_> {
     /// (`rate_alpha`).
     fn read_encoders<ENC, ADC, PWM, DIR, EN, IN, OUT>(
         &mut self,
-        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+        hw: &Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+        acquired: &Frames,
         lost: &[bool; JOINTS],
         alpha: f32,
-    ) -> ([EncoderSense; ENCODERS], [EncoderFrame; ENCODERS])
-    where
-        ENC: SpiDevice<u8>,
-    {
+    ) -> ([EncoderSense; ENCODERS], [EncoderFrame; ENCODERS]) {
         let mut out = [BAD_ENCODER; ENCODERS];
         let mut frames = [EncoderFrame::NONE; ENCODERS];
         let dt = self.cfg.dt_s;
         let offsets = self.supervisor.encoder_offsets();
-        for (i, ((enc, o), frame)) in hw
+        for (i, (((enc, reply), o), frame)) in hw
             .encoders
-            .iter_mut()
+            .iter()
+            .zip(acquired.encoders)
             .zip(out.iter_mut())
             .zip(frames.iter_mut())
             .enumerate()
         {
-            let result = enc.read_angle();
-            let status = EncoderStatus::of(&result);
+            let result = match reply {
+                Some(reply) => as5048a::decode_angle(reply, enc.calibration()),
+                None => Err(EncoderStatus::BusError),
+            };
             *o = match &result {
                 Ok(r) => EncoderSense {
-                    status,
+                    status: EncoderStatus::Ok,
                     raw_counts: r.raw_counts,
                     angle_rad: r.angle_rad,
                 },
-                Err(_) => EncoderSense {
-                    status,
+                Err(status) => EncoderSense {
+                    status: *status,
                     raw_counts: self.last_raw.get(i).copied().unwrap_or(0),
                     angle_rad: f32::NAN,
                 },
@@ -180,55 +182,50 @@ impl Controller<'_> {
         (out, frames)
     }
 
-    fn read_forces<ENC, ADC, PWM, DIR, EN, IN, OUT>(
-        &mut self,
-        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
-    ) -> [ForceSense; FORCES]
-    where
-        ADC: SpiDevice<u8>,
-    {
-        let ch = hw.force_channels;
-        let channels = [ch.left_foot, ch.right_foot, ch.left_crutch, ch.right_crutch];
+    /// Each force sensor's acquired counts, calibrated and checked.
+    fn read_forces(&self, acquired: &Frames) -> [ForceSense; FORCES] {
         let mut out = [ForceSense {
             status: ForceStatus::BusError,
             newtons: f32::NAN,
         }; FORCES];
-        for ((o, channel), cal) in out
+        for ((o, counts), cal) in out
             .iter_mut()
-            .zip(channels)
+            .zip(acquired.forces)
             .zip(&self.cfg.force_calibration)
         {
-            let result = hw.adc.read_force(channel, cal);
-            *o = ForceSense {
-                status: ForceStatus::of(&result),
-                newtons: result.unwrap_or(f32::NAN),
-            };
+            if let Some(counts) = counts {
+                *o = match cal.convert(counts) {
+                    Ok(newtons) => ForceSense {
+                        status: ForceStatus::Ok,
+                        newtons,
+                    },
+                    Err(f) => ForceSense {
+                        status: f.status(),
+                        newtons: f32::NAN,
+                    },
+                };
+            }
         }
         out
     }
 
-    /// One drive's current monitor a tick, in turn (each every
-    /// [`JOINTS`] ticks: one ADC conversion, not four, in the tick's
-    /// budget).
-    fn read_drive_current<ENC, ADC, PWM, DIR, EN, IN, OUT>(
-        &mut self,
-        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
-    ) -> DriveCurrentSense
-    where
-        ADC: SpiDevice<u8>,
-    {
-        let joint = (self.tick % JOINTS as u32) as usize;
-        let (Some(&channel), Some(cal)) = (
-            hw.drive_current_channels.get(joint),
-            self.cfg.drive_current_calibration.get(joint),
-        ) else {
+    /// The drive current monitor the acquisition read: one a tick, in turn
+    /// (each every [`JOINTS`] ticks: one ADC conversion, not four, in the
+    /// tick's budget).
+    fn read_drive_current(&self, acquired: &Frames) -> DriveCurrentSense {
+        let joint = acquired.drive_joint;
+        let Some(cal) = self.cfg.drive_current_calibration.get(usize::from(joint)) else {
             return DriveCurrentSense::default();
         };
-        let result = hw.adc.read_drive_torque(channel, cal);
+        let (status, torque_nm) = match acquired.drive_current.map(|c| cal.convert(c)) {
+            Some(Ok(nm)) => (ForceStatus::Ok, nm),
+            Some(Err(f)) => (f.status(), f32::NAN),
+            None => (ForceStatus::BusError, f32::NAN),
+        };
         DriveCurrentSense {
-            joint: joint as u8,
-            status: ForceStatus::of(&result),
-            torque_nm: result.unwrap_or(f32::NAN),
+            joint,
+            status,
+            torque_nm,
         }
     }
 

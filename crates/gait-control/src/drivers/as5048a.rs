@@ -231,6 +231,20 @@ pub struct Reading {
     pub angle_rad: f32,
 }
 
+/// An angle read's reply frame as a [`Reading`] under `calibration`, or
+/// why it is not one (the same outcome as [`As5048a::read_angle`] had for
+/// that reply).
+pub fn decode_angle(frame: u16, calibration: Calibration) -> Result<Reading, ReadStatus> {
+    match decode_response(frame) {
+        Ok(raw_counts) => Ok(Reading {
+            raw_counts,
+            angle_rad: calibration.counts_to_rad(raw_counts),
+        }),
+        Err(FrameError::Parity) => Err(ReadStatus::Parity),
+        Err(FrameError::ErrorFlag) => Err(ReadStatus::ErrorFlag),
+    }
+}
+
 super::read_status! {
     /// The outcome of one read, without the bus's own error type: the kind
     /// of a driver error, which the supervisor counts as it is
@@ -277,10 +291,7 @@ pub struct As5048a<SPI> {
     calibration: Calibration,
 }
 
-impl<SPI, E> As5048a<SPI>
-where
-    SPI: SpiDevice<u8, Error = E>,
-{
+impl<SPI> As5048a<SPI> {
     /// Wraps a configured SPI device (mode 1, ≤ 10 MHz).
     pub const fn new(spi: SPI, calibration: Calibration) -> Self {
         Self { spi, calibration }
@@ -295,7 +306,12 @@ where
     pub const fn calibration(&self) -> Calibration {
         self.calibration
     }
+}
 
+impl<SPI, E> As5048a<SPI>
+where
+    SPI: SpiDevice<u8, Error = E>,
+{
     /// One 16-bit frame in its own chip-select window; returns the reply.
     fn frame(&mut self, command: u16) -> Result<u16, Error<E>> {
         let mut buf = command.to_be_bytes();
@@ -324,6 +340,20 @@ where
         let _previous = self.frame(encode_command(reg::CLEAR_ERROR_FLAG, true))?;
         let reply = self.frame(encode_command(reg::NOP, true))?;
         Ok(decode_response(reply).ok().map(ErrorRegister::from_bits))
+    }
+
+    /// Reads the angle register and returns its reply frame undecoded, for
+    /// [`decode_angle`] (the tick decodes what an acquisition ahead of it
+    /// read, `crate::acquisition`). On a reply with good parity and EF the
+    /// flag is cleared at once, as [`Self::read_register`] does; a failed
+    /// clear is a bus error.
+    pub fn read_angle_frame(&mut self) -> Result<u16, Error<E>> {
+        let _previous = self.frame(encode_command(reg::ANGLE, true))?;
+        let reply = self.frame(encode_command(reg::NOP, true))?;
+        if let Err(FrameError::ErrorFlag) = decode_response(reply) {
+            self.clear_error()?;
+        }
+        Ok(reply)
     }
 
     /// Reads the angle: raw counts and the calibrated angle.

@@ -264,9 +264,19 @@ impl<E> Error<E> {
     pub fn kind(&self) -> ReadStatus {
         match self {
             Self::Bus(_) => ReadStatus::BusError,
-            Self::Sensor(ForceFault::OpenCircuit { .. }) => ReadStatus::Open,
-            Self::Sensor(ForceFault::ShortCircuit { .. }) => ReadStatus::Shorted,
-            Self::Sensor(ForceFault::OutOfRange { .. }) => ReadStatus::OutOfRange,
+            Self::Sensor(f) => f.status(),
+        }
+    }
+}
+
+impl ForceFault {
+    /// What kind of failure this is ([`ReadStatus`], never `Ok`).
+    #[must_use]
+    pub const fn status(&self) -> ReadStatus {
+        match self {
+            Self::OpenCircuit { .. } => ReadStatus::Open,
+            Self::ShortCircuit { .. } => ReadStatus::Shorted,
+            Self::OutOfRange { .. } => ReadStatus::OutOfRange,
         }
     }
 }

@@ -39,7 +39,8 @@ use gait_control::feedforward::ModelTask;
 use gait_control::replan::{ReplanOutcome, ReplanSlot};
 use gait_control::supervisor::WindowedChecks;
 
-use crate::{INSTR_PER_TICK, Out, SYST_MAX, checked, line, print_phases};
+use crate::recorded::print_phases;
+use crate::{INSTR_PER_TICK, Out, SYST_MAX, checked, line};
 
 /// One tick of the 168 MHz core in counts of the 25 MHz timer clock under
 /// `-icount shift=0` (1 ns an instruction): 168,000 instructions.
@@ -91,8 +92,14 @@ impl Ticking {
             return false;
         };
         qemu_rig::replay(&self.device, &record);
+        // The board's DMA reads the sensors before the tick: not the
+        // tick's work (it is the interrupt's, out of the re-planner's
+        // count all the same).
+        let frames = qemu_rig::acquire(&mut self.hw, &self.controller);
         let start = SYST::get_current();
-        let report = self.controller.tick(&mut self.hw, record.deadline_missed);
+        let report = self
+            .controller
+            .tick_acquired(&mut self.hw, &frames, record.deadline_missed);
         let instr = since(start);
         self.replay
             .account(self.next, instr, &report, &record.host_command_nm);

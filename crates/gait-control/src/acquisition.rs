@@ -1,0 +1,121 @@
+//! One tick's sensor frames, read before the tick decodes them.
+//!
+//! An *acquisition* reads every encoder's angle frame and the ADC's
+//! conversions into [`Frames`]; the tick's *sense* stage decodes,
+//! calibrates and checks them. Where the core drives the buses (the host,
+//! the simulator), the acquisition is [`acquire`], through the drivers, at
+//! the start of [`Controller::tick`]. On the motor board the SPI buses'
+//! DMA reads the same frames shortly before the tick
+//! ([`Controller::tick_acquired`]), so the tick neither polls a bus nor
+//! waits for one. Both read the same frames in the same order ([`plan`]),
+//! and one decode serves both.
+//!
+//! [`Controller::tick`]: crate::controller::Controller::tick
+//! [`Controller::tick_acquired`]: crate::controller::Controller::tick_acquired
+
+use embedded_hal::spi::SpiDevice;
+
+use crate::controller::Hardware;
+use crate::drivers::as5048a::{self, FrameError};
+use crate::drivers::mcp3208::{self, Channel};
+use crate::layout::{ENCODERS, FORCES};
+use crate::posture::JOINTS;
+
+/// The frames of one acquisition, as read: each `None` is a read the bus
+/// failed (the tick counts it as a bus error).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Frames {
+    /// Each encoder's reply to its angle read (the NOP frame after the
+    /// ANGLE command), encoder order: undecoded, parity and EF included.
+    pub encoders: [Option<u16>; ENCODERS],
+    /// The force sensors' counts (left foot, right foot, left crutch, right
+    /// crutch).
+    pub forces: [Option<u16>; FORCES],
+    /// The counts of one drive's current monitor ([`Self::drive_joint`]).
+    pub drive_current: Option<u16>,
+    /// The joint whose drive monitor was read: one a tick, in turn.
+    pub drive_joint: u8,
+}
+
+impl Frames {
+    /// An acquisition that read nothing: every read a bus error.
+    pub const MISSING: Self = Self {
+        encoders: [None; ENCODERS],
+        forces: [None; FORCES],
+        drive_current: None,
+        drive_joint: 0,
+    };
+}
+
+/// What an acquisition converts, in order: the four force sensors' ADC
+/// channels, then the drive monitor's of `drive_joint` (none for a joint
+/// the board has not). The encoders are read in encoder order, each with
+/// [`ENCODER_COMMANDS`].
+#[must_use]
+pub fn plan<ENC, ADC, PWM, DIR, EN, IN, OUT>(
+    hw: &Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+    drive_joint: u8,
+) -> ([Channel; FORCES], Option<Channel>) {
+    let ch = hw.force_channels;
+    (
+        [ch.left_foot, ch.right_foot, ch.left_crutch, ch.right_crutch],
+        hw.drive_current_channels
+            .get(usize::from(drive_joint))
+            .copied(),
+    )
+}
+
+/// An encoder's angle read: the ANGLE command, then the NOP whose reply is
+/// the answer, each frame in its own chip-select window.
+pub const ENCODER_COMMANDS: [u16; 2] = [
+    as5048a::encode_command(as5048a::reg::ANGLE, true),
+    as5048a::encode_command(as5048a::reg::NOP, true),
+];
+
+/// After an angle reply that raised the error flag (good parity, EF set),
+/// the acquisition reads the error register, which clears it: these two
+/// frames, on that encoder, before the next encoder.
+pub const CLEAR_ERROR_COMMANDS: [u16; 2] = [
+    as5048a::encode_command(as5048a::reg::CLEAR_ERROR_FLAG, true),
+    as5048a::encode_command(as5048a::reg::NOP, true),
+];
+
+/// Whether an angle reply asks for [`CLEAR_ERROR_COMMANDS`].
+#[must_use]
+pub const fn needs_clear(reply: u16) -> bool {
+    matches!(as5048a::decode_response(reply), Err(FrameError::ErrorFlag))
+}
+
+/// The drive monitor read after `tick`'s: the next in turn.
+#[must_use]
+pub const fn drive_joint_of(tick: u32) -> u8 {
+    (tick % JOINTS as u32) as u8
+}
+
+/// One acquisition through the drivers, as the tick did its own reads:
+/// every encoder (clearing an error flag at once), then the ADC's
+/// conversions in [`plan`]'s order. Fixed work: 12 encoder frames (two
+/// more per flag cleared) and 5 conversions.
+pub fn acquire<ENC, ADC, PWM, DIR, EN, IN, OUT>(
+    hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+    drive_joint: u8,
+) -> Frames
+where
+    ENC: SpiDevice<u8>,
+    ADC: SpiDevice<u8>,
+{
+    let mut frames = Frames::MISSING;
+    for (frame, enc) in frames.encoders.iter_mut().zip(hw.encoders.iter_mut()) {
+        *frame = enc.read_angle_frame().ok();
+    }
+    frames.drive_joint = drive_joint;
+    let (forces, drive) = plan(hw, drive_joint);
+    frames.forces = forces.map(|ch| read(&mut hw.adc, ch));
+    frames.drive_current = drive.and_then(|ch| read(&mut hw.adc, ch));
+    frames
+}
+
+fn read<ADC: SpiDevice<u8>>(adc: &mut mcp3208::Mcp3208<ADC>, channel: Channel) -> Option<u16> {
+    adc.read_raw(channel).ok()
+}
