@@ -485,11 +485,12 @@ pub fn peripherals() -> RigIo {
     }
 }
 
-/// The acquisition before `controller`'s next tick, through the drivers
-/// and the rig's parts: what the motor board's DMA reads instead, before
-/// its tick, so the tick's count holds none of the buses' work.
+/// The acquisition before `controller`'s next tick, frame by frame in the
+/// motor board's DMA order ([`acquisition::acquire_in_rounds`]) through
+/// the rig's parts: what the board's DMA reads before its tick, so the
+/// tick's count holds none of the buses' work.
 pub fn acquire(hw: &mut RigHardware, controller: &Controller<'_>) -> Frames {
-    acquisition::acquire(hw, controller.next_drive_joint())
+    acquisition::acquire_in_rounds(hw, controller.next_drive_joint())
 }
 
 /// A pilot standing still ([`stand`]) and the rig's peripherals.

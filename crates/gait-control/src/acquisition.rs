@@ -13,6 +13,8 @@
 //! [`Controller::tick`]: crate::controller::Controller::tick
 //! [`Controller::tick_acquired`]: crate::controller::Controller::tick_acquired
 
+mod round;
+
 use embedded_hal::spi::SpiDevice;
 
 use crate::controller::Hardware;
@@ -20,6 +22,8 @@ use crate::drivers::as5048a::{self, FrameError};
 use crate::drivers::mcp3208::{self, Channel};
 use crate::layout::{ENCODERS, FORCES};
 use crate::posture::JOINTS;
+
+pub use round::{AdcRound, EncoderRound};
 
 /// The frames of one acquisition, as read: each `None` is a read the bus
 /// failed (the tick counts it as a bus error).
@@ -118,4 +122,31 @@ where
 
 fn read<ADC: SpiDevice<u8>>(adc: &mut mcp3208::Mcp3208<ADC>, channel: Channel) -> Option<u16> {
     adc.read_raw(channel).ok()
+}
+
+/// The same acquisition as [`acquire`], frame by frame in the order the
+/// motor board's DMA sends them ([`EncoderRound`], [`AdcRound`]): what
+/// the QEMU rig does before each tick in the board's place.
+pub fn acquire_in_rounds<ENC, ADC, PWM, DIR, EN, IN, OUT>(
+    hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
+    drive_joint: u8,
+) -> Frames
+where
+    ENC: SpiDevice<u8>,
+    ADC: SpiDevice<u8>,
+{
+    let mut encoders = EncoderRound::new();
+    while let Some((chip, command)) = encoders.next() {
+        let reply = hw
+            .encoders
+            .get_mut(chip)
+            .and_then(|e| e.frame(command).ok());
+        encoders.answer(reply);
+    }
+    let (forces, drive) = plan(hw, drive_joint);
+    let mut adc = AdcRound::new(forces, drive, drive_joint);
+    while let Some(request) = adc.next() {
+        adc.answer(hw.adc.exchange(request).ok());
+    }
+    Frames::of(&encoders, &adc)
 }

@@ -312,8 +312,9 @@ impl<SPI, E> As5048a<SPI>
 where
     SPI: SpiDevice<u8, Error = E>,
 {
-    /// One 16-bit frame in its own chip-select window; returns the reply.
-    fn frame(&mut self, command: u16) -> Result<u16, Error<E>> {
+    /// One 16-bit frame in its own chip-select window; returns the reply
+    /// (the answer to the command before).
+    pub fn frame(&mut self, command: u16) -> Result<u16, Error<E>> {
         let mut buf = command.to_be_bytes();
         self.spi
             .transaction(&mut [Operation::TransferInPlace(&mut buf)])

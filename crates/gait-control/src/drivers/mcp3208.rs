@@ -303,11 +303,16 @@ where
 
     /// One single-ended conversion: raw 12-bit counts.
     pub fn read_raw(&mut self, channel: Channel) -> Result<u16, Error<E>> {
-        let mut buf = encode_request(channel);
+        self.exchange(encode_request(channel)).map(decode_reply)
+    }
+
+    /// One 3-byte conversion window: `request` out, the reply back.
+    pub fn exchange(&mut self, request: [u8; 3]) -> Result<[u8; 3], Error<E>> {
+        let mut buf = request;
         self.spi
             .transaction(&mut [Operation::TransferInPlace(&mut buf)])
             .map_err(Error::Bus)?;
-        Ok(decode_reply(buf))
+        Ok(buf)
     }
 
     /// One drive-current conversion, as joint torque, checked.

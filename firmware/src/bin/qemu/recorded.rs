@@ -60,7 +60,7 @@ pub(crate) fn check(out: &mut Out, ctr: &mut InstrCounter) -> usize {
                     .u64(r.acquisition.average())
                     .str(" worst=")
                     .u32(r.acquisition.worst)
-                    .str(" (the rig's parts through the drivers; DMA on the board)"),
+                    .str(" (the rig's parts, frame by frame in the DMA's order; DMA on the board)"),
             );
             out.put(
                 line("tick: replayed runs=")
