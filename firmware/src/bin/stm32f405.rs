@@ -41,6 +41,8 @@
 // to `#[export_name]`, which this lint counts.
 #![allow(unsafe_code)]
 
+#[path = "stm32f405/acquire.rs"]
+mod acquire;
 #[path = "stm32f405/calibrate.rs"]
 mod calibrate;
 #[path = "stm32f405/clocks.rs"]
@@ -89,10 +91,10 @@ const WATCHDOG_MS: u32 = 20;
 /// AS5048A: CSn low to first clock edge, and CSn high time between frames,
 /// at least 350 ns each (datasheet, SPI timing tL and tCSn): 64 cycles at
 /// 168 MHz is 381 ns.
-const ENCODER_CS_CYCLES: u32 = 64;
+pub(crate) const ENCODER_CS_CYCLES: u32 = 64;
 /// MCP3208: CS high at least 500 ns between conversions (tCSH): 96 cycles
 /// is 571 ns.
-const ADC_CS_CYCLES: u32 = 96;
+pub(crate) const ADC_CS_CYCLES: u32 = 96;
 
 /// A chip-select line that holds its new level for the part's set-up /
 /// hold time after every change (busy-wait of `CYCLES` core cycles), so two
@@ -218,15 +220,21 @@ fn main() -> ! {
         Ok(d) => d,
         Err(e) => match e {},
     };
-    let encoders = [
-        encoder(gpioa.pa4.into_push_pull_output().erase()),
-        encoder(gpioc.pc4.into_push_pull_output().erase()),
-        encoder(gpioc.pc5.into_push_pull_output().erase()),
-        encoder(gpiob.pb0.into_push_pull_output().erase()),
-        encoder(gpiob.pb1.into_push_pull_output().erase()),
-        encoder(gpioc.pc6.into_push_pull_output().erase()),
+    let encoder_cs = [
+        gpioa.pa4.into_push_pull_output().erase(),
+        gpioc.pc4.into_push_pull_output().erase(),
+        gpioc.pc5.into_push_pull_output().erase(),
+        gpiob.pb0.into_push_pull_output().erase(),
+        gpiob.pb1.into_push_pull_output().erase(),
+        gpioc.pc6.into_push_pull_output().erase(),
     ];
-    let adc_cs = ChipSelect::<ADC_CS_CYCLES>(gpioc.pc7.into_push_pull_output().erase());
+    // The same lines for the DMA acquisition, once the drivers are done
+    // with the buses (`acquire`).
+    let encoder_lines = encoder_cs.each_ref().map(acquire::Line::of);
+    let encoders = encoder_cs.map(encoder);
+    let adc_cs_pin = gpioc.pc7.into_push_pull_output().erase();
+    let adc_line = acquire::Line::of(&adc_cs_pin);
+    let adc_cs = ChipSelect::<ADC_CS_CYCLES>(adc_cs_pin);
     let adc = match ExclusiveDevice::new(adc_bus, adc_cs, CycleDelay) {
         Ok(d) => d,
         Err(e) => match e {},
@@ -370,7 +378,17 @@ fn main() -> ! {
         halt("the model task's state is in use: motors stay disabled");
     }
 
-    // 8. The 1 kHz tick in TIM2's interrupt under an independent watchdog;
+    // 8. The sensors by DMA before each tick: from here on the drivers'
+    //    blocking buses are not used (`acquire`).
+    acquire::install(
+        &dp.RCC,
+        encoder_lines,
+        adc_line,
+        cfg.force_channels,
+        cfg.drive_current_channels,
+    );
+
+    // 9. The 1 kHz tick in TIM2's interrupt under an independent watchdog;
     //    the re-planner in thread mode.
     cp.DCB.enable_trace();
     cp.DWT.enable_cycle_counter();

@@ -1,5 +1,7 @@
 //! The motor board's three priorities: TIM2's update interrupt runs the
-//! control tick every 1 ms; PendSV, which the tick pends as it ends, runs
+//! control tick every 1 ms on the sensor frames the DMA read before it
+//! (`acquire`, started by TIM2's compare and carried by the DMA streams'
+//! interrupts, at the tick's priority); PendSV, which the tick pends as it ends, runs
 //! the supervisor's windowed checks of the tick's facts and works out the
 //! model's feed-forward for the next tick (`firmware::model_task`); thread
 //! mode runs the step re-planner when the sequencer asked for one (with
@@ -24,6 +26,7 @@ use gait_control::replan::ReplanSlot;
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
+use crate::acquire;
 use crate::tick::Tick;
 use crate::{BoardHardware, CYCLES_PER_TICK};
 
@@ -43,6 +46,9 @@ pub struct Board {
     log: LoopLog,
     /// The last tick ran past its period: this one tells the supervisor.
     overran: bool,
+    /// Periods begun (TIM2 updates): stamps each acquisition with the
+    /// tick it is for.
+    period: u32,
 }
 
 impl Board {
@@ -59,16 +65,32 @@ impl Board {
             dog,
             log: LoopLog::new(),
             overran: false,
+            period: 0,
+        }
+    }
+
+    /// TIM2's interrupt: the compare starts the next tick's acquisition,
+    /// the update runs the tick (both when a late tick left both flags
+    /// up: the acquisition then misses this tick, which decodes none).
+    fn on_timer(&mut self) {
+        if self.tick.compare_elapsed() {
+            acquire::start(self.period);
+        }
+        if self.tick.elapsed() {
+            self.period = self.period.wrapping_add(1);
+            self.tick();
         }
     }
 
     /// One control tick, in the timer's interrupt. The DWT cycle counter
     /// measures its work for the log.
     fn tick(&mut self) {
-        // This period's update: cleared, the tick begins.
-        let _ = self.tick.elapsed();
         let start = DWT::cycle_count();
-        let report = self.controller.tick(&mut self.hw, self.overran);
+        let frames = acquire::take(self.period.wrapping_sub(1));
+        let report = self
+            .controller
+            .tick_acquired(&mut self.hw, &frames, self.overran);
+        acquire::set_next_drive_joint(self.controller.next_drive_joint());
         model_task::pend();
         self.dog.feed();
         let cycles = DWT::cycle_count().wrapping_sub(start);
@@ -89,14 +111,25 @@ fn PendSV() {
 }
 
 /// Every interrupt without a handler of its own comes here (cortex-m-rt's
-/// vector table without a device crate); only TIM2's is unmasked.
+/// vector table without a device crate); only TIM2's and the two DMA
+/// streams' (`acquire::install`) are unmasked.
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
-    // No state to tick with (unreachable: `run` places it before
-    // unmasking): no more ticks, so the watchdog, fed only by the tick,
-    // resets the board into its safe boot.
-    if irqn == pac::Interrupt::TIM2 as i16 && BOARD.with(Board::tick).is_none() {
-        NVIC::mask(pac::Interrupt::TIM2);
+    const TIM2: i16 = pac::Interrupt::TIM2 as i16;
+    const ENCODER_FRAME: i16 = pac::Interrupt::DMA2_STREAM0 as i16;
+    const CONVERSION: i16 = pac::Interrupt::DMA1_STREAM3 as i16;
+    match irqn {
+        // No state to tick with (unreachable: `run` places it before
+        // unmasking): no more ticks, so the watchdog, fed only by the
+        // tick, resets the board into its safe boot.
+        TIM2 => {
+            if BOARD.with(Board::on_timer).is_none() {
+                NVIC::mask(pac::Interrupt::TIM2);
+            }
+        }
+        ENCODER_FRAME => acquire::on_encoder_frame(),
+        CONVERSION => acquire::on_conversion(),
+        _ => {}
     }
 }
 
@@ -212,7 +245,7 @@ impl LoopLog {
         if r.tick.is_multiple_of(TICK_HZ) {
             let [left_foot, right_foot, left_crutch, right_crutch] = r.forces_n;
             defmt::info!(
-                "t {=u32} s: {} feet {=f32} {=f32} N, crutches {=f32} {=f32} N, worst tick {=u32}/{=u32} cycles, overruns {=u32}",
+                "t {=u32} s: {} feet {=f32} {=f32} N, crutches {=f32} {=f32} N, worst tick {=u32}/{=u32} cycles, overruns {=u32}, acquisitions missed {=u32}",
                 r.tick / TICK_HZ,
                 r.phase,
                 left_foot,
@@ -221,7 +254,8 @@ impl LoopLog {
                 right_crutch,
                 self.worst_cycles,
                 CYCLES_PER_TICK,
-                self.overruns
+                self.overruns,
+                acquire::missed()
             );
             self.worst_cycles = 0;
         }
