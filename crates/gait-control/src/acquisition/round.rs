@@ -105,6 +105,9 @@ impl EncoderRound {
     }
 }
 
+/// The MCP3208's null bit in a reply's second byte (datasheet §6.1).
+const NULL_BIT: u8 = 0x10;
+
 /// The ADC's conversions of one acquisition: the four force sensors, then
 /// one drive monitor ([`super::plan`]'s order).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -149,7 +152,11 @@ impl AdcRound {
             k += 1;
         }
         if let Some(c) = self.counts.get_mut(k) {
-            *c = reply.map(mcp3208::decode_reply);
+            // The null bit before B11 is driven low: set, the frame slipped
+            // (a byte lost or left over), and its counts mean nothing.
+            *c = reply
+                .filter(|r| r[1] & NULL_BIT == 0)
+                .map(mcp3208::decode_reply);
             self.sent = (k + 1) as u8;
         }
     }
@@ -307,5 +314,15 @@ mod tests {
             assert_eq!(frames.drive_joint, 2);
             assert_eq!(sent[0], mcp3208::encode_request(Channel::Ch0));
         }
+    }
+
+    #[test]
+    fn a_slipped_conversion_is_a_bus_error() {
+        let forces = [Channel::Ch0, Channel::Ch1, Channel::Ch2, Channel::Ch3];
+        let mut round = AdcRound::new(forces, None, 0);
+        round.answer(Some([0xFF, 0x10 | 0x01, 0x23]));
+        round.answer(Some([0xFF, 0x01, 0x23]));
+        let frames = Frames::of(&EncoderRound::new(), &round);
+        assert_eq!(frames.forces[..2], [None, Some(0x123)]);
     }
 }

@@ -27,7 +27,7 @@
 //! still running.
 
 use core::cell::{Cell, RefCell};
-use core::sync::atomic::{AtomicU8, AtomicU32, Ordering, compiler_fence};
+use core::sync::atomic::{AtomicU8, AtomicU32, Ordering, fence};
 
 use cortex_m::interrupt::{self, Mutex};
 use cortex_m::peripheral::NVIC;
@@ -52,9 +52,10 @@ const ENC_CHANNEL: u8 = 3;
 const ADC_RX: usize = 3;
 const ADC_TX: usize = 4;
 const ADC_CHANNEL: u8 = 0;
-/// Polls of a stream's EN bit after disabling it (RM0090 §10.3.17: it
-/// clears once the current transfer ends, a byte at most).
-const DISABLE_POLLS: u32 = 200;
+/// Polls for a stream's EN bit to clear or the SPI to go idle when a
+/// transfer is stopped: at least 4 cycles each, 48 µs in all, four byte
+/// times of the ADC's bus (12.2 µs a byte at 656 kHz).
+const SPI_POLLS: u32 = 2_000;
 
 /// The DMA's buffers. It reads and writes them behind the compiler's
 /// back: as atomics, each access is a real load or store.
@@ -306,21 +307,13 @@ pub fn on_encoder_frame() {
         let Some(e) = engine.as_mut() else {
             return;
         };
-        let dma = dma2();
-        let isr = dma.lisr().read();
-        let failed = isr.teif0().is_error() || isr.teif3().is_error() || isr.dmeif3().is_error();
-        // Pended by a stream an abort stopped, its flags since cleared:
-        // the frame in flight has not ended.
-        if !failed && !isr.tcif0().is_complete() {
+        let Some(failed) = Bus::Encoders.ended() else {
             return;
-        }
-        clear_flags(dma, ENC_RX);
-        clear_flags(dma, ENC_TX);
+        };
         let chip = e.chip.take();
         if let Some(line) = chip.and_then(|c| e.encoder_cs.get(c)) {
             line.high();
         }
-        compiler_fence(Ordering::SeqCst);
         let reply = (!failed).then(|| {
             u16::from_be_bytes([
                 ENC_RX_BUF[0].load(Ordering::Relaxed),
@@ -336,28 +329,18 @@ pub fn on_encoder_frame() {
 /// DMA1 stream 3's interrupt: a conversion ended.
 pub fn on_conversion() {
     interrupt::free(|cs| {
-        // Never borrowed twice (each borrow is inside a critical
-        // section); `try_` keeps the panic of a double borrow out of the
-        // image.
+        // As in `on_encoder_frame`.
         let Ok(mut engine) = ENGINE.borrow(cs).try_borrow_mut() else {
             return;
         };
         let Some(e) = engine.as_mut() else {
             return;
         };
-        let dma = dma1();
-        let rx = dma.lisr().read();
-        let failed = rx.teif3().is_error()
-            || dma.hisr().read().teif4().is_error()
-            || dma.hisr().read().dmeif4().is_error();
-        if !failed && !rx.tcif3().is_complete() {
+        let Some(failed) = Bus::Adc.ended() else {
             return;
-        }
-        clear_flags(dma, ADC_RX);
-        clear_flags(dma, ADC_TX);
+        };
         e.adc_cs.high();
         e.adc_busy = false;
-        compiler_fence(Ordering::SeqCst);
         let reply = (!failed).then(|| ADC_RX_BUF.each_ref().map(|b| b.load(Ordering::Relaxed)));
         e.adc.answer(reply);
         // MCP3208: CS high at least 500 ns between conversions (tCSH).
@@ -385,9 +368,10 @@ impl Engine {
         if last == Some(chip) {
             cortex_m::asm::delay(ENCODER_CS_CYCLES);
         }
+        Bus::Encoders.drain();
         self.chip = Some(chip);
         line.low();
-        arm(dma2(), ENC_RX, ENC_TX, 2, ENCODER_CS_CYCLES);
+        Bus::Encoders.arm(2, ENCODER_CS_CYCLES);
     }
 
     /// Sends the round's next conversion, if any.
@@ -398,10 +382,11 @@ impl Engine {
         for (b, r) in ADC_TX_BUF.iter().zip(request) {
             b.store(r, Ordering::Relaxed);
         }
+        Bus::Adc.drain();
         self.adc_busy = true;
         self.adc_cs.low();
         // MCP3208: CS low to the first clock, 100 ns (tSUCS).
-        arm(dma1(), ADC_RX, ADC_TX, 3, ADC_CS_CYCLES / 4);
+        Bus::Adc.arm(3, ADC_CS_CYCLES / 4);
     }
 
     /// Publishes the frames once both rounds are done.
@@ -417,54 +402,150 @@ impl Engine {
         }
     }
 
-    /// Stops both buses' streams and raises every chip select: what was
-    /// not read is lost, and the new round starts clean.
+    /// Stops both buses and raises every chip select: what was not read
+    /// is lost, and the new round starts on idle buses.
     fn abort(&mut self) {
-        for (dma, streams) in [(dma2(), [ENC_RX, ENC_TX]), (dma1(), [ADC_RX, ADC_TX])] {
-            for s in streams {
-                dma.st(s).cr().modify(|_, w| w.en().disabled());
-                for _ in 0..DISABLE_POLLS {
-                    if dma.st(s).cr().read().en().is_disabled() {
-                        break;
-                    }
-                }
-            }
-        }
+        Bus::Encoders.stop();
+        Bus::Adc.stop();
         self.encoder_cs.iter().for_each(|l| l.high());
         self.adc_cs.high();
-        // An overrun left by the cut transfer: cleared by reading DR, then
-        // SR (RM0090 §28.4.8).
-        for spi in [spi1(), spi2()] {
-            let _ = spi.dr().read();
-            let _ = spi.sr().read();
-        }
         self.chip = None;
         self.adc_busy = false;
         self.running = None;
     }
 }
 
-/// Re-arms a bus's two streams for one frame of `len` bytes after its
-/// chip select went low, `setup` cycles before the first clock: the RX
-/// stream first, so no received byte finds it off (RM0090 §28.3.9).
-fn arm(dma: &dma2::RegisterBlock, rx: usize, tx: usize, len: u16, setup: u32) {
-    // RM0090 §10.3.17: a stream's flags are cleared before it is enabled.
-    clear_flags(dma, rx);
-    clear_flags(dma, tx);
-    dma.st(rx).ndtr().write(|w| w.ndt().set(len));
-    dma.st(tx).ndtr().write(|w| w.ndt().set(len));
-    compiler_fence(Ordering::SeqCst);
-    cortex_m::asm::delay(setup);
-    dma.st(rx).cr().modify(|_, w| w.en().enabled());
-    dma.st(tx).cr().modify(|_, w| w.en().enabled());
+/// A bus and its two DMA streams.
+#[derive(Clone, Copy)]
+enum Bus {
+    /// SPI1 on DMA2 streams 0 (RX) and 3 (TX).
+    Encoders,
+    /// SPI2 on DMA1 streams 3 (RX) and 4 (TX).
+    Adc,
 }
+
+/// A stream's flags in its six-bit group of LISR/HISR: direct mode error,
+/// transfer error, transfer complete.
+const DMEIF: u32 = 1 << 2;
+const TEIF: u32 = 1 << 3;
+const TCIF: u32 = 1 << 5;
+
+impl Bus {
+    fn parts(
+        self,
+    ) -> (
+        &'static dma2::RegisterBlock,
+        &'static spi1::RegisterBlock,
+        usize,
+        usize,
+    ) {
+        match self {
+            Self::Encoders => (dma2(), spi1(), ENC_RX, ENC_TX),
+            Self::Adc => (dma1(), spi2(), ADC_RX, ADC_TX),
+        }
+    }
+
+    /// After the RX stream's interrupt: whether the frame failed (a
+    /// stream's transfer or direct-mode error, or an SPI overrun; the bus
+    /// is then stopped), or `None` if the RX stream has not completed (an
+    /// interrupt an abort's stopped stream left pending).
+    fn ended(self) -> Option<bool> {
+        let (dma, spi, rx, tx) = self.parts();
+        let (rx_flags, tx_flags) = (flags(dma, rx), flags(dma, tx));
+        let failed =
+            (rx_flags | tx_flags) & (TEIF | DMEIF) != 0 || spi.sr().read().ovr().bit_is_set();
+        if !failed && rx_flags & TCIF == 0 {
+            return None;
+        }
+        if failed {
+            self.stop();
+        }
+        clear_flags(dma, rx);
+        clear_flags(dma, tx);
+        fence(Ordering::SeqCst);
+        Some(failed)
+    }
+
+    /// Stops a transfer that may be under way (RM0090 §28.3.8, disabling
+    /// with DMA): the TX stream, then the last byte out (TXE, not BSY),
+    /// then the RX stream; the bytes left are read out (DR, then SR, which
+    /// also clears an overrun). Every wait is bounded.
+    fn stop(self) {
+        let (dma, spi, rx, tx) = self.parts();
+        disable(dma, tx);
+        for _ in 0..SPI_POLLS {
+            let sr = spi.sr().read();
+            if sr.txe().bit_is_set() && sr.bsy().bit_is_clear() {
+                break;
+            }
+        }
+        disable(dma, rx);
+        let _ = spi.dr().read();
+        let _ = spi.sr().read();
+        clear_flags(dma, rx);
+        clear_flags(dma, tx);
+    }
+
+    /// Before a frame's chip select goes low: a byte left in the receiver
+    /// (or an overrun) is read out, so the frame's RX stream takes only
+    /// its own bytes.
+    fn drain(self) {
+        let (_, spi, _, _) = self.parts();
+        let sr = spi.sr().read();
+        if sr.rxne().bit_is_set() || sr.ovr().bit_is_set() {
+            let _ = spi.dr().read();
+            let _ = spi.sr().read();
+        }
+    }
+
+    /// Re-arms both streams for one frame of `len` bytes after its chip
+    /// select went low, `setup` cycles before the first clock: the RX
+    /// stream first, so no received byte finds it off (RM0090 §28.3.9).
+    fn arm(self, len: u16, setup: u32) {
+        let (dma, _, rx, tx) = self.parts();
+        // RM0090 §10.3.17: a stream's flags are cleared before it is
+        // enabled.
+        clear_flags(dma, rx);
+        clear_flags(dma, tx);
+        dma.st(rx).ndtr().write(|w| w.ndt().set(len));
+        dma.st(tx).ndtr().write(|w| w.ndt().set(len));
+        fence(Ordering::SeqCst);
+        cortex_m::asm::delay(setup);
+        dma.st(rx).cr().modify(|_, w| w.en().enabled());
+        dma.st(tx).cr().modify(|_, w| w.en().enabled());
+    }
+}
+
+/// Disables a stream and waits (bounded) for its EN bit to clear, once the
+/// transfer under way ends (RM0090 §10.3.17).
+fn disable(dma: &dma2::RegisterBlock, stream: usize) {
+    dma.st(stream).cr().modify(|_, w| w.en().disabled());
+    for _ in 0..SPI_POLLS {
+        if dma.st(stream).cr().read().en().is_disabled() {
+            break;
+        }
+    }
+}
+
+/// `stream`'s six flag bits (LISR for streams 0–3, HISR for 4–7).
+fn flags(dma: &dma2::RegisterBlock, stream: usize) -> u32 {
+    let isr = if stream < 4 {
+        dma.lisr().read().bits()
+    } else {
+        dma.hisr().read().bits()
+    };
+    (isr >> SHIFTS.get(stream % 4).copied().unwrap_or(0)) & 0x3D
+}
+
+/// Where each stream's flags start in LISR/LIFCR (streams 0–3) and
+/// HISR/HIFCR (4–7), RM0090 §10.5.1–4.
+const SHIFTS: [u32; 4] = [0, 6, 16, 22];
 
 /// Clears every flag of `stream` (transfer complete, half, error, direct
 /// mode error, FIFO error): six bits a stream, at 0, 6, 16 and 22 in
 /// LIFCR (streams 0–3) and HIFCR (4–7), RM0090 §10.5.3–4. An interrupt
 /// left with its flag up would come back at once.
 fn clear_flags(dma: &dma2::RegisterBlock, stream: usize) {
-    const SHIFTS: [u32; 4] = [0, 6, 16, 22];
     let bits = 0x3D << SHIFTS.get(stream % 4).copied().unwrap_or(0);
     // SAFETY: write-1-to-clear bits of this stream only; the other bits
     // written 0 do nothing.

@@ -27,8 +27,13 @@ use stm32f4xx_hal::pac;
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
 use crate::acquire;
-use crate::tick::Tick;
+use crate::tick::{self, Tick};
 use crate::{BoardHardware, CYCLES_PER_TICK};
+
+/// The tick's deadline in core cycles: the next acquisition's start,
+/// `acquire::LEAD_US` before the period ends.
+const DEADLINE_CYCLES: u32 =
+    CYCLES_PER_TICK / tick::US_PER_TICK * (tick::US_PER_TICK - acquire::LEAD_US);
 
 /// The slot the sequencer and the idle-time re-planner share.
 pub static SLOT: ReplanSlot = ReplanSlot::new();
@@ -96,10 +101,11 @@ impl Board {
         let cycles = DWT::cycle_count().wrapping_sub(start);
         self.log
             .after_tick(&report, &self.controller, cycles, self.overran);
-        // The next period's update already here: this tick (and its log)
-        // ran past the deadline, and its interrupt is pending. The
-        // supervisor decides what a run of them means.
-        self.overran = self.tick.pending();
+        // The next acquisition's start (or the next period's update)
+        // already here: this tick (and its log) ran past its deadline, and
+        // the next tick's sensors come late or not at all. The supervisor
+        // decides what a run of them means.
+        self.overran = self.tick.compare_pending() || self.tick.pending();
     }
 }
 
@@ -253,7 +259,7 @@ impl LoopLog {
                 left_crutch,
                 right_crutch,
                 self.worst_cycles,
-                CYCLES_PER_TICK,
+                DEADLINE_CYCLES,
                 self.overruns,
                 acquire::missed()
             );

@@ -9,7 +9,7 @@ use crate::acquire::LEAD_US;
 use firmware::board_config::TICK_HZ;
 
 /// One control period, µs.
-const US_PER_TICK: u32 = 1_000_000 / TICK_HZ;
+pub const US_PER_TICK: u32 = 1_000_000 / TICK_HZ;
 const _: () = assert!(LEAD_US < US_PER_TICK && 1_000_000 % TICK_HZ == 0);
 
 use firmware::clock_tree::TICK_TIMER;
@@ -58,6 +58,11 @@ impl Tick {
         } else {
             false
         }
+    }
+
+    /// Whether the compare came and was not yet served (SR CC1IF).
+    pub fn compare_pending(&self) -> bool {
+        self.tim.sr().read().cc1if().bit_is_set()
     }
 
     /// Whether a period ended since the last [`Tick::elapsed`] (SR UIF),
