@@ -130,12 +130,12 @@ impl Controller<'_> {
         for (i, (((enc, reply), o), frame)) in hw
             .encoders
             .iter()
-            .zip(acquired.encoders)
+            .zip(&acquired.encoders)
             .zip(out.iter_mut())
             .zip(frames.iter_mut())
             .enumerate()
         {
-            let result = match reply {
+            let result = match *reply {
                 Some(reply) => as5048a::decode_angle(reply, enc.calibration()),
                 None => Err(EncoderStatus::BusError),
             };
