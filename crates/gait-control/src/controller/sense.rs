@@ -127,17 +127,11 @@ impl Controller<'_> {
         let mut frames = [EncoderFrame::NONE; ENCODERS];
         let dt = self.cfg.dt_s;
         let offsets = self.supervisor.encoder_offsets();
-        for (i, (((enc, reply), o), frame)) in hw
-            .encoders
-            .iter()
-            .zip(&acquired.encoders)
-            .zip(out.iter_mut())
-            .zip(frames.iter_mut())
-            .enumerate()
-        {
-            let result = match *reply {
-                Some(reply) => as5048a::decode_angle(reply, enc.calibration()),
-                None => Err(EncoderStatus::BusError),
+        for (i, (o, frame)) in out.iter_mut().zip(frames.iter_mut()).enumerate() {
+            let reply = acquired.encoders.get(i).copied().flatten();
+            let result = match (reply, hw.encoders.get(i)) {
+                (Some(reply), Some(enc)) => as5048a::decode_angle(reply, enc.calibration()),
+                _ => Err(EncoderStatus::BusError),
             };
             *o = match &result {
                 Ok(r) => EncoderSense {
