@@ -21,10 +21,11 @@
 //!
 //! The finished frames wait for the tick stamped with the period they were
 //! started in. A tick that finds none of its own (the acquisition did not
-//! finish, or started late) decodes `Frames::MISSING`: every sensor read a
-//! bus error, which the supervisor's encoder and force rows count and
-//! react to (`docs/safety.md`); the next period's start aborts what is
-//! still running.
+//! finish, or started late behind an overrunning tick) stops what is still
+//! running and reads the sensors itself through the drivers' blocking
+//! buses, about 200 µs, as the host's tick always does: the controller is
+//! never left without this tick's sensors. The status line counts those
+//! ticks; the next period's start aborts what is still running.
 
 use core::cell::{Cell, RefCell};
 use core::sync::atomic::{AtomicU8, AtomicU32, Ordering, fence};
@@ -114,11 +115,12 @@ impl Line {
 }
 
 /// The peripherals the acquisition drives.
-// SAFETY (each): once `install` has run, the acquisition is the buses'
-// only user: the blocking buses the drivers were built over serve the
-// calibration at boot, before it, and nothing after (the tick decodes the
-// acquisition's frames, `Controller::tick_acquired`). The DMA controllers
-// serve nothing else.
+// SAFETY (each): once `install` has run, the acquisition and the blocking
+// buses the drivers were built over never use a bus at once: those serve
+// the calibration at boot, before it, and after it only a tick that found
+// no frames of its own, which first stops the acquisition (`stop`); the
+// tick and the acquisition's interrupts share one priority and critical
+// sections. The DMA controllers serve nothing else.
 fn spi1() -> &'static spi1::RegisterBlock {
     unsafe { &*pac::SPI1::ptr() }
 }
@@ -273,16 +275,29 @@ pub fn start(period: u32) {
 }
 
 /// The frames of the acquisition started in `period`, once (the tick's
-/// own); `Frames::MISSING` when there are none.
-pub fn take(period: u32) -> Frames {
+/// own); `None` when there are none (counted: [`missed`]).
+pub fn take(period: u32) -> Option<Frames> {
     let ready = interrupt::free(|cs| READY.borrow(cs).take());
     match ready {
-        Some((p, frames)) if p == period => frames,
+        Some((p, frames)) if p == period => Some(frames),
         _ => {
             MISSED.fetch_add(1, Ordering::Relaxed);
-            Frames::MISSING
+            None
         }
     }
+}
+
+/// Stops an acquisition still running and leaves both buses idle, every
+/// chip select high: for a tick that found no frames of its own and reads
+/// the sensors itself, through the drivers' blocking buses.
+pub fn stop() {
+    interrupt::free(|cs| {
+        if let Ok(mut engine) = ENGINE.borrow(cs).try_borrow_mut()
+            && let Some(e) = engine.as_mut()
+        {
+            e.abort();
+        }
+    });
 }
 
 /// The drive monitor the next acquisition reads.

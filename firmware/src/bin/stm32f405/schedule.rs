@@ -19,6 +19,7 @@ use firmware::board_config::{self, TICK_HZ};
 use firmware::idle_replan::IdleReplanner;
 use firmware::model_task;
 use firmware::tick_state::TickState;
+use gait_control::acquisition;
 use gait_control::controller::{Controller, TickReport};
 use gait_control::faults::{FaultCode, FaultSet, Reaction};
 use gait_control::feedforward::ModelTask;
@@ -91,7 +92,15 @@ impl Board {
     /// measures its work for the log.
     fn tick(&mut self) {
         let start = DWT::cycle_count();
-        let frames = acquire::take(self.period.wrapping_sub(1));
+        let frames = match acquire::take(self.period.wrapping_sub(1)) {
+            Some(frames) => frames,
+            // None of its own (late or stalled): the tick reads the
+            // sensors itself, the acquisition stopped (about 200 µs).
+            None => {
+                acquire::stop();
+                acquisition::acquire(&mut self.hw, self.controller.next_drive_joint())
+            }
+        };
         let report = self
             .controller
             .tick_acquired(&mut self.hw, &frames, self.overran);
