@@ -15,6 +15,9 @@
 
 mod round;
 
+use core::cell::Cell;
+
+use critical_section::Mutex;
 use embedded_hal::spi::SpiDevice;
 
 use crate::controller::Hardware;
@@ -149,4 +152,76 @@ where
         adc.answer(hw.adc.exchange(request).ok());
     }
     Frames::of(&encoders, &adc)
+}
+
+/// Where a finished acquisition waits for its tick, stamped with the
+/// period it was started in (the board counts periods by its timer's
+/// updates): the tick of the next period takes it, once. A tick takes
+/// nothing of another period's, so an acquisition that finished late is
+/// never decoded as a later tick's sensors.
+pub struct Handoff {
+    ready: Mutex<Cell<Option<(u32, Frames)>>>,
+}
+
+impl Default for Handoff {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Handoff {
+    /// Nothing waiting.
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            ready: Mutex::new(Cell::new(None)),
+        }
+    }
+
+    /// Leaves `frames`, from the acquisition started in `period`, replacing
+    /// any not taken.
+    pub fn publish(&self, period: u32, frames: Frames) {
+        critical_section::with(|cs| self.ready.borrow(cs).set(Some((period, frames))));
+    }
+
+    /// The frames of the acquisition started in `period`, once; `None` if
+    /// none waits or what waits is another period's (dropped).
+    pub fn take(&self, period: u32) -> Option<Frames> {
+        critical_section::with(|cs| self.ready.borrow(cs).take())
+            .filter(|(p, _)| *p == period)
+            .map(|(_, frames)| frames)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frames(drive_joint: u8) -> Frames {
+        Frames {
+            drive_joint,
+            ..Frames::MISSING
+        }
+    }
+
+    #[test]
+    fn a_tick_takes_its_own_acquisition_once() {
+        let h = Handoff::new();
+        h.publish(7, frames(3));
+        assert_eq!(h.take(7).map(|f| f.drive_joint), Some(3));
+        assert_eq!(h.take(7), None);
+    }
+
+    #[test]
+    fn another_periods_acquisition_is_dropped_not_taken() {
+        let h = Handoff::new();
+        // Finished after its tick had run: the next tick must not take it.
+        h.publish(7, frames(1));
+        assert_eq!(h.take(8), None);
+        assert_eq!(h.take(7), None, "dropped, not kept");
+        // The newest replaces one not taken.
+        h.publish(8, frames(1));
+        h.publish(9, frames(2));
+        assert_eq!(h.take(9).map(|f| f.drive_joint), Some(2));
+    }
 }

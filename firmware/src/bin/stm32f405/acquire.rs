@@ -27,12 +27,12 @@
 //! never left without this tick's sensors. The status line counts those
 //! ticks; the next period's start aborts what is still running.
 
-use core::cell::{Cell, RefCell};
+use core::cell::RefCell;
 use core::sync::atomic::{AtomicU8, AtomicU32, Ordering, fence};
 
 use cortex_m::interrupt::{self, Mutex};
 use cortex_m::peripheral::NVIC;
-use gait_control::acquisition::{AdcRound, EncoderRound, Frames};
+use gait_control::acquisition::{AdcRound, EncoderRound, Frames, Handoff};
 use gait_control::controller::ENCODERS;
 use gait_control::drivers::mcp3208::{Channel, ForceChannels};
 use gait_control::posture::JOINTS;
@@ -72,8 +72,9 @@ static NEXT_DRIVE_JOINT: AtomicU8 = AtomicU8::new(1);
 static MISSED: AtomicU32 = AtomicU32::new(0);
 
 static ENGINE: Mutex<RefCell<Option<Engine>>> = Mutex::new(RefCell::new(None));
-/// The last finished acquisition and the period it was started in.
-static READY: Mutex<Cell<Option<(u32, Frames)>>> = Mutex::new(Cell::new(None));
+/// The last finished acquisition, for the tick of the period after its
+/// start.
+static READY: Handoff = Handoff::new();
 
 /// A chip select: its GPIO port and pin, driven through BSRR.
 #[derive(Clone, Copy)]
@@ -270,21 +271,18 @@ pub fn start(period: u32) {
         e.running = Some(period);
         e.next_encoder_frame(None);
         e.next_conversion();
-        e.finish_if_done(cs);
+        e.finish_if_done();
     });
 }
 
 /// The frames of the acquisition started in `period`, once (the tick's
 /// own); `None` when there are none (counted: [`missed`]).
 pub fn take(period: u32) -> Option<Frames> {
-    let ready = interrupt::free(|cs| READY.borrow(cs).take());
-    match ready {
-        Some((p, frames)) if p == period => Some(frames),
-        _ => {
-            MISSED.fetch_add(1, Ordering::Relaxed);
-            None
-        }
+    let frames = READY.take(period);
+    if frames.is_none() {
+        MISSED.fetch_add(1, Ordering::Relaxed);
     }
+    frames
 }
 
 /// Stops an acquisition still running and leaves both buses idle, every
@@ -337,7 +335,7 @@ pub fn on_encoder_frame() {
         });
         e.encoders.answer(reply);
         e.next_encoder_frame(chip);
-        e.finish_if_done(cs);
+        e.finish_if_done();
     });
 }
 
@@ -361,7 +359,7 @@ pub fn on_conversion() {
         // MCP3208: CS high at least 500 ns between conversions (tCSH).
         cortex_m::asm::delay(ADC_CS_CYCLES);
         e.next_conversion();
-        e.finish_if_done(cs);
+        e.finish_if_done();
     });
 }
 
@@ -405,14 +403,13 @@ impl Engine {
     }
 
     /// Publishes the frames once both rounds are done.
-    fn finish_if_done(&mut self, cs: &interrupt::CriticalSection) {
+    fn finish_if_done(&mut self) {
         let done = self.chip.is_none()
             && self.encoders.next().is_none()
             && !self.adc_busy
             && self.adc.next().is_none();
         if let (true, Some(period)) = (done, self.running) {
-            let frames = Frames::of(&self.encoders, &self.adc);
-            READY.borrow(cs).set(Some((period, frames)));
+            READY.publish(period, Frames::of(&self.encoders, &self.adc));
             self.running = None;
         }
     }
