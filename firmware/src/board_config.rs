@@ -31,7 +31,8 @@ pub fn flash_tables() -> GaitTables<'static> {
 /// Whether the motor board re-plans each step in the tick's idle time
 /// (`firmware::idle_replan`). Off: in the closed loop the re-planned steps
 /// do not yet beat the tables for every pilot, and the board's idle time
-/// at its measured cycles per instruction may be below the device model's
+/// at 1.0–1.5 cycles per instruction (not yet measured) may be below the
+/// device model's
 /// (`docs/replanning.md`). The QEMU image runs the same schedule with it
 /// on.
 pub const REPLANNING: bool = false;

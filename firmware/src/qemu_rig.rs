@@ -3,8 +3,8 @@
 //! speak their wire formats, and PWM and GPIO fakes that accept writes.
 //!
 //! The fakes are written from the datasheets, not from gait-control's
-//! drivers, so the benchmark also checks that the drivers speak the parts'
-//! protocols. No heap, no `unsafe`, fixed work per call.
+//! drivers, so the benchmark also checks that the acquisition's rounds
+//! (the DMA's frame order) and the drivers speak the parts' protocols. No heap, no `unsafe`, fixed work per call.
 //!
 //! The fakes read what a [`PANEL`] of atomics holds, set between ticks:
 //! [`standing`] builds a rig of a pilot standing still on both feet with

@@ -4,11 +4,12 @@
 //! conversions into [`Frames`]; the tick's *sense* stage decodes,
 //! calibrates and checks them. Where the core drives the buses (the host,
 //! the simulator), the acquisition is [`acquire`], through the drivers, at
-//! the start of [`Controller::tick`]. On the motor board the SPI buses'
-//! DMA reads the same frames shortly before the tick
+//! the start of [`Controller::tick`], and on the motor board for a tick
+//! that finds no acquisition of its own. Otherwise the board's SPI buses'
+//! DMA reads the frames shortly before the tick
 //! ([`Controller::tick_acquired`]), so the tick neither polls a bus nor
-//! waits for one. Both read the same frames in the same order ([`plan`]),
-//! and one decode serves both.
+//! waits for one. Both read the same frames (each chip sees ANGLE then
+//! NOP; the ADC converts in [`plan`]'s order), and one decode serves both.
 //!
 //! [`Controller::tick`]: crate::controller::Controller::tick
 //! [`Controller::tick_acquired`]: crate::controller::Controller::tick_acquired
@@ -100,7 +101,8 @@ pub const fn drive_joint_of(tick: u32) -> u8 {
     (tick % JOINTS as u32) as u8
 }
 
-/// One acquisition through the drivers, as the tick did its own reads:
+/// One acquisition through the drivers (the host's tick, and the board's
+/// tick that finds no acquisition of its own):
 /// every encoder (clearing an error flag at once), then the ADC's
 /// conversions in [`plan`]'s order. Fixed work: 12 encoder frames (two
 /// more per flag cleared) and 5 conversions.

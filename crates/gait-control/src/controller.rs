@@ -390,7 +390,7 @@ impl<'t> Controller<'t> {
         OUT: OutputPin,
     {
         let acquired = acquisition::acquire(hw, self.next_drive_joint());
-        self.run_tick(hw, &acquired, deadline_missed)
+        self.tick_acquired(hw, &acquired, deadline_missed)
     }
 
     /// One control tick on frames acquired before it (on the motor board,
@@ -411,34 +411,17 @@ impl<'t> Controller<'t> {
         IN: InputPin,
         OUT: OutputPin,
     {
-        self.run_tick(hw, acquired, deadline_missed)
-    }
-
-    /// The drive whose current monitor the next tick's acquisition reads.
-    pub const fn next_drive_joint(&self) -> u8 {
-        acquisition::drive_joint_of(self.tick.wrapping_add(1))
-    }
-
-    #[inline(always)]
-    fn run_tick<ENC, ADC, PWM, DIR, EN, IN, OUT, PwmE, PinE>(
-        &mut self,
-        hw: &mut Hardware<ENC, ADC, PWM, DIR, EN, IN, OUT>,
-        acquired: &Frames,
-        deadline_missed: bool,
-    ) -> TickReport
-    where
-        PWM: SetDutyCycle<Error = PwmE>,
-        DIR: OutputPin<Error = PinE>,
-        EN: OutputPin<Error = PinE>,
-        IN: InputPin,
-        OUT: OutputPin,
-    {
         self.tick = self.tick.wrapping_add(1);
         let senses = self.sense(hw, acquired);
         let plan = self.plan(hw, &senses);
         let actuation = self.act(&senses, &plan.reference);
         let verdict = self.guard(&senses, &plan.reference, &actuation, deadline_missed);
         self.write(hw, &senses, &plan, &actuation, &verdict)
+    }
+
+    /// The drive whose current monitor the next tick's acquisition reads.
+    pub const fn next_drive_joint(&self) -> u8 {
+        acquisition::drive_joint_of(self.tick.wrapping_add(1))
     }
 
     /// Stage 2: the operator's requests and the last verdict's orders to

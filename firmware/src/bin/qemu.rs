@@ -462,7 +462,7 @@ fn control_tick_bench(out: &mut Out, ctr: &mut InstrCounter) -> usize {
             "control: ok (no fault, motors enabled, commands finite)",
         ));
     }
-    // The drivers must have spoken the parts' protocols: two 16-bit frames
+    // The acquisition must have spoken the parts' protocols: two 16-bit frames
     // per encoder read, one conversion per force sensor and one drive's
     // current monitor, every tick.
     let frames = hw.encoders.map(|e| e.destroy().frames);

@@ -36,7 +36,8 @@
 // Unsafe, each block with its reason: the panic mark and `disable_motors`
 // (the motor-enable lines reached whatever owns GPIOB), the register words
 // the PAC takes as raw bits (`clocks`), the PAC's TIM1/SPI register blocks
-// after the peripheral was handed over (`pwm`, `spi`), and the RTT control
+// after the peripheral was handed over (`pwm`, `spi`), the DMA, SPI and
+// GPIO BSRR registers the sensors' acquisition drives (`acquire`), and the RTT control
 // block the probe shares (`rtt_log`); cortex-m-rt's attributes also expand
 // to `#[export_name]`, which this lint counts.
 #![allow(unsafe_code)]
@@ -378,8 +379,8 @@ fn main() -> ! {
         halt("the model task's state is in use: motors stay disabled");
     }
 
-    // 8. The sensors by DMA before each tick: from here on the drivers'
-    //    blocking buses are not used (`acquire`).
+    // 8. The sensors by DMA before each tick; the blocking buses serve
+    //    only a tick that finds no acquisition of its own (`acquire`).
     acquire::install(
         &dp.RCC,
         encoder_lines,

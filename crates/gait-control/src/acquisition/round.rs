@@ -4,8 +4,9 @@
 //! their order are fixed here, so the board's interrupt only moves bytes.
 //!
 //! The encoders' round sends every ANGLE command, then every NOP: two
-//! frames in a row are never on one chip, so each chip's CSn stays high for
-//! five frames between its two, well over the part's 350 ns. Each chip
+//! frames in a row are on one chip only in an error flag's clear, so each
+//! chip's CSn stays high for five frames between its two, well over the
+//! part's 350 ns. Each chip
 //! still sees ANGLE then NOP, so its NOP reply is the answer to its ANGLE
 //! command, as in [`super::acquire`]; a reply with the error flag is
 //! followed at once by that chip's [`CLEAR_ERROR_COMMANDS`], as the

@@ -204,8 +204,8 @@ impl Controller<'_> {
     }
 
     /// The drive current monitor the acquisition read: one a tick, in turn
-    /// (each every [`JOINTS`] ticks: one ADC conversion, not four, in the
-    /// tick's budget).
+    /// (each every [`JOINTS`] ticks: one ADC conversion, not four, in an
+    /// acquisition).
     fn read_drive_current(&self, acquired: &Frames) -> DriveCurrentSense {
         let joint = acquired.drive_joint;
         let Some(cal) = self.cfg.drive_current_calibration.get(usize::from(joint)) else {

@@ -242,8 +242,8 @@ pub struct Reading {
 }
 
 /// An angle read's reply frame as a [`Reading`] under `calibration`, or
-/// why it is not one (the same outcome as [`As5048a::read_angle`] had for
-/// that reply).
+/// why it is not one (the same outcome as [`As5048a::read_angle`] gives
+/// for that reply).
 pub fn decode_angle(frame: u16, calibration: Calibration) -> Result<Reading, ReadStatus> {
     match decode_response(frame) {
         Ok(raw_counts) => Ok(Reading {

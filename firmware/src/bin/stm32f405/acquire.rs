@@ -9,8 +9,8 @@
 //! streams (Betaflight's SPI scheme). The rounds decide the frames
 //! (`EncoderRound`: every ANGLE command, then every NOP, an error flag
 //! cleared at once; `AdcRound`: four force sensors and one drive monitor),
-//! so the interrupts only move bytes: about 100 cycles a frame, 17 frames
-//! a tick.
+//! so the interrupts only move bytes: about 100–250 cycles a frame
+//! (chip-select waits included), 17 frames a tick.
 //!
 //! - SPI1 (encoders): DMA2 stream 0 (RX) and stream 3 (TX), channel 3.
 //! - SPI2 (ADC): DMA1 stream 3 (RX) and stream 4 (TX), channel 0
@@ -23,7 +23,7 @@
 //! started in. A tick that finds none of its own (the acquisition did not
 //! finish, or started late behind an overrunning tick) stops what is still
 //! running and reads the sensors itself through the drivers' blocking
-//! buses, about 200 µs, as the host's tick always does: the controller is
+//! buses, about 235 µs (both buses in turn), as the host's tick always does: the controller is
 //! never left without this tick's sensors. The status line counts those
 //! ticks; the next period's start aborts what is still running.
 
@@ -43,7 +43,8 @@ use crate::{ADC_CS_CYCLES, ENCODER_CS_CYCLES};
 
 /// How long before a tick its acquisition starts, µs. The ADC's bus is
 /// the slow one: five 24-bit conversions at 656 kHz take 183 µs; the
-/// encoders' twelve 16-bit frames at 5.25 MHz take 37 µs beside them.
+/// encoders' twelve 16-bit frames at 5.25 MHz take 37 µs on the wire,
+/// about 60 µs with their interrupts, beside them.
 pub const LEAD_US: u32 = 250;
 
 /// SPI1's DMA (DMA2) streams and channel; SPI2's (DMA1).

@@ -50,7 +50,8 @@ pub struct Board {
     tick: Tick,
     dog: IndependentWatchdog,
     log: LoopLog,
-    /// The last tick ran past its period: this one tells the supervisor.
+    /// The last tick ran past its deadline, the next acquisition's start
+    /// (750 µs in): this one tells the supervisor.
     overran: bool,
     /// Periods begun (TIM2 updates): stamps each acquisition with the
     /// tick it is for.
@@ -77,7 +78,8 @@ impl Board {
 
     /// TIM2's interrupt: the compare starts the next tick's acquisition,
     /// the update runs the tick (both when a late tick left both flags
-    /// up: the acquisition then misses this tick, which decodes none).
+    /// up: the acquisition then misses this tick, which reads its sensors
+    /// itself).
     fn on_timer(&mut self) {
         if self.tick.compare_elapsed() {
             acquire::start(self.period);
@@ -95,7 +97,8 @@ impl Board {
         let frames = match acquire::take(self.period.wrapping_sub(1)) {
             Some(frames) => frames,
             // None of its own (late or stalled): the tick reads the
-            // sensors itself, the acquisition stopped (about 200 µs).
+            // sensors itself, the acquisition stopped (about 235 µs, both
+            // buses in turn).
             None => {
                 acquire::stop();
                 acquisition::acquire(&mut self.hw, self.controller.next_drive_joint())
