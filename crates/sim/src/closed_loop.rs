@@ -16,6 +16,7 @@ use std::rc::Rc;
 use embedded_hal::digital::{self, InputPin, OutputPin};
 use exogait_device::tick_record::TickRecord;
 use exogait_device::{BoardIo, DeviceConfig};
+use gait_control::acquisition;
 use gait_control::controller::{Controller, Hardware, TickReport};
 use gait_control::faults::{FaultSet, Reaction};
 use gait_control::operator::Gait;
@@ -185,6 +186,10 @@ pub struct Rig<'t> {
     /// When recording (`record_ticks`): every tick's peripheral state and
     /// the controller's commands, for a replay on the target.
     pub recorded: Option<Vec<TickRecord>>,
+    /// Each tick's sensors read frame by frame in the motor board's DMA
+    /// order (`acquisition::acquire_in_rounds`, then `tick_acquired`), not
+    /// through the drivers at the tick's start: the same frames.
+    pub dma_frame_order: bool,
 }
 
 /// How a rig starts.
@@ -334,6 +339,7 @@ impl<'t> Rig<'t> {
             faults: Injector::default(),
             tables,
             recorded: None,
+            dma_frame_order: false,
         };
         // Start the ankle readings at their true values (no lag to settle).
         let s = rig.plant.state();
@@ -430,6 +436,12 @@ impl<'t> Rig<'t> {
             .then(|| self.peripheral_state(overrun));
         let report = match self.rebooting()? {
             Some(report) => report,
+            None if self.dma_frame_order => {
+                let joint = self.controller.next_drive_joint();
+                let frames = acquisition::acquire_in_rounds(&mut self.hw, joint);
+                self.controller
+                    .tick_acquired(&mut self.hw, &frames, overrun)
+            }
             None => self.controller.tick(&mut self.hw, overrun),
         };
         if let (Some(log), Some(r)) = (&mut self.recorded, &mut record) {

@@ -5,6 +5,7 @@
 // of the strict lints, host-tests denies only these two (Cargo.toml).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod acquisition;
 mod clinical_tables;
 mod closed_loop;
 mod common;
