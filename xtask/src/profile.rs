@@ -316,7 +316,80 @@ pub fn profile(elf: &Path) -> Result {
 /// Files listed for each phase's costliest tick.
 const TOP_WORST_FILES: usize = 60;
 
-/// Per phase, its costliest marked tick by source file (and, for the
+/// The tick's stages as the README's "Performance" table groups them, by
+/// what a source file's path holds (the first stage that matches; what
+/// none does is shared: clamps, copies, compiler builtins).
+const STAGES: [(&str, &[&str]); 8] = [
+    ("rig", &["qemu_rig.rs"]),
+    ("timer-reads", &["tick_replay.rs", "bin/qemu"]),
+    (
+        "sense",
+        &[
+            "controller/sense.rs",
+            "as5048a.rs",
+            "mcp3208.rs",
+            "buttons.rs",
+            "controller/chain.rs",
+            "controller/estop.rs",
+            "acquisition",
+        ],
+    ),
+    (
+        "plan",
+        &[
+            "sequencer",
+            "ahead",
+            "operator.rs",
+            "reference.rs",
+            "tables.rs",
+            "kinematics.rs",
+            "posture.rs",
+            "reach.rs",
+            "model.rs",
+            "foot.rs",
+            "ik.rs",
+        ],
+    ),
+    (
+        "act",
+        &[
+            "controller/act.rs",
+            "position_loop.rs",
+            "feedforward.rs",
+            "dynamics",
+        ],
+    ),
+    (
+        "guard",
+        &[
+            "supervisor",
+            "controller/guard.rs",
+            "check_slot.rs",
+            "faults",
+            "ring_log.rs",
+        ],
+    ),
+    (
+        "write",
+        &[
+            "controller/write.rs",
+            "motor.rs",
+            "status.rs",
+            "crutch_load.rs",
+        ],
+    ),
+    ("shared", &[]),
+];
+
+/// The stage of [`STAGES`] `file` belongs to.
+fn stage_of(file: &str) -> &'static str {
+    STAGES
+        .iter()
+        .find(|(_, parts)| parts.iter().any(|p| file.contains(p)))
+        .map_or("shared", |&(stage, _)| stage)
+}
+
+/// Per phase, its costliest marked tick by stage and source file (and, for the
 /// costliest phase, by line): what the `tick:` lines' worst figures are made
 /// of (plus the few instructions of the replay's timer reads).
 fn print_worst_ticks(log: &ExecLog, sources: &HashMap<u32, Source>) {
@@ -336,6 +409,16 @@ fn print_worst_ticks(log: &ExecLog, sources: &HashMap<u32, Source>) {
             *by_file.entry(file).or_insert(0) += n;
             *by_line.entry((file, line)).or_insert(0) += n;
         }
+        let mut by_stage: Vec<(&str, u64)> = STAGES.iter().map(|&(s, _)| (s, 0)).collect();
+        for (f, n) in &by_file {
+            let stage = stage_of(f);
+            if let Some(row) = by_stage.iter_mut().find(|(s, _)| *s == stage) {
+                row.1 += n;
+            }
+        }
+        for (stage, n) in by_stage {
+            println!("profile-stage: {phase} {stage} {n}");
+        }
         let mut rows: Vec<(&str, u64)> = by_file.into_iter().collect();
         rows.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
         for (f, n) in rows.into_iter().take(TOP_WORST_FILES) {
@@ -354,6 +437,24 @@ fn print_worst_ticks(log: &ExecLog, sources: &HashMap<u32, Source>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_file_goes_to_its_stage() {
+        for (file, stage) in [
+            ("crates/gait-control/src/controller/sense.rs", "sense"),
+            ("crates/gait-control/src/drivers/as5048a.rs", "sense"),
+            ("crates/gait-control/src/sequencer/swing.rs", "plan"),
+            ("crates/gait-control/src/ahead/swing.rs", "plan"),
+            ("crates/gait-core/src/dynamics/pinned.rs", "act"),
+            ("crates/gait-control/src/supervisor/tracks.rs", "guard"),
+            ("crates/gait-control/src/drivers/motor.rs", "write"),
+            ("crates/gait-core/src/scalar.rs", "shared"),
+            ("firmware/src/qemu_rig.rs", "rig"),
+            ("firmware/src/bin/qemu/recorded.rs", "timer-reads"),
+        ] {
+            assert_eq!(stage_of(file), stage, "{file}");
+        }
+    }
 
     const LOG: &str = "\
 ----------------
