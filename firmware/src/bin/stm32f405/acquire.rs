@@ -253,16 +253,7 @@ pub fn install(
 /// Starts the acquisition for the tick that ends `period` (TIM2's compare
 /// interrupt); aborts one still running.
 pub fn start(period: u32) {
-    interrupt::free(|cs| {
-        // Never borrowed twice (each borrow is inside a critical
-        // section); `try_` keeps the panic of a double borrow out of the
-        // image.
-        let Ok(mut engine) = ENGINE.borrow(cs).try_borrow_mut() else {
-            return;
-        };
-        let Some(e) = engine.as_mut() else {
-            return;
-        };
+    with_engine(|e| {
         if e.running.is_some() {
             e.abort();
         }
@@ -290,11 +281,18 @@ pub fn take(period: u32) -> Option<Frames> {
 /// chip select high: for a tick that found no frames of its own and reads
 /// the sensors itself, through the drivers' blocking buses.
 pub fn stop() {
+    with_engine(Engine::abort);
+}
+
+/// `f` on the installed engine, in a critical section. Never borrowed
+/// twice (each borrow is inside one); `try_` keeps the panic of a double
+/// borrow out of the image.
+fn with_engine(f: impl FnOnce(&mut Engine)) {
     interrupt::free(|cs| {
         if let Ok(mut engine) = ENGINE.borrow(cs).try_borrow_mut()
             && let Some(e) = engine.as_mut()
         {
-            e.abort();
+            f(e);
         }
     });
 }
@@ -311,16 +309,7 @@ pub fn missed() -> u32 {
 
 /// DMA2 stream 0's interrupt: an encoder frame ended.
 pub fn on_encoder_frame() {
-    interrupt::free(|cs| {
-        // Never borrowed twice (each borrow is inside a critical
-        // section); `try_` keeps the panic of a double borrow out of the
-        // image.
-        let Ok(mut engine) = ENGINE.borrow(cs).try_borrow_mut() else {
-            return;
-        };
-        let Some(e) = engine.as_mut() else {
-            return;
-        };
+    with_engine(|e| {
         let Some(failed) = Bus::Encoders.ended() else {
             return;
         };
@@ -342,14 +331,7 @@ pub fn on_encoder_frame() {
 
 /// DMA1 stream 3's interrupt: a conversion ended.
 pub fn on_conversion() {
-    interrupt::free(|cs| {
-        // As in `on_encoder_frame`.
-        let Ok(mut engine) = ENGINE.borrow(cs).try_borrow_mut() else {
-            return;
-        };
-        let Some(e) = engine.as_mut() else {
-            return;
-        };
+    with_engine(|e| {
         let Some(failed) = Bus::Adc.ended() else {
             return;
         };
