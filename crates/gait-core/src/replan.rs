@@ -39,15 +39,22 @@
 //!   playback of the samples ([`crate::playback::for_each_sample`]) gives
 //!   the predicted balance impulse Σ|τ_pilot|Δt/lever plus the clinical
 //!   mode's quadratic penalties (drive torque over its share, joint speed
-//!   and acceleration, joint range inside a margin, clearance band, sole
+//!   and acceleration, hip and knee range inside a margin, clearance band, sole
 //!   over the ground, the last centimetre straight down, weight on the
 //!   trailing foot at the start), with the same weights; hard rejects for
 //!   a hip or knee torque above what the drive can give at its speed, an
 //!   angle outside the envelope, an IK without a posture, and a landing
-//!   more than [`LANDING_TOLERANCE_M`] off the table's. One term differs:
-//!   the "last centimetre straight down" counts only samples where the
-//!   foot comes down (gait-opt's also counts an ascent's rise to the upper
-//!   tread, some 0.4 m from the landing, which no candidate can change).
+//!   more than [`LANDING_TOLERANCE_M`] off the table's. Two terms differ:
+//!   - the "last centimetre straight down" counts only samples where the
+//!     foot comes down (gait-opt's also counts an ascent's rise to the
+//!     upper tread, some 0.4 m from the landing, which no candidate can
+//!     change);
+//!   - the stance ankle has its stop as a hard limit but no soft margin.
+//!     The ankle has no drive, so its angle is the pilot's. With the
+//!     margin, a pilot leaning back 2° on the walk stood inside it, and
+//!     the search bought the margin back by planning φ1 forward, where the
+//!     pilot did not go: the landings were right, but the crutch load
+//!     rose by a third in the closed loop.
 //! - **Baseline** (`table_cost`): the table played from the measured start,
 //!   as the device does without re-planning: every sample rotated by δ. Its
 //!   cost is the same sum plus the landing penalty

@@ -1,8 +1,9 @@
 //! The board's idle-time re-planner in the closed loop: the answer reaches
 //! the sequencer on the tick the board would have it, the swing starts
 //! exactly the latency after the request, and a pilot who stands leaning
-//! forward on a stair descent has each step land where it is planned; a
-//! late or refused answer is logged (0x0606, 0x0607) and the table played.
+//! forward on a stair descent has each step land where it is planned, as
+//! does one leaning back on the walk without more crutch load; a late or
+//! refused answer is logged (0x0606, 0x0607) and the table played.
 
 use exogait_device::DeviceConfig;
 use exogait_device::replan::REPLAN;
@@ -113,6 +114,50 @@ fn a_forward_leaning_pilots_descent_steps_land_where_planned_when_replanned() {
             "{answers:?}"
         );
     }
+}
+
+/// Four walking steps of a pilot leaning 2° back, the encoders and ADC
+/// noisy as the device's (±3 and ±10 counts, `compare`'s default seed),
+/// the board re-planning or not.
+fn back_leaning_walk(replan: bool) -> GaitRun {
+    let device = DeviceConfig::exogait().unwrap();
+    let table = flash_tables::walk().unwrap();
+    let pilot = PilotConfig {
+        habit_lean_rad: (-2.0f64).to_radians(),
+        ..strong_pilot()
+    };
+    let slot = ReplanSlot::new();
+    let (run, _) = play(&device, table, pilot, 4, 40.0, |rig| {
+        rig.set_sensor_noise(3, 10, 2026);
+        if replan {
+            rig.replan_with(&slot);
+        }
+    })
+    .unwrap();
+    run
+}
+
+/// The walking pilot leaning back stands inside the soft margin of the
+/// ankle's plantarflexion stop. The re-planner keeps that ankle where the
+/// pilot has it (no soft margin on an ankle without a drive): the steps
+/// land on their footholds and the crutches carry what they carry on the
+/// table. With the margin, the steps landed as well but the balance part
+/// of the crutch load rose by a third.
+#[test]
+fn a_back_leaning_walkers_steps_land_where_planned_without_more_crutch_load() {
+    let (plain, replanned) = (back_leaning_walk(false), back_leaning_walk(true));
+    assert!(plain.faults.is_empty() && replanned.faults.is_empty());
+    let (before, after) = (mean_step_error_mm(&plain), mean_step_error_mm(&replanned));
+    assert!(
+        after <= 0.5 * before,
+        "step error {after:.1} mm re-planned against {before:.1} mm"
+    );
+    let balance = |r: &GaitRun| r.mean(|s| s.balance_ns).unwrap();
+    let (before, after) = (balance(&plain), balance(&replanned));
+    assert!(
+        after <= 1.03 * before,
+        "balance {after:.1} N·s a step re-planned against {before:.1} N·s"
+    );
 }
 
 #[test]

@@ -206,10 +206,10 @@ impl<'s, 'a, T: Real> Accumulator<'s, 'a, T> {
         }
         let margin = l.range_margin_rad;
         let phi1 = s.phi[0];
-        self.add(
-            RANGE,
-            T::lit(W_RANGE) * sq_excess(l.ankle_min_rad + margin, phi1),
-        );
+        // The stance ankle has no drive: where it is, the pilot put it. Its
+        // stop is a hard limit here, with no soft margin (the clinical
+        // mode's margin keeps a designed plan off the stop; a re-plan that
+        // buys that margin back steers φ1 where the pilot does not follow).
         if phi1 < l.ankle_min_rad {
             self.hard(Violation::AnkleRange(at));
         }
