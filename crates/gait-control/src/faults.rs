@@ -551,6 +551,19 @@ fault_table! {
         reset_allowed_when: "the ankle is back near its plan or stops moving away",
         in_swing: InSwing::HoldNow,
     },
+    /// The crutches stay at their resting load through a swing: the pilot
+    /// no longer pushes on them, so nothing balances the body over the
+    /// stance foot (in a stair descent it sinks back onto the tread it
+    /// left). In a swing the foot is set down where it is, over that
+    /// tread early in the step; late in the swing the step lands.
+    PilotNotBalancing = 0x0703 {
+        name: "pilot not balancing",
+        reaction: Reaction::SafeHold,
+        detection_bound: "800 ticks of a swing with the crutches within 10 N of the least \
+            they carried lately",
+        reset_allowed_when: "no swing is under way (in the hold: at once)",
+        in_swing: InSwing::HoldNow,
+    },
 }
 
 // A `FaultSet` has one bit per code in a `u64`.

@@ -12,8 +12,8 @@ use crate::drivers::motor::MotorConfig;
 use crate::position_loop::JointGains;
 use crate::sequencer::SequencerConfig;
 use crate::supervisor::{
-    AngleRange, BalanceCheck, Debounce, DriveCurrentCheck, ErrorBounds, ResponseCheck,
-    SupervisorConfig,
+    AngleRange, BalanceCheck, CrutchIdleCheck, Debounce, DriveCurrentCheck, ErrorBounds,
+    ResponseCheck, SupervisorConfig,
 };
 
 impl_fingerprint_enum!(Direction, ActiveLevel, Channel);
@@ -119,7 +119,13 @@ impl_fingerprint!(SupervisorConfig {
     deadline_window_ticks,
     response,
     balance,
+    crutch_idle,
     drive_current,
+});
+impl_fingerprint!(CrutchIdleCheck {
+    rise_n,
+    forget_n_per_s,
+    ticks,
 });
 impl_fingerprint!(BalanceCheck {
     idle,

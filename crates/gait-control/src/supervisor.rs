@@ -29,6 +29,7 @@ pub use crate::layout::{ANKLES, ENCODERS, FORCES, JOINTS, Side};
 mod balance;
 mod checks;
 mod config;
+mod crutch_idle;
 mod drive_current;
 mod facts;
 mod findings;
@@ -42,6 +43,7 @@ pub use balance::{BalanceCheck, ErrorBounds};
 pub use config::{
     AngleRange, ConfigError, Debounce, EnvelopeMargins, ResetRefused, SupervisorConfig,
 };
+pub use crutch_idle::CrutchIdleCheck;
 pub use drive_current::{DriveCurrentCheck, DriveCurrentSense};
 pub use facts::{
     EncoderSense, EncoderStatus, ForceSense, ForceStatus, MotorSense, SupervisorInput,

@@ -4,7 +4,7 @@
 //! [`crate::outcome`]. Beside it, healthy runs of each gait with sensor
 //! noise and no fault, in which anything latched is a false trip. The same
 //! seed gives the same runs. `exogait faults` and the campaign tests run
-//! them; docs/safety.md has the figures.
+//! them; docs/campaign.md has the figures.
 //!
 //! A campaign plays the device's own gaits or every gait of a patient's
 //! bundle (`gaits`).

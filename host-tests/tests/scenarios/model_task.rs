@@ -104,7 +104,8 @@ fn a_model_task_between_ticks_drives_the_device_as_the_tick_alone_does() {
 }
 
 /// Faults that only the windowed checks find (the torque residual, a
-/// frozen encoder, a force sensor's debounce): found in the task's time,
+/// frozen encoder, a force sensor's debounce, the crutches left at rest
+/// through a swing): found in the task's time,
 /// they latch on the same tick, with the same reaction, as the tick's own
 /// run of the checks finds them.
 #[test]
@@ -126,7 +127,7 @@ fn the_windowed_checks_in_the_task_find_what_the_tick_finds_on_the_same_tick() {
         (
             Kind::PilotStopsBalancing,
             None,
-            FaultCode::PilotFallingForward,
+            FaultCode::PilotNotBalancing,
         ),
     ]
     .into_iter()

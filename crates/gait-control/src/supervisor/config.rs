@@ -152,6 +152,8 @@ pub struct SupervisorConfig {
     pub response: ResponseCheck,
     /// The balance check (0x0701, 0x0702).
     pub balance: BalanceCheck,
+    /// The idle-crutches check (0x0703).
+    pub crutch_idle: CrutchIdleCheck,
     /// The drives' currents against their commands (0x0405, 0x0406).
     pub drive_current: DriveCurrentCheck,
 }
@@ -239,6 +241,7 @@ impl SupervisorConfig {
             deadline_window_ticks: 1000,
             response: ResponseCheck::DEFAULT,
             balance: BalanceCheck::DEFAULT,
+            crutch_idle: CrutchIdleCheck::DEFAULT,
             drive_current: DriveCurrentCheck::DEFAULT,
         }
     }
@@ -265,6 +268,7 @@ impl SupervisorConfig {
             && velocities_ok
             && self.response.is_valid()
             && self.balance.is_valid()
+            && self.crutch_idle.is_valid()
             && self.drive_current.is_valid())
             || self.velocity_filter_alpha > 1.0
         {

@@ -1,10 +1,10 @@
 //! The windowed checks: the rules that judge a channel over many ticks
 //! (a joint's velocity, frozen counts, tracking and torque residual; an
 //! ankle's heel-off and stuck readings; the force sensors' and drive
-//! monitors' debounces). None of them can trip on one tick's facts alone,
+//! monitors' debounces; the crutches left idle through a swing). None of them can trip on one tick's facts alone,
 //! and together they are most of the supervisor's work. (The pilot's
-//! balance, 0x0701 and 0x0702, is judged over ticks too but stays in the
-//! tick: a pilot losing balance is held a millisecond sooner.)
+//! balance at the ankles, 0x0701 and 0x0702, is judged over ticks too but
+//! stays in the tick: a pilot losing balance is held a millisecond sooner.)
 //!
 //! So the controller runs them a tick late, off the tick: it hands each
 //! tick's facts over as a [`WindowedJob`] and applies the [`Findings`] of
@@ -20,6 +20,7 @@
 //! [`Supervisor::check`] runs both on the same tick's facts (the rules'
 //! own tests).
 
+use super::crutch_idle::CrutchIdleTrack;
 use super::findings::{Findings, Marks};
 use super::tracks::{ForceTrack, JointMotion};
 use super::*;
@@ -59,6 +60,8 @@ pub struct WindowedChecks {
     plan_since_moved: [f32; ANKLES],
     forces: [ForceTrack; FORCES],
     pub(super) drive_currents: [drive_current::DriveCurrentTrack; JOINTS],
+    /// The crutches' resting load and idle stretch (0x0703).
+    crutch_idle: CrutchIdleTrack,
     previous_reference_rad: Option<[f32; JOINTS]>,
 }
 
@@ -75,6 +78,7 @@ impl WindowedChecks {
             plan_since_moved: [f32::NAN; ANKLES],
             forces: [ForceTrack::default(); FORCES],
             drive_currents: Default::default(),
+            crutch_idle: CrutchIdleTrack::default(),
             previous_reference_rad: None,
         }
     }
@@ -85,6 +89,7 @@ impl WindowedChecks {
         self.check_joints(&job.input, &job.frames, &mut f);
         self.check_ankles(&job.input, &job.frames, &mut f);
         self.check_forces(&job.input, &mut f);
+        self.check_crutches(&job.input, &mut f);
         self.check_drive_current(&job.input, &mut f);
         self.previous_reference_rad = Some(job.input.joint_reference_rad);
         f
@@ -292,6 +297,29 @@ impl WindowedChecks {
                     f.raise(FaultCode::AnkleEncoder, ch, plan - *from);
                 }
             }
+        }
+    }
+
+    /// 0x0703: the crutches at their resting load through a swing.
+    fn check_crutches(&mut self, input: &SupervisorInput, f: &mut Findings) {
+        let read = |i: usize| match input.forces.get(i) {
+            Some(ForceSense {
+                status: ForceStatus::Ok,
+                newtons,
+            }) => *newtons,
+            _ => f32::NAN,
+        };
+        let sum = crate::layout::force::CRUTCHES
+            .iter()
+            .map(|&i| read(i))
+            .sum::<f32>();
+        let swinging = input.step_in_progress && input.swing_leg.is_some();
+        let cfg = &self.cfg;
+        if let Some(above) = self
+            .crutch_idle
+            .update(&cfg.crutch_idle, sum, swinging, cfg.dt_s)
+        {
+            f.raise(FaultCode::PilotNotBalancing, NO_CHANNEL, above);
         }
     }
 

@@ -1,4 +1,4 @@
-//! The falls `docs/safety.md` names with their physical reason (issue 13's
+//! The falls `docs/campaign.md` names with their physical reason (issue 13's
 //! exceptions to "no fall"), told from a run's plan and where the gait was
 //! when its fault struck: what no reaction of these four drives, with
 //! these sensors, can hold. Every other fall is the device's to fix.
@@ -11,7 +11,7 @@ use crate::inject::{Kind, Target};
 
 use super::CampaignRun;
 
-/// A fall with a physical reason (docs/safety.md, "Cases named with their
+/// A fall with a physical reason (docs/campaign.md, "Cases named with their
 /// physical reason").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NamedCase {

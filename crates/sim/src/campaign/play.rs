@@ -19,7 +19,7 @@ pub fn play(run: &CampaignRun, device: &DeviceConfig) -> RunResult {
 
 /// [`play`] with another simulated pilot (the campaign's is
 /// [`strong_pilot`]): how the figures depend on what only the simulation
-/// has, e.g. the pilot's reaction to a hold (`docs/safety.md`).
+/// has, e.g. the pilot's reaction to a hold (`docs/campaign.md`).
 pub fn play_with_pilot(run: &CampaignRun, device: &DeviceConfig, pilot: PilotConfig) -> RunResult {
     play_on(run, device, pilot, &CampaignGaits::built_in())
 }

@@ -327,7 +327,7 @@ mod tests {
 
     /// What the campaign's figures rest on: the pilot's aim in a safe hold
     /// moves the falls of a 10,000-run campaign by hundreds
-    /// (`docs/safety.md`, "The randomised fault campaign"), so a change
+    /// (`docs/campaign.md`), so a change
     /// here must be deliberate.
     #[test]
     fn the_pilot_aims_at_the_step_s_start_but_in_a_swing_and_a_transfer() {

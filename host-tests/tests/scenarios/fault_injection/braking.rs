@@ -271,9 +271,13 @@ fn a_slipping_gear_is_found_by_its_residual_not_its_current() {
     // The gearbox passes a third of the motor's torque; the current, and
     // its monitor, stay what was asked: the current check cannot see it,
     // the residual (0x0404) must. Measured with the campaign's pilot, who
-    // meets a hold 0.15 s late: 20 of 36 braked first at their own joint
+    // meets a hold 0.15 s late: 19 of 36 braked first at their own joint
     // by the residual (it shows only under load), 5 at a joint the
-    // slipping one drags, all on stairs, 11 not within the 4 s played.
+    // slipping one drags, all on stairs, 12 not within the 4 s played. One
+    // of these (the walk's left knee slipping before the first swing) is
+    // held first for the crutches left at rest (0x0703): the slipping
+    // stance knee lets the body down, the pilot's push rests 0.8 s of the
+    // swing, and the residual no longer trips in the hold; no fall.
     let (mut own, mut other) = (0, 0);
     for (case, slipping, first) in first_brakes("gear-slip=0.3") {
         let Some((code, joint, _)) = first else {
@@ -284,7 +288,7 @@ fn a_slipping_gear_is_found_by_its_residual_not_its_current() {
         other += usize::from(joint != slipping);
     }
     assert!(
-        own >= 20 && other <= 5,
+        own >= 19 && other <= 5,
         "{own} of 36 at their own joint, {other} elsewhere"
     );
 }

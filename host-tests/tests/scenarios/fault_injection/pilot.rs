@@ -14,7 +14,7 @@ fn the_simulated_pilot_reacts_to_a_hold_late_and_slowly() {
     // The campaign's pilot goes on with the step's shank for its reaction
     // time, then eases it to the hold's aim; an instant one
     // (`scenario::instant_pilot`) meets the hold at once with the crutches'
-    // full torque (`docs/safety.md`, "The randomised fault campaign").
+    // full torque (`docs/campaign.md`).
     let device = DeviceConfig::exogait().unwrap();
     let fault: Injection = "dir-fail:right-hip@2.497".parse().unwrap();
     let crutches_after_hold = |pilot: sim::pilot::PilotConfig| {
@@ -92,8 +92,11 @@ fn a_pilot_who_stops_balancing_on_the_stairs_is_found_by_the_shank_and_kept_up()
     // (3.8 s) before the tipping has built up, and 0x0701 finds it in the
     // weight transfer, where both feet carry the body and it tips slower;
     // without the check, the heel-off check holds it later.
+    // The crutches' check (0x0703) would find each of these first: it is
+    // off here, to try the shank's.
     use gait_control::faults::FaultCode;
-    let device = DeviceConfig::exogait().unwrap();
+    let mut device = DeviceConfig::exogait().unwrap();
+    device.supervisor.crutch_idle.ticks = u32::MAX;
     let mut unchecked = device;
     unchecked.supervisor.balance.ticks = u32::MAX;
     for (fault, code, found_within_s) in [
@@ -168,4 +171,77 @@ fn a_fast_clinical_walk_of_a_tall_heavy_patient_does_not_trip_the_balance_check(
         (slowed - ATTEMPTS[1].0).abs() < 0.011,
         "slowed by {slowed} s"
     );
+}
+
+#[test]
+fn a_pilot_who_stops_balancing_in_a_descents_swing_is_set_down_on_the_tread_he_left() {
+    // Seed 1's campaign runs of a pilot who stops pushing on the crutches
+    // early in a stair descent's swing: the stance heel is on its stop,
+    // so the ankle does not see it, and the body sinks back onto the tread
+    // it left. The crutches left at their resting load find it 0.8 s
+    // later (0x0703), while the swing foot is still over that tread: it is
+    // set down there, and the pilot stands on two feet, no stop crossed.
+    use gait_control::faults::FaultCode;
+    for (fault, seed) in [
+        ("pilot-stops-balancing@1.821", 284_074),
+        ("pilot-stops-balancing@4.197", 557_637),
+    ] {
+        let r = crate::common::campaign_run(Gait::StairDown, fault, seed);
+        let o = &r.outcome;
+        assert!(o.fell.is_none(), "{fault}: {o:?}");
+        assert!(o.worst_limit_margin_rad > 0.0, "{fault}: {o:?}");
+        let first = o.faults.first().unwrap();
+        assert_eq!(first.code, FaultCode::PilotNotBalancing, "{fault}: {o:?}");
+        let latency = first.latency_ticks.unwrap();
+        // Within the window of a crutch rest that may begin before the stop.
+        assert!(latency <= 810, "{fault}: {latency} ticks");
+    }
+}
+
+#[test]
+fn a_balancing_pilot_never_leaves_the_crutches_idle_near_the_window() {
+    // The longest stretch of a swing with the crutches within the check's
+    // rise of their resting load, in healthy runs of every built-in gait,
+    // without sensor noise (where it is longest: the pilot's torque passes
+    // slowly through zero mid-swing) and with the device's: at most 85 %
+    // of the window that makes 0x0703.
+    use gait_control::layout::force::CRUTCHES;
+    use gait_control::sequencer::Phase;
+    let device = DeviceConfig::exogait().unwrap();
+    let cfg = device.supervisor.crutch_idle;
+    for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
+        for noise in [None, Some(2026)] {
+            let run = run_tables_with(
+                &device,
+                flash_tables(),
+                gait,
+                strong_pilot(),
+                40.0,
+                4,
+                |rig| {
+                    if let Some(seed) = noise {
+                        rig.set_sensor_noise(3, 10, seed);
+                    }
+                },
+            )
+            .unwrap();
+            let (mut least, mut stretch, mut longest) = (f32::INFINITY, 0u32, 0u32);
+            for s in &run.rig.trace {
+                let sum: f32 = CRUTCHES.iter().map(|&i| s.report.forces_n[i]).sum();
+                least = (least + cfg.forget_n_per_s * 1e-3).min(sum);
+                let swing = matches!(s.report.phase, Phase::Swing { .. });
+                stretch = if swing && sum - least < cfg.rise_n {
+                    stretch + 1
+                } else {
+                    0
+                };
+                longest = longest.max(stretch);
+            }
+            assert!(run.rig.trace.len() > 8000, "{gait:?}: a short run");
+            assert!(
+                longest as f32 <= 0.85 * cfg.ticks as f32,
+                "{gait:?}, noise {noise:?}: idle for {longest} ticks of a swing"
+            );
+        }
+    }
 }

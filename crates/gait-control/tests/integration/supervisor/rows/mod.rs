@@ -2,6 +2,7 @@
 //! reaction, detection bound, not before), by the part the fault is in.
 
 mod ankles;
+mod crutches;
 mod drive_current;
 mod encoders;
 mod inputs;
