@@ -80,7 +80,7 @@ struct BadRunJson {
     fault: String,
     noise_seed: u64,
     fell: Option<String>,
-    /// The case docs/safety.md names the fall with (`None`: the device's).
+    /// The case docs/campaign.md names the fall with (`None`: the device's).
     named_case: Option<&'static str>,
     worst_limit_margin_rad: f64,
     /// The joint of the smallest margin, and which of its stops.
@@ -414,8 +414,8 @@ pub fn run(args: &FaultsArgs) -> u8 {
             }
         }
     }
-    // Issue 13's goal: no fall and no stop crossed but for the cases
-    // docs/safety.md names with their physical reason.
+    // No fall and no stop crossed but for the cases docs/campaign.md
+    // names with their physical reason.
     let goal = all.unnamed_falls == 0
         && all.unnamed_past_a_stop == 0
         && all.missed == 0

@@ -204,8 +204,9 @@ pub enum InSwing {
     HoldNow,
     /// Play the step on to its landing, then hold: the timing slipped, but
     /// the sensors, the table and the motors are good, and a foot in the
-    /// air is no posture to hold. Measured in the fault campaign
-    /// (`docs/safety.md`, seed 1): falls after overruns 7 → 0 in 96 runs.
+    /// air is no posture to hold. In the fault campaign (`docs/campaign.md`,
+    /// seed 1) no pilot falls after overruns in 96 runs; holding at once,
+    /// 7 did.
     /// Not for a lost joint encoder: landing on a joint run on the model's
     /// torque alone fell more often than holding at once (57 against 34
     /// falls in 400 encoder-fault runs). Every hold late in a stair

@@ -64,8 +64,7 @@ pub fn descent_then_walk_bundle(
 /// automatic response starts ≈ 0.1 s after a perturbation, a voluntary one
 /// 0.18–0.23 s), then 1.5 s to move the body to the hold's aim (a
 /// deliberate move of the body by the arms takes 1–2 s). Sources and
-/// what an instant pilot changes: `docs/safety.md`, "The randomised fault
-/// campaign".
+/// what an instant pilot changes: `docs/campaign.md`.
 pub fn strong_pilot() -> PilotConfig {
     PilotConfig {
         torque_limit_nm: 300.0,

@@ -70,7 +70,7 @@ impl BalanceCheck {
     /// 30 ms: beyond the healthy runs' tracking of the stance shank
     /// (the campaign's and the clinical families'), and reached within a
     /// few hundred milliseconds of a pilot who stops balancing
-    /// (`docs/safety.md`).
+    /// (`docs/safety.md`, `docs/campaign.md`).
     pub const DEFAULT: Self = Self {
         idle: ErrorBounds {
             feet_down_rad: 0.1,

@@ -208,7 +208,7 @@ impl<W> Supervisor<W> {
 }
 
 /// Both crutches' load, N; NaN unless both sensors read.
-fn crutch_sum_n(input: &SupervisorInput) -> f32 {
+pub(super) fn crutch_sum_n(input: &SupervisorInput) -> f32 {
     use crate::layout::force::{LEFT_CRUTCH, RIGHT_CRUTCH};
     let read = |c: usize| match input.forces.get(c) {
         Some(f) if f.status == ForceStatus::Ok => f.newtons,

@@ -91,7 +91,8 @@ pub struct SupervisorInput {
     /// and the pilot's balance (0x0701, 0x0702).
     pub ankle_plan_rad: [f32; ANKLES],
     /// The leg in the air (`None` while both feet are down): its joints
-    /// move only their own links (0x0404's swing inertias).
+    /// move only their own links (0x0404's swing inertias), and the
+    /// crutches are judged through its swing (0x0703).
     pub swing_leg: Option<Side>,
     /// The swing leg once its foot is surely in the air (the table's
     /// landing window, no contact yet; `Sequencer::airborne_leg`): an

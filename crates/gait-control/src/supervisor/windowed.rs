@@ -1,8 +1,9 @@
 //! The windowed checks: the rules that judge a channel over many ticks
 //! (a joint's velocity, frozen counts, tracking and torque residual; an
 //! ankle's heel-off and stuck readings; the force sensors' and drive
-//! monitors' debounces; the crutches left idle through a swing). None of them can trip on one tick's facts alone,
-//! and together they are most of the supervisor's work. (The pilot's
+//! monitors' debounces; the crutches left at rest through a swing). None
+//! of them can trip on one tick's facts alone, and together they are most
+//! of the supervisor's work. (The pilot's
 //! balance at the ankles, 0x0701 and 0x0702, is judged over ticks too but
 //! stays in the tick: a pilot losing balance is held a millisecond sooner.)
 //!
@@ -302,17 +303,7 @@ impl WindowedChecks {
 
     /// 0x0703: the crutches at their resting load through a swing.
     fn check_crutches(&mut self, input: &SupervisorInput, f: &mut Findings) {
-        let read = |i: usize| match input.forces.get(i) {
-            Some(ForceSense {
-                status: ForceStatus::Ok,
-                newtons,
-            }) => *newtons,
-            _ => f32::NAN,
-        };
-        let sum = crate::layout::force::CRUTCHES
-            .iter()
-            .map(|&i| read(i))
-            .sum::<f32>();
+        let sum = checks::crutch_sum_n(input);
         let swinging = input.step_in_progress && input.swing_leg.is_some();
         let cfg = &self.cfg;
         if let Some(above) = self

@@ -92,7 +92,7 @@ fn a_seeded_campaign_detects_every_fault_it_must_and_never_trips_falsely() {
     // fault latches before the injection. Falls and stop crossings are
     // counted and printed, not asserted here; `cargo xtask faults --runs N`
     // runs the large campaign, which fails on any that is not a named case
-    // (docs/safety.md, "The randomised fault campaign").
+    // (docs/campaign.md).
     let device = DeviceConfig::exogait().unwrap();
     let runs = sim::campaign::plan(2026, 200);
     let results = sim::campaign::play_all(&runs, &device, &|| {});

@@ -21,7 +21,7 @@ fn a_panic_resets_the_board_into_a_hold_of_the_posture_it_finds() {
     // from any other fault there plays on to its landing; the set-down
     // alone keeps the pilot up there, the simulated pilot restarting his
     // push from the set-down foot's shank when it lands (docs/safety.md,
-    // "If a panic happens anyway" and "The randomised fault campaign").
+    // "If a panic happens anyway"; docs/campaign.md).
     for gait in [Gait::Walk, Gait::StairUp, Gait::StairDown] {
         for at in [0.5, 1.2, 1.6, 2.0, 2.4, 2.8, 3.2] {
             let o = run(gait, 3, at + 3.0, None, &[&format!("panic@{at}")]);

@@ -44,15 +44,25 @@ fn a_pilot_who_pushes_now_and_then_or_stands_at_rest_is_not_tripped() {
     // Standing or in a weight transfer, resting the crutches is allowed.
     let (_, v) = inject(3000, |_, input| input.step_in_progress = true);
     assert!(quiet(&v));
-    // A crutch sensor that cannot tell restarts the count (its own row,
-    // 0x0302, is the force sensors').
-    let v = inject(600, |k, input| {
+}
+
+#[test]
+fn a_crutch_sensor_failing_now_and_then_does_not_hide_a_stopped_pilot() {
+    // One bus error every 400 ticks (under the force sensors' own
+    // debounce, 0x0301): those ticks neither count nor restart the count,
+    // and the row trips one tick later for each.
+    let cfg = SupervisorConfig::paper().crutch_idle;
+    let v = inject(2 * cfg.ticks, |k, input| {
         input.step_in_progress = true;
         input.swing_leg = Some(Side::Right);
-        if k % 200 == 0 {
-            input.forces[force::LEFT_CRUTCH].newtons = f32::NAN;
+        if k % 400 == 0 {
+            input.forces[force::LEFT_CRUTCH].status = ForceStatus::BusError;
         }
     })
     .1;
-    assert_eq!(detected_at(&v, FaultCode::PilotNotBalancing), None);
+    let glitches = (1..=cfg.ticks + 2).filter(|k| k % 400 == 0).count() as u32;
+    assert_eq!(
+        detected_at(&v, FaultCode::PilotNotBalancing),
+        Some(cfg.ticks + glitches)
+    );
 }
