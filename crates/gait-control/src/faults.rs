@@ -198,9 +198,14 @@ macro_rules! fault_table {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum InSwing {
     /// Hold the posture at once: the actuators or the motion itself are in
-    /// doubt (a stuck motor, a joint past its envelope or off its
-    /// reference, a frozen reading control still believes); the swing foot
-    /// is set down onto the ground below it (`SequencerConfig::set_down_depth_m`).
+    /// doubt (a stuck or saturated motor, a joint past its envelope or off
+    /// its reference, a frozen reading control still believes); the swing
+    /// foot is set down onto the ground below it
+    /// (`SequencerConfig::set_down_depth_m`). A second foot down is what
+    /// lets a weak stance hip share the torso with the other hip: holding
+    /// the foot in the air after a saturated drive dropped 63 pilots of the
+    /// campaign's 406 slipping gears (seed 1), setting it down 39
+    /// (`docs/safety.md`).
     HoldNow,
     /// Play the step on to its landing, then hold: the timing slipped, but
     /// the sensors, the table and the motors are good, and a foot in the
@@ -213,11 +218,6 @@ pub enum InSwing {
     /// descent's swing lands first while the stance knee works
     /// (`Sequencer::in_swing_now`).
     LandFirst,
-    /// Hold at once, and leave the swing foot where it is (no set-down):
-    /// a saturated drive has no torque to spare, and moving the swing leg
-    /// loads it further. Measured on the campaign's weak-drive runs (seed
-    /// 1, 486): 34 falls with the set-down, 19 without.
-    HoldInAir,
 }
 
 // The fault table, each fault once. Rows are in bit order of `FaultSet`
@@ -362,7 +362,7 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "200 ticks",
         reset_allowed_when: "the command is under the limit",
-        in_swing: InSwing::HoldInAir,
+        in_swing: InSwing::HoldNow,
     },
     /// The motor driver's I²t model latched a thermal fault.
     MotorThermal = 0x0402 {

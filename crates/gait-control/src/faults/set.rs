@@ -89,15 +89,12 @@ impl FaultSet {
     }
 
     /// What the safe hold does in a swing ([`InSwing`]): land first only
-    /// when every fault that asks for a safe hold lets the step land; set
-    /// the foot down when one of them asks for that; otherwise hold it in
-    /// the air.
+    /// when every fault that asks for a safe hold lets the step land;
+    /// otherwise set the foot down.
     #[must_use]
     pub const fn in_swing(&self) -> InSwing {
         if self.0 & HOLD_NOW_IN_SWING != 0 {
             InSwing::HoldNow
-        } else if self.0 & HOLD_IN_AIR_IN_SWING != 0 {
-            InSwing::HoldInAir
         } else {
             InSwing::LandFirst
         }
@@ -105,10 +102,9 @@ impl FaultSet {
 }
 
 /// The faults whose safe hold holds a swing at once and sets its foot
-/// down, and those that hold it in the air, as [`FaultSet`] bits (worked
-/// out from the table when compiling: one AND a tick).
+/// down, as [`FaultSet`] bits (worked out from the table when compiling:
+/// one AND a tick).
 const HOLD_NOW_IN_SWING: u64 = in_swing_mask(&FaultCode::ALL, InSwing::HoldNow);
-const HOLD_IN_AIR_IN_SWING: u64 = in_swing_mask(&FaultCode::ALL, InSwing::HoldInAir);
 
 /// The [`FaultSet`] bits of the faults of each reaction
 /// ([`FaultSet::reaction`]).

@@ -215,6 +215,16 @@ impl Sequencer<'_> {
             .copied()
             .unwrap_or(f32::NAN);
         if foot >= cfg.landing_contact_n || !foot.is_finite() {
+            if sd.hip_and_ankle_m.is_none() {
+                // Carrying on the hold's first tick (early in a descent's
+                // swing the trailing toe still lowers the body), or a
+                // sensor that cannot tell: nothing to set down, and the
+                // leg ramps to its hold as the others do. Held at once
+                // where it was measured, its loaded knee lost the
+                // reference's push in a tick and sank.
+                self.set_down = None;
+                return;
+            }
             sd.done = true;
         }
         if !sd.done && sd.hip_and_ankle_m.is_none() {

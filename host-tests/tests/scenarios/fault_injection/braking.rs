@@ -292,3 +292,30 @@ fn a_slipping_gear_is_found_by_its_residual_not_its_current() {
         "{own} of 36 at their own joint, {other} elsewhere"
     );
 }
+
+#[test]
+fn a_slipping_stance_hip_in_a_swing_has_the_swing_foot_set_down() {
+    // Seed 1's campaign runs of a hip gear slipping before the swing it
+    // stands on: its drive saturates under the torso late in the swing
+    // (0x0401), and the hold sets the swing foot down, so the other hip,
+    // its leg on the ground, shares the torso. With the foot held in the
+    // air the torso tipped past 60° on the weak hip in both.
+    for (gait, fault, seed) in [
+        (
+            Gait::Walk,
+            "gear-slip=0.775491943846832:left-hip@1.204",
+            71_001,
+        ),
+        (
+            Gait::StairUp,
+            "gear-slip=0.6070844373799871:right-hip@1.829",
+            751_222,
+        ),
+    ] {
+        let r = crate::common::campaign_run(gait, fault, seed);
+        let o = &r.outcome;
+        assert!(o.fell.is_none(), "{fault}: {o:?}");
+        let first = o.faults.first().unwrap();
+        assert_eq!(first.code, FaultCode::MotorSaturated, "{fault}: {o:?}");
+    }
+}
