@@ -362,7 +362,6 @@ fault_table! {
         reaction: Reaction::SafeHold,
         detection_bound: "200 ticks",
         reset_allowed_when: "the command is under the limit",
-        in_swing: InSwing::HoldNow,
     },
     /// The motor driver's I²t model latched a thermal fault.
     MotorThermal = 0x0402 {

@@ -196,7 +196,9 @@ impl Sequencer<'_> {
     /// swing hip and knee placing the ankle the eased depth below where it
     /// was in the posture held, while the swing foot's sensor reads less
     /// than a contact; from the first contact (or a sensor that cannot
-    /// tell) on, where they were then. `held` itself without a set-down.
+    /// tell) on, where they were then. A contact (or such a sensor) on the
+    /// hold's first tick drops the set-down: the leg ramps with the others.
+    /// `held` itself without a set-down.
     fn set_down(
         &mut self,
         sensed: &Sensed,
@@ -215,7 +217,7 @@ impl Sequencer<'_> {
             .copied()
             .unwrap_or(f32::NAN);
         if foot >= cfg.landing_contact_n || !foot.is_finite() {
-            if sd.hip_and_ankle_m.is_none() {
+            if !sd.done && sd.hip_and_ankle_m.is_none() {
                 // Carrying on the hold's first tick (early in a descent's
                 // swing the trailing toe still lowers the body), or a
                 // sensor that cannot tell: nothing to set down, and the
