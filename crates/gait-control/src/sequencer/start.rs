@@ -75,7 +75,7 @@ impl<'t> Sequencer<'t> {
         self.phase = Phase::Swing { stance, t_s: 0.0 };
         let start = step.at_time(0.0);
         let lands_first_from_s = self.lands_first_from_s();
-        self.swing.begin(lands_first_from_s);
+        self.swing.begin(lands_first_from_s, start[0]);
         if let Some(slot) = ahead {
             self.ask_swing(slot, dt_s);
         }

@@ -39,8 +39,9 @@ pub(super) struct SwingState {
     /// The present swing has reached its landing window (set each swing
     /// tick; a swing starts without it).
     pub(super) in_landing_window: bool,
-    /// The table's stance-shank angle φ1 at the last tick of a swing, rad
-    /// (a hold's set-down starts from it).
+    /// The step's stance-shank angle φ1 at the swing's last tick, rad
+    /// (the step's first sample's from the tick the swing begins on): a
+    /// hold's set-down builds its frame on it.
     pub(super) phi1: f32,
     /// From when in this swing a hold lands the step first, s
     /// ([`Sequencer::lands_first_from_s`], fixed for the swing).
@@ -58,10 +59,11 @@ impl SwingState {
         lands_first_from_s: f32::INFINITY,
     };
 
-    /// A swing begins; its swing toe's start is worked out at its first
-    /// tick (φ1 stays the last swing's until the table is first read).
-    pub(super) fn begin(&mut self, lands_first_from_s: f32) {
+    /// A swing begins from the step's first sample, its stance shank at
+    /// `phi1`; its swing toe's start is worked out at its first tick.
+    pub(super) fn begin(&mut self, lands_first_from_s: f32, phi1: f32) {
         self.start_m = [f32::NAN; 2];
+        self.phi1 = phi1;
         self.lands_first_from_s = lands_first_from_s;
         self.lifted_at_s = None;
         self.in_landing_window = false;

@@ -205,6 +205,54 @@ fn a_safe_hold_in_a_swing_sets_the_foot_down_until_it_feels_the_ground() {
 }
 
 #[test]
+fn a_hold_on_a_swing_s_first_tick_sets_the_foot_down_as_on_any_swing() {
+    // The set-down's frame is built on the stance shank the step plays:
+    // on a swing's first tick that is its first sample's, the same on the
+    // run's first swing (where there was none before) and on its third
+    // (not the last swing's landing, a frame turned by the step's whole
+    // stance-shank travel), both left stance from the same posture.
+    let img = walk_image();
+    let set_down = |swings_before: usize| {
+        let (mut rig, model, s, _) = started_with_a_model(&img);
+        let mut stance = Side::Left;
+        for _ in 0..swings_before {
+            for _ in 0..20_000 {
+                rig.step(&s);
+                if let Phase::Swing { stance: st, .. } = rig.seq.phase() {
+                    stance = st;
+                    break;
+                }
+            }
+            swing_and_land(&mut rig, stance, None);
+            stance = stance.other();
+        }
+        let mut held = None;
+        for _ in 0..20_000 {
+            let ready = sensed(rig.start_pose(stance), READY_FEET, READY_CRUTCHES);
+            let r = rig.step(&ready);
+            if let Phase::Swing { stance: st, t_s } = rig.seq.phase() {
+                assert_eq!((st, t_s), (Side::Left, 0.0), "the swing's first tick");
+                held = Some(r);
+                break;
+            }
+        }
+        let held = held.expect("a swing began");
+        rig.hold(held, InSwing::HoldNow);
+        let in_air = sensed(held, READY_FEET, READY_CRUTCHES);
+        let trace: Vec<_> = (0..(0.5 * SequencerConfig::DEFAULT.set_down_s / DT) as usize)
+            .map(|_| rig.step(&in_air))
+            .collect();
+        let ankle = |j: &[f32; JOINTS]| swing_ankle(&model, j, rig.table.first()[0]);
+        let depth = ankle(&held)[1] - trace.last().map_or(f32::NAN, |j| ankle(j)[1]);
+        (trace, depth)
+    };
+    let (first, depth) = set_down(0);
+    assert!(depth > 1e-3, "the first swing's foot went down {depth} m");
+    let (third, _) = set_down(2);
+    assert_eq!(first, third);
+}
+
+#[test]
 fn a_swing_foot_carrying_when_the_hold_strikes_ramps_with_the_others() {
     // Early in a stair descent's swing the trailing toe still lowers the
     // body: that foot is not set down, and its leg ramps to the posture
