@@ -39,9 +39,10 @@ pub(super) struct SwingState {
     /// The present swing has reached its landing window (set each swing
     /// tick; a swing starts without it).
     pub(super) in_landing_window: bool,
-    /// The step's stance-shank angle φ1 at the swing's last tick, rad
-    /// (the step's first sample's from the tick the swing begins on): a
-    /// hold's set-down builds its frame on it.
+    /// The stance-shank angle φ1 of the step's posture last sent in the
+    /// present swing, rad (its first sample's on the tick the swing
+    /// begins; NaN before any swing): a hold's set-down builds its frame
+    /// on it.
     pub(super) phi1: f32,
     /// From when in this swing a hold lands the step first, s
     /// ([`Sequencer::lands_first_from_s`], fixed for the swing).

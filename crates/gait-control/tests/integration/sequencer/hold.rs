@@ -223,6 +223,7 @@ fn a_hold_on_a_swing_s_first_tick_sets_the_foot_down_as_on_any_swing() {
                     break;
                 }
             }
+            assert!(matches!(rig.seq.phase(), Phase::Swing { .. }));
             swing_and_land(&mut rig, stance, None);
             stance = stance.other();
         }
@@ -246,6 +247,9 @@ fn a_hold_on_a_swing_s_first_tick_sets_the_foot_down_as_on_any_swing() {
         let depth = ankle(&held)[1] - trace.last().map_or(f32::NAN, |j| ankle(j)[1]);
         (trace, depth)
     };
+    // The trailing leg is at full reach on a swing's first tick: the foot
+    // goes down along the leg, a few millimetres, not straight down as
+    // from the middle of a swing.
     let (first, depth) = set_down(0);
     assert!(depth > 1e-3, "the first swing's foot went down {depth} m");
     let (third, _) = set_down(2);
