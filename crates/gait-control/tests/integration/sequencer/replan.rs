@@ -279,3 +279,65 @@ fn an_answer_counts_only_for_the_request_it_was_worked_on() {
         gait_control::replan::SlotView::Done(ReplanOutcome::Declined)
     );
 }
+
+#[test]
+fn a_hold_on_a_replanned_step_s_first_tick_sets_the_foot_down_in_that_step_s_frame() {
+    // The set-down's frame is the stance shank of the step played: a
+    // re-planned step's first sample (here 0.08 rad off the table's start),
+    // as if those samples were the table.
+    let img = walk_image();
+    let table = GaitTable::parse(&img).unwrap();
+    let answer = shifted(&table, 0.08);
+    let mut answer_img = vec![0u8; image_len(answer.len())];
+    encode(
+        GaitKind::Walk,
+        10_000,
+        table.ik_options(),
+        &answer,
+        &mut answer_img,
+    )
+    .unwrap();
+    let ankle = START_ANKLE + 0.08;
+    // The foot set down from a hold on the swing's first tick, the rig
+    // ticked by `to_swing` until then.
+    let set_down = |mut rig: Rig<'_>, to_swing: &mut dyn FnMut(&mut Rig<'_>) -> [f32; JOINTS]| {
+        let held = to_swing(&mut rig);
+        assert!(
+            matches!(rig.seq.phase(), Phase::Swing { t_s, .. } if t_s == 0.0),
+            "the swing's first tick"
+        );
+        rig.hold(held, InSwing::HoldNow);
+        let in_air = sensed(held, READY_FEET, READY_CRUTCHES);
+        let trace: Vec<_> = (0..200).map(|_| rig.step(&in_air)).collect();
+        (held, trace)
+    };
+    let slot = ReplanSlot::new();
+    let mut replanned = Rig::new(&img).with_model(paper_model());
+    replanned.seq = replanned.seq.with_replanner(&slot, RC);
+    let (replanned, pose, _) = replanned.walking();
+    let s = ready_at(pose, ankle);
+    let (held, from_replan) = set_down(replanned, &mut |rig| {
+        let ticket = until_requested(rig, &slot, &s);
+        assert!(slot.publish(ticket, ReplanOutcome::Replanned, &answer));
+        (1..=RC.latency_ticks).map(|_| rig.step(&s)).last().unwrap()
+    });
+    assert_eq!(held, joints_from_phi(&answer[0], Side::Left));
+    let (planned, pose, _) = Rig::new(&answer_img).with_model(paper_model()).walking();
+    let s = ready_at(pose, ankle);
+    let (_, from_table) = set_down(planned, &mut |rig| {
+        for _ in 0..10 {
+            let r = rig.step(&s);
+            if matches!(rig.seq.phase(), Phase::Swing { .. }) {
+                return r;
+            }
+        }
+        panic!("no swing");
+    });
+    let down = |j: &[f32; JOINTS]| -> f32 {
+        let phi = gait_control::posture::phi_from_joints(j, answer[0][0], Side::Left);
+        gait_core::kinematics::forward_kinematics(&paper_model(), &phi)[4][1]
+    };
+    let depth = down(&held) - down(from_replan.last().unwrap());
+    assert!(depth > 1e-3, "went down {depth} m");
+    assert_eq!(from_replan, from_table);
+}
