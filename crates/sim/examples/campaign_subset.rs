@@ -6,8 +6,10 @@
 //! `EXO_SET_DOWN_SPEED=RAD_PER_S` another cap on its joints,
 //! `EXO_LANDS_AFTER=WALK,UP,DOWN` other points of each swing from which a
 //! hold lands first, `EXO_PILOT_REACTION=SECONDS,SECONDS` a pilot who
-//! reacts to a hold at another time and speed, `EXO_GAIT=stair-down` one
-//! gait's runs alone), or the runs
+//! reacts to a hold at another time and speed, `EXO_RESIDUAL=N_M` another
+//! limit of the joints' torque residual (0x0404), `EXO_GAIT=stair-down` one
+//! gait's runs alone, `EXO_ALL=1` every run played with the phase its fault
+//! struck in, not only the falls), or the runs
 //! listed in a file, one `GAIT FAULT NOISE_SEED` a line (as `fault_trace`
 //! takes them): `... campaign_subset -- file PATH`.
 
@@ -89,6 +91,13 @@ fn main() {
     }) {
         device.controller.sequencer.lands_after = f;
     }
+    // EXO_RESIDUAL=N_M: another limit of the joints' torque residual.
+    if let Some(l) = std::env::var("EXO_RESIDUAL")
+        .ok()
+        .and_then(|v| v.parse::<f32>().ok())
+    {
+        device.supervisor.response.limit_nm = l;
+    }
     // EXO_GAIT=walk|stair-up|stair-down: that gait's runs alone.
     let gait = std::env::var("EXO_GAIT").ok().and_then(|g| gait_named(&g));
     let plan: Vec<_> = match &file {
@@ -159,13 +168,19 @@ fn main() {
         if r.missed() {
             missed += 1;
         }
+        if std::env::var_os("EXO_ALL").is_some() && r.outcome.fell.is_none() {
+            println!(
+                "ok {:?} {} {} in {:?}",
+                r.run.gait, r.run.fault, r.run.noise_seed, r.struck_in
+            );
+        }
         if let Some(f) = &r.outcome.fell {
             falls += 1;
             unnamed += usize::from(r.unnamed_fall());
             let named = r.named_fall().map_or("device", |c| c.name());
             println!(
-                "{:?} {} {} {f} [{named}]",
-                r.run.gait, r.run.fault, r.run.noise_seed
+                "{:?} {} {} {f} [{named}] in {:?}",
+                r.run.gait, r.run.fault, r.run.noise_seed, r.struck_in
             );
         }
     }
