@@ -134,6 +134,8 @@ fn main() {
     let mut missed = 0;
     let mut unnamed = 0;
     let mut unnamed_past = 0;
+    // EXO_ALL=1: the runs that did not fall too.
+    let every_run = std::env::var_os("EXO_ALL").is_some();
     for r in &results {
         unnamed_past += usize::from(r.unnamed_stop());
         if r.outcome.worst_limit_margin_rad < 0.0 {
@@ -168,7 +170,7 @@ fn main() {
         if r.missed() {
             missed += 1;
         }
-        if std::env::var_os("EXO_ALL").is_some() && r.outcome.fell.is_none() {
+        if every_run && r.outcome.fell.is_none() {
             println!(
                 "ok {:?} {} {} in {:?}",
                 r.run.gait, r.run.fault, r.run.noise_seed, r.struck_in
