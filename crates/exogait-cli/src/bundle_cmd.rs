@@ -29,6 +29,9 @@ struct GaitJson {
     step_time_s: f32,
     pace_m_s: f32,
     clearance_m: f32,
+    /// The stance hip's torque-residual limit in its swings, N·m (`null`:
+    /// the device's own).
+    stance_hip_residual_nm: Option<u8>,
 }
 
 #[derive(Debug, Serialize)]
@@ -86,6 +89,7 @@ pub fn run(args: &BundleArgs) -> u8 {
                 step_time_s: g.info.step_time_s,
                 pace_m_s: g.info.pace_m_s,
                 clearance_m: g.info.clearance_m,
+                stance_hip_residual_nm: Some(g.info.stance_hip_residual_nm).filter(|&nm| nm > 0),
             })
             .collect(),
     };
@@ -119,11 +123,11 @@ pub fn run(args: &BundleArgs) -> u8 {
         p.segments_m[2]
     );
     println!(
-        "  #  name          kind        step m  rise m  tread m  time s  pace m/s  clearance m"
+        "  #  name          kind        step m  rise m  tread m  time s  pace m/s  clearance m  stance hip N·m"
     );
     for (i, g) in answer.gaits.iter().enumerate() {
         println!(
-            "{:>3}  {:<12}  {:<10}  {:>6.3}  {:>+6.3}  {:>7.3}  {:>6.2}  {:>8.3}  {:>11.3}",
+            "{:>3}  {:<12}  {:<10}  {:>6.3}  {:>+6.3}  {:>7.3}  {:>6.2}  {:>8.3}  {:>11.3}  {:>14}",
             i + 1,
             g.name,
             g.kind,
@@ -132,7 +136,9 @@ pub fn run(args: &BundleArgs) -> u8 {
             g.tread_m,
             g.step_time_s,
             g.pace_m_s,
-            g.clearance_m
+            g.clearance_m,
+            g.stance_hip_residual_nm
+                .map_or_else(|| "device's".to_string(), |nm| nm.to_string())
         );
     }
     0

@@ -90,6 +90,10 @@ struct GaitJson {
     clearance_m: Option<f64>,
     double_support_s: Option<f64>,
     balance_ns: Option<f64>,
+    /// The stance hip's torque residual in the healthy swings, highest, N·m.
+    stance_hip_residual_peak_nm: Option<f64>,
+    /// The limit the gait carries there (0x0404), N·m.
+    stance_hip_residual_limit_nm: Option<u8>,
     reason: Option<String>,
 }
 
@@ -206,6 +210,8 @@ pub fn run(args: &TablesArgs) -> u8 {
                 clearance_m: Some(f64::from(g.info.clearance_m)),
                 double_support_s: Some(g.evaluation.double_support_s),
                 balance_ns: Some(g.balance_ns),
+                stance_hip_residual_peak_nm: Some(g.stance_hip_residual_peak_nm),
+                stance_hip_residual_limit_nm: Some(g.info.stance_hip_residual_nm),
                 reason: None,
             },
             Outcome::LeftOut { plan, reason } => GaitJson {
@@ -219,6 +225,8 @@ pub fn run(args: &TablesArgs) -> u8 {
                 clearance_m: None,
                 double_support_s: None,
                 balance_ns: None,
+                stance_hip_residual_peak_nm: None,
+                stance_hip_residual_limit_nm: None,
                 reason: Some(reason.clone()),
             },
         })
@@ -251,7 +259,7 @@ pub fn run(args: &TablesArgs) -> u8 {
         for g in &report.gaits {
             if g.cleared {
                 println!(
-                    "  cleared   {:<12} step {:.3} m, rise {:+.3} m, {:.2} s ({:.2} s double support): pace {:.3} m/s, clearance {:.3} m, balance part {:.0} N·s",
+                    "  cleared   {:<12} step {:.3} m, rise {:+.3} m, {:.2} s ({:.2} s double support): pace {:.3} m/s, clearance {:.3} m, balance part {:.0} N·s, stance hip's residual {:.0} N·m (limit {})",
                     g.name,
                     g.step_length_m,
                     g.rise_m,
@@ -260,6 +268,8 @@ pub fn run(args: &TablesArgs) -> u8 {
                     g.pace_m_s.unwrap_or(0.0),
                     g.clearance_m.unwrap_or(0.0),
                     g.balance_ns.unwrap_or(0.0),
+                    g.stance_hip_residual_peak_nm.unwrap_or(0.0),
+                    g.stance_hip_residual_limit_nm.unwrap_or(0),
                 );
             } else {
                 println!(

@@ -343,6 +343,12 @@ impl<'t> Controller<'t> {
         &self.supervisor
     }
 
+    /// The supervisor's windowed checks, while the tick runs them itself
+    /// (not lent to a model task), for observers.
+    pub fn windowed_checks(&self) -> Option<&WindowedChecks> {
+        self.windowed.as_ref()
+    }
+
     /// Joints whose drive is disabled and braked on the supervisor's word
     /// (not those the e-stop disables, nor those 0x0404 holds in place).
     pub const fn braked_joints(&self) -> [bool; JOINTS] {

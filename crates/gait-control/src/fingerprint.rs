@@ -153,5 +153,6 @@ impl_fingerprint!(ResponseCheck {
     swing_inertia_kgm2,
     bandwidth_hz,
     limit_nm,
+    stance_hip_min_nm,
     ticks,
 });

@@ -114,6 +114,9 @@ pub struct Sequencer<'t> {
     /// The selected table (kept at hand: the tick reads it several
     /// times).
     table: Option<GaitTable<'t>>,
+    /// That table's stance-hip residual limit, N·m (NaN: none; read once
+    /// a tick by the supervisor's facts, so worked out at the start).
+    stance_hip_residual_nm: f32,
     /// The step a swing plays: that table's, or its re-planned version.
     step: Option<StepTable<'t>>,
     /// The idle-time re-planner's slot and settings, where one runs.
@@ -140,6 +143,7 @@ impl<'t> Sequencer<'t> {
             gait: Gait::Walk,
             slot: 0,
             table: None,
+            stance_hip_residual_nm: f32::NAN,
             step: None,
             replanner: None,
             replan_wait: None,
@@ -171,6 +175,7 @@ impl<'t> Sequencer<'t> {
         self.gait = Gait::Walk;
         self.slot = 0;
         self.table = None;
+        self.stance_hip_residual_nm = f32::NAN;
         self.step = None;
         self.withdraw_replan();
         self.stance = Side::Left;
@@ -236,6 +241,14 @@ impl<'t> Sequencer<'t> {
     #[must_use]
     pub fn gait(&self) -> Gait {
         self.gait
+    }
+
+    /// The torque-residual limit the selected gait's table sets for the
+    /// stance hip of its swings, N·m (NaN: none; the supervisor's 0x0404,
+    /// [`crate::supervisor::ResponseCheck::stance_hip_limit_nm`]).
+    #[must_use]
+    pub fn stance_hip_residual_nm(&self) -> f32 {
+        self.stance_hip_residual_nm
     }
 
     /// The current reference posture (joint order, rad).

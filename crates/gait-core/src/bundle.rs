@@ -33,7 +33,9 @@
 //! extension, ankle dorsiflexion, ankle plantarflexion, rad), zero-padded.
 //!
 //! Directory entry: name (16 bytes, ASCII, NUL-padded, not empty), gait
-//! kind (one byte, as in the table), 3 reserved, then f32: step length
+//! kind (one byte, as in the table), the stance hip's torque-residual
+//! limit in the gait's swings (one byte, N·m; 0: the device's own limit;
+//! [`GaitInfo::stance_hip_residual_nm`]), 2 reserved, then f32: step length
 //! (m, horizontal), rise (m, signed: down is negative), tread (m, 0 on
 //! level ground), step time (s), pace (closed-loop progression, m/s),
 //! clearance (the table's lowest over the floor or nosing, m); then u32:
@@ -312,6 +314,12 @@ pub struct GaitInfo {
     /// Lowest swing-foot clearance the table plans over the floor or
     /// the nosing, m.
     pub clearance_m: f32,
+    /// The torque residual the stance hip may show in this gait's swings
+    /// before it is taken for a drive fault (0x0404), N·m: what the
+    /// gait's healthy closed loop showed there, with a margin, measured
+    /// by the generator (0: the device's own limit). The board's
+    /// supervisor holds it within its bounds.
+    pub stance_hip_residual_nm: u8,
 }
 
 /// One verified gait of a bundle.
@@ -454,6 +462,7 @@ impl<'a> Bundle<'a> {
         let bad = BundleError::BadEntry(tag);
         let name = GaitName::from_field(e.get(..NAME_LEN).ok_or(bad)?).ok_or(bad)?;
         let kind = kind_from_byte(e.get(NAME_LEN).copied().ok_or(bad)?).ok_or(bad)?;
+        let stance_hip_residual_nm = e.get(NAME_LEN + 1).copied().ok_or(bad)?;
         let f = |k: usize| f32_at(e, 20 + 4 * k).ok_or(bad);
         let info = GaitInfo {
             name,
@@ -464,6 +473,7 @@ impl<'a> Bundle<'a> {
             step_time_s: f(3)?,
             pace_m_s: f(4)?,
             clearance_m: f(5)?,
+            stance_hip_residual_nm,
         };
         let figures = [
             info.step_length_m,
@@ -499,7 +509,10 @@ impl<'a> Bundle<'a> {
         if table.kind() != kind {
             return Err(BundleError::KindMismatch(tag));
         }
-        Ok(BundleGait { info, table })
+        Ok(BundleGait {
+            info,
+            table: table.with_stance_hip_residual_nm(stance_hip_residual_nm),
+        })
     }
 
     /// Number of gaits.

@@ -881,19 +881,25 @@ pub static STAIR_DOWN: [u8; 4608] = [
     0x07, 0x6c, 0xc6, 0x3e, 0x34, 0x6c, 0x28, 0x40, 0xf5, 0x63, 0x43, 0x40, 0xe7, 0x1b, 0x69, 0x86,
 ];
 
-/// The walking table, verified.
+/// The walking table, verified, with the stance hip's torque-residual
+/// limit of its swings: 70 N·m (its healthy closed loop peaks at
+/// 29.9 N·m there; `gait_opt::residual_limit`).
 pub fn walk() -> Result<GaitTable<'static>, TableError> {
-    GaitTable::parse(&WALK)
+    GaitTable::parse(&WALK).map(|t| t.with_stance_hip_residual_nm(70))
 }
 
-/// The stair-ascent table, verified.
+/// The stair-ascent table, verified, with the stance hip's torque-residual
+/// limit of its swings: 70 N·m (its healthy closed loop peaks at
+/// 28.9 N·m there; `gait_opt::residual_limit`).
 pub fn stair_up() -> Result<GaitTable<'static>, TableError> {
-    GaitTable::parse(&STAIR_UP)
+    GaitTable::parse(&STAIR_UP).map(|t| t.with_stance_hip_residual_nm(70))
 }
 
-/// The stair-descent table, verified.
+/// The stair-descent table, verified, with the stance hip's torque-residual
+/// limit of its swings: 70 N·m (its healthy closed loop peaks at
+/// 22.5 N·m there; `gait_opt::residual_limit`).
 pub fn stair_down() -> Result<GaitTable<'static>, TableError> {
-    GaitTable::parse(&STAIR_DOWN)
+    GaitTable::parse(&STAIR_DOWN).map(|t| t.with_stance_hip_residual_nm(70))
 }
 
 /// The table of a movement, verified.

@@ -157,6 +157,9 @@ pub struct GaitTable<'a> {
     ik: IkOptions<f32>,
     samples: &'a [u8],
     count: usize,
+    /// What its bundle says of the stance hip's torque residual, N·m
+    /// (0: nothing; [`GaitTable::with_stance_hip_residual_nm`]).
+    stance_hip_residual_nm: u8,
 }
 
 /// Total image length for `n` samples.
@@ -237,7 +240,31 @@ impl<'a> GaitTable<'a> {
             ik,
             samples,
             count,
+            stance_hip_residual_nm: 0,
         })
+    }
+
+    /// The table with the torque-residual limit its gait's healthy closed
+    /// loop allows at the stance hip of a swing, N·m (0: none given, the
+    /// device's own limit applies). It is not part of the table's image:
+    /// the generator measures it on the device's closed loop, a bundle
+    /// carries it in the gait's directory entry and the device's own
+    /// tables in their code ([`crate::flash_tables`]). The supervisor
+    /// holds it within its own bounds (`docs/safety.md`, 0x0404).
+    #[must_use]
+    pub const fn with_stance_hip_residual_nm(mut self, nm: u8) -> Self {
+        self.stance_hip_residual_nm = nm;
+        self
+    }
+
+    /// The stance hip's torque-residual limit of this gait's swings, N·m;
+    /// NaN where none was given.
+    pub fn stance_hip_residual_nm(&self) -> f32 {
+        if self.stance_hip_residual_nm == 0 {
+            f32::NAN
+        } else {
+            f32::from(self.stance_hip_residual_nm)
+        }
     }
 
     /// The movement this table describes.

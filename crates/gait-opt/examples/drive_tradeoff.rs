@@ -1,8 +1,9 @@
 //! What a change of the hip and knee drives would buy a patient's gait
 //! family: for each patient and drive, the walking paces and stairs the
 //! device clears (the same search, admission check and closed loop as
-//! `exogait tables`). `cargo run --release -p gait-opt --example
-//! drive_tradeoff` (a few minutes); the figures are in
+//! `exogait tables`), and on stderr why each other gait is left out.
+//! `cargo run --release -p gait-opt --example drive_tradeoff` (a few
+//! minutes); the figures are in
 //! `docs/optimiser.md`, "What the drives allow".
 #![allow(missing_docs)]
 
@@ -63,6 +64,9 @@ fn main() -> ExitCode {
             let mut walks = Vec::new();
             let (mut up, mut down) = (Vec::new(), Vec::new());
             for o in &out {
+                if let Outcome::LeftOut { plan, reason } = o {
+                    eprintln!("{h:.2} m, {name}: {} left out: {reason}", plan.name);
+                }
                 if let Outcome::Cleared(g) = o {
                     let rise = g.plan.spacing_m[1];
                     match g.plan.kind {

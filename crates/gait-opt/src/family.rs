@@ -132,6 +132,9 @@ pub struct ClearedGait {
     pub impulse_ns: f64,
     /// Mean balance part of it, N·s.
     pub balance_ns: f64,
+    /// The stance hip's torque residual, highest over the healthy runs
+    /// with and without sensor noise, N·m ([`crate::residual_limit`]).
+    pub stance_hip_residual_peak_nm: f64,
 }
 
 /// What became of one plan.
@@ -294,6 +297,8 @@ fn attempt(
     // holds (gait-core models the foot's toe rocker); the closed loop's
     // (`sim::compare::nosing_clearance_m`, the sole taken level) is
     // reported beside it by `exogait compare`.
+    let (residual_peak, residual_limit) =
+        crate::residual_limit::measure(device, table, VERIFY_STEPS, max_s)?;
     let clearance = e.clearance_m;
     let name = GaitName::new(&plan.name)
         .ok_or_else(|| format!("name {:?} is not 1-16 printable ASCII", plan.name))?;
@@ -307,6 +312,7 @@ fn attempt(
         step_time_s: plan.step_time_s as f32,
         pace_m_s: run.progression_m_s() as f32,
         clearance_m: clearance as f32,
+        stance_hip_residual_nm: residual_limit,
     };
     Ok(Box::new(ClearedGait {
         plan: plan.clone(),
@@ -315,6 +321,7 @@ fn attempt(
         evaluation: e,
         impulse_ns: run.mean(|s| s.impulse_ns).unwrap_or(f64::NAN),
         balance_ns: run.mean(|s| s.balance_ns).unwrap_or(f64::NAN),
+        stance_hip_residual_peak_nm: residual_peak,
     }))
 }
 
@@ -439,8 +446,9 @@ pub fn campaign_check(
     runs: usize,
     seed: u64,
 ) -> Result<(), String> {
-    let table =
-        GaitTable::parse(&gait.image).map_err(|_| "table refused by its own reader".to_string())?;
+    let table = GaitTable::parse(&gait.image)
+        .map_err(|_| "table refused by its own reader".to_string())?
+        .with_stance_hip_residual_nm(gait.info.stance_hip_residual_nm);
     let gaits = CampaignGaits::of(vec![CampaignGait {
         name: gait.plan.name.clone(),
         gait: sim::compare::gait_of(table.kind()),

@@ -24,6 +24,7 @@ pub mod phi_cost;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod report;
+pub mod residual_limit;
 pub mod run;
 pub mod solver;
 pub mod tables;

@@ -23,7 +23,7 @@ use gait_core::kinematics::Phi;
 use gait_core::problem::{
     JointMotionLimit, JointRangeLimit, PaperProblem, PeriodicError, PeriodicStep, StepCase,
 };
-use gait_core::tables::{GaitKind, TableError, encode, image_len};
+use gait_core::tables::{GaitKind, GaitTable, TableError, encode, image_len};
 
 use exogait_device::DeviceConfig;
 
@@ -78,6 +78,9 @@ pub enum TableGenError {
     Device(exogait_device::DeviceError),
     /// The closed-loop refinement failed, or its record does not hold.
     Refine(String),
+    /// A healthy closed-loop run of the table faulted or landed short
+    /// (the stance hip's residual measured, `crate::residual_limit`).
+    ClosedLoop(String),
 }
 
 impl std::fmt::Display for TableGenError {
@@ -90,6 +93,7 @@ impl std::fmt::Display for TableGenError {
             Self::Clinical(e) => write!(f, "clinical search: {e}"),
             Self::Device(e) => write!(f, "device configuration: {e:?}"),
             Self::Refine(e) => write!(f, "closed-loop refinement: {e}"),
+            Self::ClosedLoop(e) => write!(f, "closed loop: {e}"),
         }
     }
 }
@@ -424,6 +428,13 @@ pub fn flash_module_source_with(
         table(GaitKind::StairUp)?,
         table(GaitKind::StairDown)?,
     ];
+    let mut limits = [(0.0, 0u8); 3];
+    for (limit, t) in limits.iter_mut().zip(&tables) {
+        let table = GaitTable::parse(&t.image).map_err(TableGenError::Table)?;
+        let max_s = 4.0 + 4.0 * (f64::from(table.duration_s()) + 3.0);
+        *limit = crate::residual_limit::measure(&device, table, 4, max_s)
+            .map_err(TableGenError::ClosedLoop)?;
+    }
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -448,15 +459,24 @@ pub fn flash_module_source_with(
         }
         let _ = writeln!(s, "];\n");
     }
+    let names = [
+        ("walking", "walk", "WALK"),
+        ("stair-ascent", "stair_up", "STAIR_UP"),
+        ("stair-descent", "stair_down", "STAIR_DOWN"),
+    ];
+    for ((what, f, ident), (peak, limit)) in names.iter().zip(limits) {
+        let _ = writeln!(
+            s,
+            "/// The {what} table, verified, with the stance hip's torque-residual\n\
+             /// limit of its swings: {limit} N·m (its healthy closed loop peaks at\n\
+             /// {peak:.1} N·m there; `gait_opt::residual_limit`).\n\
+             pub fn {f}() -> Result<GaitTable<'static>, TableError> {{\n    \
+             GaitTable::parse(&{ident}).map(|t| t.with_stance_hip_residual_nm({limit}))\n}}\n"
+        );
+    }
     let _ = writeln!(
         s,
-        "/// The walking table, verified.\n\
-         pub fn walk() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&WALK)\n}}\n\n\
-         /// The stair-ascent table, verified.\n\
-         pub fn stair_up() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&STAIR_UP)\n}}\n\n\
-         /// The stair-descent table, verified.\n\
-         pub fn stair_down() -> Result<GaitTable<'static>, TableError> {{\n    GaitTable::parse(&STAIR_DOWN)\n}}\n\n\
-         /// The table of a movement, verified.\n\
+        "/// The table of a movement, verified.\n\
          pub fn of(kind: GaitKind) -> Result<GaitTable<'static>, TableError> {{\n    match kind {{\n        GaitKind::Walk => walk(),\n        GaitKind::StairUp => stair_up(),\n        GaitKind::StairDown => stair_down(),\n    }}\n}}"
     );
     Ok(s)

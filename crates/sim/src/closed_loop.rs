@@ -142,6 +142,9 @@ pub struct Sample {
     pub state: TrueState,
     /// Joints the controller had braked after the tick.
     pub braked: [bool; 4],
+    /// The supervisor's torque residual of each joint after the tick, N·m
+    /// (0x0404; NaN where a model task runs the windowed checks).
+    pub residual_nm: [f32; 4],
 }
 
 /// The closed loop.
@@ -507,6 +510,10 @@ impl<'t> Rig<'t> {
             report,
             state: self.plant.state(),
             braked: self.controller.braked_joints(),
+            residual_nm: self
+                .controller
+                .windowed_checks()
+                .map_or([f32::NAN; 4], |w| w.residuals_nm()),
         });
         self.trace.last().ok_or(SimError::NonFinite)
     }

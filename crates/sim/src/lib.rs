@@ -34,6 +34,7 @@ pub mod plant;
 pub mod plot;
 pub mod replanning;
 pub mod replay;
+pub mod residual;
 pub mod scenario;
 pub mod shared;
 pub mod spi;

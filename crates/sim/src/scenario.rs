@@ -30,7 +30,8 @@ pub fn flash_tables() -> GaitTables<'static> {
 /// A bundle for `patient` on `device` of the flash tables' stair descent
 /// (`down`), then walk (`walk`): a clinician's list in an order of its own,
 /// not the built-in one, to boot and play from. The gaits' descriptions
-/// carry the same placeholder figures (nothing plays them).
+/// carry the same placeholder figures (nothing plays them) and the flash
+/// tables' stance-hip residual limits.
 pub fn descent_then_walk_bundle(
     device: &DeviceConfig,
     patient: &Patient,
@@ -46,6 +47,9 @@ pub fn descent_then_walk_bundle(
             step_time_s: 2.24,
             pace_m_s: 0.1,
             clearance_m: 0.05,
+            // The device's own table's limit (NaN, none, reads 0).
+            stance_hip_residual_nm: gait_core::flash_tables::of(kind)
+                .map_or(0, |t| t.stance_hip_residual_nm() as u8),
         };
         Ok::<_, BundleError>(GaitSource { info, table })
     };

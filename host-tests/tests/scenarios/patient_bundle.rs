@@ -1,7 +1,8 @@
 //! A patient's bundle in the closed loop: the controller the board builds
 //! for it (`exogait_device::boot::patient_gaits`) offers its gaits in the
 //! bundle's order; MODE picks the next, GO plays the one picked, and GO on
-//! a gait whose start posture the pilot is not in starts nothing.
+//! a gait whose start posture the pilot is not in starts nothing; each
+//! gait plays with the stance-hip residual limit its entry carries.
 
 use exogait_device::DeviceConfig;
 use exogait_device::boot::{self, TableSlots};
@@ -46,6 +47,9 @@ fn mode_picks_the_bundles_second_gait_and_go_plays_it() {
         Rig::press(&rig.go, 600, GO_TICKS);
         run_steps(rig, 2, 16.0).unwrap();
         assert_eq!(rig.controller.sequencer().gait(), Gait::Walk);
+        // The walk's stance-hip residual limit, from the bundle's
+        // directory, is the one its swings are checked with (0x0404).
+        assert_eq!(rig.controller.sequencer().stance_hip_residual_nm(), 70.0);
         assert!(rig.faults().is_empty(), "{:?}", rig.faults());
         let landings = rig.plant.landings();
         assert!(landings.len() >= 2);

@@ -14,7 +14,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
             "--runs",
             "60",
             "--seed",
-            "1",
+            "18",
             "--healthy",
             "0",
             "--json",
@@ -34,7 +34,7 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
         && all["errors"] == 0;
     assert_eq!(out.status.code(), Some(if goal_met { 0 } else { 1 }));
     let bad = v["bad_runs"].as_array().unwrap();
-    assert!(!bad.is_empty(), "seed 1's first 60 runs include bad ones");
+    assert!(!bad.is_empty(), "seed 18's first 60 runs include bad ones");
     let mut own_joint_runs = 0;
     let mut estop_runs = 0;
     for run in bad {
@@ -82,8 +82,9 @@ fn a_short_campaign_lists_each_bad_run_s_braked_joints() {
     }
     // With the campaign's pilot, who meets a hold 0.15 s late, no e-stop
     // run (824 in seed 1's 10,000) and no lost encoder or output stage is
-    // a bad one: each is checked above when one is. Seed 1's first 60 hold
-    // a slipping hip gear braked at its own hip.
+    // a bad one: each is checked above when one is. Seed 18's first 60
+    // hold a stair ascent's slipping hip gear braked at its own hip (the
+    // torso tips on the braked stance hip, a named case).
     eprintln!("{estop_runs} e-stop runs among the bad ones");
     assert!(
         own_joint_runs > 0,

@@ -43,6 +43,7 @@ impl Controller<'_> {
             motors: &self.motor_sense,
             gains: &self.cfg.gains,
             airborne_leg,
+            stance_hip_residual_nm: self.seq.stance_hip_residual_nm(),
         };
         let task = self.model_slot.filter(|_| self.checks_in_task);
         let mut verdict = check(
@@ -115,6 +116,8 @@ struct Facts<'a> {
     motors: &'a [MotorSense; JOINTS],
     gains: &'a [JointGains; JOINTS],
     airborne_leg: Option<Side>,
+    /// The playing gait's limit on the stance hip of its swings, N·m.
+    stance_hip_residual_nm: f32,
 }
 
 impl Facts<'_> {
@@ -155,6 +158,7 @@ impl Facts<'_> {
         input.button_input_fault = s.mode.input_fault || s.go.input_fault;
         input.ankle_plan_rad = r.ankle_plan_rad;
         input.swing_leg = r.status.swing_leg;
+        input.stance_hip_residual_nm = self.stance_hip_residual_nm;
         input.airborne_leg = self.airborne_leg;
         input.chain_closed = s.chain_closed;
         input.drive_current = Some(s.drive_current);

@@ -42,6 +42,7 @@ impl<'t> Sequencer<'t> {
                 self.gait = gait;
                 self.slot = slot;
                 self.table = Some(table);
+                self.stance_hip_residual_nm = table.stance_hip_residual_nm();
                 self.stance = stance;
                 self.stop_requested = false;
                 self.begin_blend(start);

@@ -94,6 +94,10 @@ pub struct SupervisorInput {
     /// move only their own links (0x0404's swing inertias), and the
     /// crutches are judged through its swing (0x0703).
     pub swing_leg: Option<Side>,
+    /// The torque-residual limit the playing gait sets for the stance hip
+    /// of its swings, N·m (NaN or 0: the device's; 0x0404,
+    /// [`super::ResponseCheck::stance_hip_limit_nm`]).
+    pub stance_hip_residual_nm: f32,
     /// The swing leg once its foot is surely in the air (the table's
     /// landing window, no contact yet; `Sequencer::airborne_leg`): an
     /// ankle its spring must have taken off the dorsiflexion stop.

@@ -21,6 +21,8 @@
 //! ascent's stance knee; walking 45); a stuck drive reaches 200–2,000 N·m,
 //! a drive at half its torque 80–250 N·m (`docs/safety.md`).
 
+use crate::layout::Side;
+
 /// Settings of the residual check.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -34,6 +36,12 @@ pub struct ResponseCheck {
     pub bandwidth_hz: f32,
     /// |d̂| above which a tick counts, N·m.
     pub limit_nm: f32,
+    /// The lowest limit a gait may set for the stance hip of its swings,
+    /// N·m ([`crate::supervisor::SupervisorInput::stance_hip_residual_nm`]):
+    /// a gait whose healthy closed loop keeps that hip's |d̂| well under
+    /// [`ResponseCheck::limit_nm`] catches a slipping stance hip sooner,
+    /// and none is held tighter than this.
+    pub stance_hip_min_nm: f32,
     /// Consecutive ticks over the limit that make the fault.
     pub ticks: u32,
 }
@@ -45,14 +53,27 @@ impl ResponseCheck {
     /// of which 8 kg·m² is what the closed loop's responses fit best. 3 Hz,
     /// 100 N·m for 10 ticks: above every healthy run (the shipped gaits
     /// stay under 50 N·m, the human-data stair descent passes 80), below
-    /// every stuck drive.
+    /// every stuck drive. A gait may hold the stance hip of its swings to
+    /// as little as 70 N·m: the built-in gaits keep it under 40, and a
+    /// stance hip whose gear slips shows 70–95 (`docs/safety.md`).
     pub const DEFAULT: Self = Self {
         stance_inertia_kgm2: [8.0, 8.0],
         swing_inertia_kgm2: [1.2, 0.35],
         bandwidth_hz: 3.0,
         limit_nm: 100.0,
+        stance_hip_min_nm: 70.0,
         ticks: 10,
     };
+
+    /// The limit on the stance hip of a swing whose gait asks for
+    /// `gait_nm`: the gait's figure held within
+    /// [`ResponseCheck::stance_hip_min_nm`] and
+    /// [`ResponseCheck::limit_nm`]; the limit itself where the gait gives
+    /// none (NaN, zero or negative).
+    #[must_use]
+    pub fn stance_hip_limit_nm(&self, gait_nm: f32) -> f32 {
+        stance_hip_limit(gait_nm, self.stance_hip_min_nm, self.limit_nm)
+    }
 
     /// Whether every value is finite and positive.
     pub(super) fn is_valid(&self) -> bool {
@@ -63,8 +84,19 @@ impl ResponseCheck {
             self.swing_inertia_kgm2[1],
             self.bandwidth_hz,
             self.limit_nm,
+            self.stance_hip_min_nm,
         ];
-        all.iter().all(|v| v.is_finite() && *v > 0.0) && self.ticks > 0
+        all.iter().all(|v| v.is_finite() && *v > 0.0)
+            && self.stance_hip_min_nm <= self.limit_nm
+            && self.ticks > 0
+    }
+}
+
+fn stance_hip_limit(gait_nm: f32, min_nm: f32, limit_nm: f32) -> f32 {
+    if gait_nm > 0.0 && gait_nm.is_finite() {
+        gait_nm.max(min_nm).min(limit_nm)
+    } else {
+        limit_nm
     }
 }
 
@@ -82,6 +114,8 @@ pub(super) struct Observer {
     inertia_kgm2: [[f32; super::JOINTS]; 2],
     /// |d̂| limit, N·m.
     pub(super) limit_nm: f32,
+    /// The lowest a gait may hold the stance hip of its swings to, N·m.
+    stance_hip_min_nm: f32,
     /// Ticks over it that make the fault.
     pub(super) ticks: u32,
 }
@@ -97,8 +131,19 @@ impl Observer {
             dt_s,
             inertia_kgm2: [[sh, sk, sh, sk], [wh, wk, wh, wk]],
             limit_nm: cfg.limit_nm,
+            stance_hip_min_nm: cfg.stance_hip_min_nm,
             ticks: cfg.ticks,
         }
+    }
+
+    /// Each joint's limit this tick: the gait's `gait_nm` for the hip
+    /// that stands while `swing_leg` swings, the device's for the rest.
+    pub(super) fn limits(&self, swing_leg: Option<Side>, gait_nm: f32) -> [f32; super::JOINTS] {
+        let mut limits = [self.limit_nm; super::JOINTS];
+        if let Some(hip) = swing_leg.and_then(|leg| limits.get_mut(leg.other().hip())) {
+            *hip = stance_hip_limit(gait_nm, self.stance_hip_min_nm, self.limit_nm);
+        }
+        limits
     }
 
     /// Joint `joint`'s inertia, on a swing leg or not.
@@ -127,6 +172,8 @@ pub(super) struct Residual {
     inertia_kgm2: f32,
     /// Consecutive ticks over the limit.
     pub(super) over_ticks: u32,
+    /// d̂ of the last tick the observer ran, N·m (0 while stopped).
+    pub(super) last_nm: f32,
 }
 
 impl Residual {
@@ -136,6 +183,7 @@ impl Residual {
         self.running = false;
         self.over_ticks = 0;
         self.last_feedforward_nm = feedforward_nm;
+        self.last_nm = 0.0;
     }
 
     /// One tick: `error_rad` now, `applied_nm` the torque the drive gave
@@ -178,6 +226,7 @@ impl Residual {
         self.e[0] += self.e[1] * o.dt_s;
         self.u[1] += u_acc * o.dt_s;
         self.u[0] += self.u[1] * o.dt_s;
+        self.last_nm = residual;
         residual
     }
 }

@@ -67,6 +67,16 @@ pub struct WindowedChecks {
 }
 
 impl WindowedChecks {
+    /// Each joint's torque residual d̂ at the last tick checked, N·m
+    /// (0x0404; 0 where its observer is stopped), for observers.
+    pub fn residuals_nm(&self) -> [f32; JOINTS] {
+        let mut out = [0.0; JOINTS];
+        for (o, j) in out.iter_mut().zip(&self.joints) {
+            *o = j.residual.last_nm;
+        }
+        out
+    }
+
     /// Fresh memory for the checks of `cfg` (validated by the
     /// [`Supervisor`] it belongs to).
     pub(super) fn new(cfg: &SupervisorConfig) -> Self {
@@ -110,6 +120,11 @@ impl WindowedChecks {
         f: &mut Findings,
     ) {
         let cfg = &self.cfg;
+        // 0x0404's limit on each joint this tick (the stance hip of a swing
+        // may have its gait's own).
+        let residual_limit = self
+            .observer
+            .limits(input.swing_leg, input.stance_hip_residual_nm);
         for i in 0..JOINTS {
             let ch = i as u8;
             let (Some(taken), Some(&reference), Some(&vmax), Some(motor), Some(track)) = (
@@ -189,7 +204,8 @@ impl WindowedChecks {
                         motor.feedforward_nm,
                         o.inertia(i, swing),
                     );
-                    if within(d, o.limit_nm) {
+                    let limit = residual_limit.get(i).copied().unwrap_or(o.limit_nm);
+                    if within(d, limit) {
                         track.residual.over_ticks = 0;
                     } else {
                         track.residual.over_ticks = track.residual.over_ticks.saturating_add(1);

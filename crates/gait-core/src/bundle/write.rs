@@ -68,7 +68,11 @@ pub fn encode(
             at,
             g.info.name.bytes.get(..g.info.name.len).ok_or(bad)?,
         )?;
-        put(img, at + NAME_LEN, &[kind_byte(g.info.kind)])?;
+        put(
+            img,
+            at + NAME_LEN,
+            &[kind_byte(g.info.kind), g.info.stance_hip_residual_nm],
+        )?;
         let i = &g.info;
         let figures = [
             i.step_length_m,

@@ -42,6 +42,12 @@ fn info(name: &str, kind: GaitKind, rise: f32) -> GaitInfo {
         step_time_s: 2.24,
         pace_m_s: 0.12,
         clearance_m: 0.05,
+        // The descent carries none: the device's own limit.
+        stance_hip_residual_nm: match kind {
+            GaitKind::Walk => 70,
+            GaitKind::StairUp => 85,
+            GaitKind::StairDown => 0,
+        },
     }
 }
 
@@ -88,6 +94,12 @@ fn round_trip() {
     assert_eq!(i, 1);
     assert_eq!(up.table.kind(), GaitKind::StairUp);
     assert_eq!(up.info.rise_m, 0.0935);
+    // The stance hip's residual limit reaches the table the board plays.
+    assert_eq!(up.info.stance_hip_residual_nm, 85);
+    assert_eq!(up.table.stance_hip_residual_nm(), 85.0);
+    let down = b.gait(2).expect("the descent");
+    assert_eq!(down.info.stance_hip_residual_nm, 0);
+    assert!(down.table.stance_hip_residual_nm().is_nan());
     assert!(b.gait(3).is_none());
     assert!(b.find("walk").is_none());
 }

@@ -319,3 +319,22 @@ fn a_slipping_stance_hip_in_a_swing_has_the_swing_foot_set_down() {
         assert_eq!(first.code, FaultCode::MotorSaturated, "{fault}: {o:?}");
     }
 }
+
+#[test]
+fn a_stance_hip_slipping_under_the_device_limit_is_caught_by_its_gait_s_limit() {
+    // Seed 1's campaign run of a right hip slipping in the first swing,
+    // where its leg swings unloaded; it shows in the next swing, which
+    // stands on it: command -112 N·m, the motor -41, tracking within
+    // 0.005 rad, a residual of about 70-80 N·m, under the device's
+    // 100 N·m. The built-in walk holds that hip to its own 70 N·m (its
+    // healthy peak is 30): 0x0404 brakes the hip and the hold sets the
+    // swing foot down. Over the device's limit alone the torso tipped past
+    // 60° when the drive saturated.
+    let fault = "gear-slip=0.3675953748980325:right-hip@2.481";
+    let r = crate::common::campaign_run(Gait::Walk, fault, 790_233);
+    let o = &r.outcome;
+    assert!(o.fell.is_none(), "{fault}: {o:?}");
+    let first = o.faults.first().unwrap();
+    assert_eq!(first.code, FaultCode::MotorResponse, "{fault}: {o:?}");
+    assert_eq!(first.channel, Some(2), "{fault}: {o:?}");
+}

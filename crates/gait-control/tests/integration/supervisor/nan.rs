@@ -147,6 +147,7 @@ fn random_input() -> impl Strategy<Value = SupervisorInput> {
                     button_input_fault: flags[4],
                     ankle_plan_rad: [f32::NAN; ANKLES],
                     swing_leg: None,
+                    stance_hip_residual_nm: f32::NAN,
                     airborne_leg: None,
                     chain_closed: [false; 4],
                     drive_current,

@@ -82,6 +82,7 @@ pub fn healthy_input(tick: u32) -> SupervisorInput {
         button_input_fault: false,
         ankle_plan_rad: [f32::NAN; ANKLES],
         swing_leg: None,
+        stance_hip_residual_nm: f32::NAN,
         airborne_leg: None,
         chain_closed: [false; JOINTS],
         // One drive a tick, in turn, giving what it was asked.

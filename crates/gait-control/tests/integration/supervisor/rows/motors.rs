@@ -34,6 +34,41 @@ fn row_motor_response() {
     assert_eq!(verdict.braked_joints, [false, true, false, false]);
 }
 
+/// A stance hip whose gear slips in a swing (the left hip, the right leg
+/// swinging): the position loop asks 90 N·m more than the model's torque
+/// and the joint does not move. Over the device's 100 N·m it would pass;
+/// a gait that holds that hip to 70 N·m (its own healthy peak with a
+/// margin) has it caught. The gait's figure is held within the device's
+/// bounds (70–100 N·m), and it is the stance hip's alone.
+#[test]
+fn a_gait_s_own_limit_catches_a_slipping_stance_hip() {
+    let slip = |joint: usize, gait_nm: f32| {
+        let (_, v) = inject(400, |_, input| {
+            input.swing_leg = Some(gait_control::layout::Side::Right);
+            input.stance_hip_residual_nm = gait_nm;
+            input.motors[joint].commanded_nm = 95.0;
+            input.motors[joint].applied_nm = 95.0;
+            input.motors[joint].limit_nm = 150.0;
+            currents_follow(input);
+        });
+        detected_at(&v, FaultCode::MotorResponse).map(|at| (at, v[at as usize - 1].braked_joints))
+    };
+    let caught = slip(0, 70.0);
+    assert!(
+        matches!(caught, Some((at, [true, false, false, false])) if (150..=300).contains(&at)),
+        "{caught:?}"
+    );
+    // Asked for less than the device allows: held to 70 N·m, caught alike.
+    assert_eq!(slip(0, 40.0), caught);
+    // The device's own limit: no gait figure, or one above the limit.
+    for gait_nm in [f32::NAN, 0.0, 150.0] {
+        assert_eq!(slip(0, gait_nm), None, "gait asks {gait_nm} N·m");
+    }
+    // The swing hip and the stance knee keep the device's limit.
+    assert_eq!(slip(2, 70.0), None);
+    assert_eq!(slip(1, 70.0), None);
+}
+
 /// 0x0404 on a joint while another is already braked: most likely the
 /// braked joint dragged it, so it is held where it is with its drive
 /// (latched and logged as ever, not braked), once; the residual still

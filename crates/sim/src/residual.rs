@@ -1,0 +1,86 @@
+//! How far a gait's healthy closed loop takes the supervisor's torque
+//! residual (0x0404) at the stance hip of its swings: the figure a table's
+//! generator sets the gait's own limit there from
+//! (`GaitTable::with_stance_hip_residual_nm`, `docs/safety.md`).
+//!
+//! A slipping stance hip shows as a residual the position loop cannot
+//! hide, 70–95 N·m late in a swing; a brisk gait for a tall patient shows
+//! up to 106 N·m healthy, the built-in gaits under 40. The device's one
+//! limit (100 N·m) must pass the brisk gaits; a gait's own limit, taken
+//! from its healthy runs, catches the slip where the gait leaves room.
+
+use gait_control::sequencer::Phase;
+use gait_core::tables::GaitTable;
+
+use crate::closed_loop::Sample;
+use crate::compare::{RunLength, play_for};
+use crate::scenario::strong_pilot;
+use exogait_device::DeviceConfig;
+
+/// Sensor-noise seeds of the noisy runs.
+pub const NOISE_SEEDS: [u64; 3] = [1, 2, 3];
+/// The encoders' noise of the noisy runs, counts (±; the AS5048A's 0.06°
+/// RMS is 2.7).
+pub const ENCODER_NOISE_COUNTS: u16 = 3;
+/// The force ADC's noise of the noisy runs, counts (±).
+pub const ADC_NOISE_COUNTS: u16 = 10;
+
+/// The largest |d̂| of the stance hip in the swings of `trace`, N·m (0
+/// without a swing; NaN samples, from a model task's checks, are skipped).
+pub fn stance_hip_peak_nm(trace: &[Sample]) -> f64 {
+    trace
+        .iter()
+        .filter_map(|s| match s.report.phase {
+            Phase::Swing { stance, .. } => s.residual_nm.get(stance.hip()).copied(),
+            _ => None,
+        })
+        .filter(|d| d.is_finite())
+        .fold(0.0, |peak, d| peak.max(f64::from(d.abs())))
+}
+
+/// The stance hip's peak over `steps` steps of `table` played by the
+/// strong pilot on `device`, without sensor noise and with the device's
+/// at each of [`NOISE_SEEDS`], N·m. An error names a run that faulted or
+/// landed short: the gait is not healthy on this device.
+pub fn stance_hip_residual_peak_nm(
+    device: &DeviceConfig,
+    table: GaitTable<'_>,
+    steps: usize,
+    max_s: f64,
+) -> Result<f64, String> {
+    let noises = core::iter::once(None).chain(NOISE_SEEDS.map(Some));
+    let mut peak = 0.0f64;
+    for noise in noises {
+        let (run, rig) = play_for(
+            device,
+            table,
+            strong_pilot(),
+            RunLength {
+                steps,
+                max_s,
+                tail_s: 0.5,
+            },
+            |rig| {
+                if let Some(seed) = noise {
+                    rig.set_sensor_noise(ENCODER_NOISE_COUNTS, ADC_NOISE_COUNTS, seed);
+                }
+            },
+        )
+        .map_err(|e| format!("closed loop: {e}"))?;
+        let with = noise.map_or_else(
+            || "without sensor noise".to_string(),
+            |seed| format!("with sensor noise ±{ENCODER_NOISE_COUNTS}/±{ADC_NOISE_COUNTS} counts, seed {seed}"),
+        );
+        if let Some((code, name)) = run.faults.first() {
+            return Err(format!("closed loop {with}: fault {code} ({name})"));
+        }
+        if run.landed() < steps {
+            return Err(format!(
+                "closed loop {with}: {} of {steps} steps landed",
+                run.landed()
+            ));
+        }
+        peak = peak.max(stance_hip_peak_nm(&rig.trace));
+    }
+    Ok(peak)
+}
