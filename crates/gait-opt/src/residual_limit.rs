@@ -10,8 +10,9 @@ use exogait_device::DeviceConfig;
 use gait_control::supervisor::ResponseCheck;
 use gait_core::tables::GaitTable;
 
-/// The margin over the healthy peak, N·m. The peaks of one gait over the
-/// noise seeds lie within 3 N·m of each other (`docs/safety.md`).
+/// The margin over the healthy peak, N·m: over the 10 noise seeds
+/// (`sim::residual::NOISE_SEEDS`) a gait's peak is within a few N·m of
+/// what 50 seeds give, and a slipping gear's deficit comes to 70–95 N·m.
 pub const MARGIN_NM: f64 = 20.0;
 
 /// The limit for a gait whose healthy stance hip peaks at `peak_nm`, N·m.
