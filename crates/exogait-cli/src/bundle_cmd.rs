@@ -29,9 +29,12 @@ struct GaitJson {
     step_time_s: f32,
     pace_m_s: f32,
     clearance_m: f32,
-    /// The stance hip's torque-residual limit in its swings, N·m (`null`:
-    /// the device's own).
-    stance_hip_residual_nm: Option<u8>,
+    /// The stance hip's torque-residual limit in its swings as the board
+    /// holds it, N·m (the entry's figure within the supervisor's bounds;
+    /// the device's own limit where the entry gives none).
+    stance_hip_residual_nm: f32,
+    /// Whether the entry gives one.
+    stance_hip_residual_own: bool,
 }
 
 #[derive(Debug, Serialize)]
@@ -65,6 +68,7 @@ pub fn run(args: &BundleArgs) -> u8 {
             return 2;
         }
     };
+    let response = file.device.supervisor.response;
     let v = b.generator_version();
     let p = b.patient();
     let answer = BundleJson {
@@ -89,7 +93,9 @@ pub fn run(args: &BundleArgs) -> u8 {
                 step_time_s: g.info.step_time_s,
                 pace_m_s: g.info.pace_m_s,
                 clearance_m: g.info.clearance_m,
-                stance_hip_residual_nm: Some(g.info.stance_hip_residual_nm).filter(|&nm| nm > 0),
+                stance_hip_residual_nm: response
+                    .stance_hip_limit_nm(f32::from(g.info.stance_hip_residual_nm)),
+                stance_hip_residual_own: g.info.stance_hip_residual_nm > 0,
             })
             .collect(),
     };
@@ -137,8 +143,11 @@ pub fn run(args: &BundleArgs) -> u8 {
             g.step_time_s,
             g.pace_m_s,
             g.clearance_m,
-            g.stance_hip_residual_nm
-                .map_or_else(|| "device's".to_string(), |nm| nm.to_string())
+            if g.stance_hip_residual_own {
+                format!("{:.0}", g.stance_hip_residual_nm)
+            } else {
+                format!("{:.0} (device's)", g.stance_hip_residual_nm)
+            }
         );
     }
     0

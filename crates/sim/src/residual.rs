@@ -27,9 +27,10 @@ pub const ENCODER_NOISE_COUNTS: u16 = 3;
 /// The force ADC's noise of the noisy runs, counts (±).
 pub const ADC_NOISE_COUNTS: u16 = 10;
 
-/// The largest |d̂| of the stance hip in the swings of `trace`, N·m (0
-/// without a swing; NaN samples, from a model task's checks, are skipped).
-pub fn stance_hip_peak_nm(trace: &[Sample]) -> f64 {
+/// The largest |d̂| of the stance hip in the swings of `trace`, N·m;
+/// `None` when no swing tick has it (no swing, or the windowed checks ran
+/// in a model task, whose residuals the trace does not see).
+pub fn stance_hip_peak_nm(trace: &[Sample]) -> Option<f64> {
     trace
         .iter()
         .filter_map(|s| match s.report.phase {
@@ -37,7 +38,8 @@ pub fn stance_hip_peak_nm(trace: &[Sample]) -> f64 {
             _ => None,
         })
         .filter(|d| d.is_finite())
-        .fold(0.0, |peak, d| peak.max(f64::from(d.abs())))
+        .map(|d| f64::from(d.abs()))
+        .reduce(f64::max)
 }
 
 /// The stance hip's peak over `steps` steps of `table` played by the
@@ -82,7 +84,10 @@ pub fn stance_hip_residual_peak_nm(
                 run.landed()
             ));
         }
-        peak = peak.max(stance_hip_peak_nm(&rig.trace));
+        let run_peak = stance_hip_peak_nm(&rig.trace).ok_or_else(|| {
+            format!("closed loop {with}: no stance hip's residual measured in a swing")
+        })?;
+        peak = peak.max(run_peak);
     }
     Ok(peak)
 }

@@ -73,6 +73,12 @@ impl<'t> Sequencer<'t> {
             return self.blend_to;
         };
         self.step = Some(step);
+        // The generator measured the gait's figure on its table's step; a
+        // re-planned step is checked against the device's limit.
+        self.stance_hip_residual_nm = match step {
+            StepTable::Planned(table) => table.stance_hip_residual_nm(),
+            StepTable::Replanned { .. } => f32::NAN,
+        };
         self.phase = Phase::Swing { stance, t_s: 0.0 };
         let start = step.at_time(0.0);
         let lands_first_from_s = self.lands_first_from_s();

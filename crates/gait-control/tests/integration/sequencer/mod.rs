@@ -86,7 +86,10 @@ impl<'t> Rig<'t> {
     }
 
     fn with_config(image: &'t [u8], cfg: SequencerConfig) -> Self {
-        let table = GaitTable::parse(image).unwrap();
+        Self::with_table(GaitTable::parse(image).unwrap(), cfg)
+    }
+
+    fn with_table(table: GaitTable<'t>, cfg: SequencerConfig) -> Self {
         let tables = match table.kind() {
             GaitKind::Walk => GaitTables::by_kind(Some(table), None, None),
             GaitKind::StairUp => GaitTables::by_kind(None, Some(table), None),

@@ -234,6 +234,36 @@ fn a_pilot_on_the_plan_steps_at_once_without_a_request() {
     assert!(!rig.events.iter().any(|e| matches!(e, SeqEvent::Replan(_))));
 }
 
+/// The stance hip's residual limit a table carries (0x0404) is the one a
+/// step played from it is checked with; a re-planned step, which the
+/// generator did not measure, is checked with the device's.
+#[test]
+fn a_table_s_step_carries_its_stance_hip_limit_and_a_replanned_one_the_device_s() {
+    let img = walk_image();
+    let table = GaitTable::parse(&img)
+        .unwrap()
+        .with_stance_hip_residual_nm(70);
+    let slot = ReplanSlot::new();
+    let start = |ankle: f32| {
+        let mut rig = Rig::with_table(table, SequencerConfig::DEFAULT);
+        rig.seq = rig.seq.with_replanner(&slot, RC);
+        let (mut rig, pose, _) = rig.walking();
+        let s = ready_at(pose, ankle);
+        if let Some(ticket) = (ankle != START_ANKLE).then(|| until_requested(&mut rig, &slot, &s)) {
+            assert!(slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&table, 0.08)));
+        }
+        for _ in 0..=RC.latency_ticks {
+            rig.step(&s);
+            if matches!(rig.seq.phase(), Phase::Swing { .. }) {
+                return rig.seq.stance_hip_residual_nm();
+            }
+        }
+        panic!("no swing");
+    };
+    assert_eq!(start(START_ANKLE), 70.0);
+    assert!(start(START_ANKLE + 0.08).is_nan());
+}
+
 #[test]
 fn a_hold_withdraws_the_request() {
     let img = walk_image();
