@@ -882,22 +882,22 @@ pub static STAIR_DOWN: [u8; 4608] = [
 ];
 
 /// The walking table, verified, with the stance hip's torque-residual
-/// limit of its swings: 70 N·m (its healthy closed loop peaks at
-/// 31.4 N·m there; `gait_opt::residual_limit`).
+/// limit of its swings: 72 N·m (its healthy closed loop peaks at
+/// 51.4 N·m there; `gait_opt::residual_limit`).
 pub fn walk() -> Result<GaitTable<'static>, TableError> {
-    GaitTable::parse(&WALK).map(|t| t.with_stance_hip_residual_nm(70))
+    GaitTable::parse(&WALK).map(|t| t.with_stance_hip_residual_nm(72))
 }
 
 /// The stair-ascent table, verified, with the stance hip's torque-residual
 /// limit of its swings: 70 N·m (its healthy closed loop peaks at
-/// 29.5 N·m there; `gait_opt::residual_limit`).
+/// 33.9 N·m there; `gait_opt::residual_limit`).
 pub fn stair_up() -> Result<GaitTable<'static>, TableError> {
     GaitTable::parse(&STAIR_UP).map(|t| t.with_stance_hip_residual_nm(70))
 }
 
 /// The stair-descent table, verified, with the stance hip's torque-residual
 /// limit of its swings: 70 N·m (its healthy closed loop peaks at
-/// 25.1 N·m there; `gait_opt::residual_limit`).
+/// 39.6 N·m there; `gait_opt::residual_limit`).
 pub fn stair_down() -> Result<GaitTable<'static>, TableError> {
     GaitTable::parse(&STAIR_DOWN).map(|t| t.with_stance_hip_residual_nm(70))
 }

@@ -54,8 +54,8 @@ impl ResponseCheck {
     /// 100 N·m for 10 ticks: above every healthy run (the shipped gaits
     /// stay under 50 N·m, the human-data stair descent passes 80), below
     /// every stuck drive. A gait may hold the stance hip of its swings to
-    /// as little as 70 N·m: the built-in gaits keep it under 40, and a
-    /// stance hip whose gear slips shows 70–95 (`docs/safety.md`).
+    /// as little as 70 N·m: the built-in gaits keep it under 52 (a pilot 2° off
+    /// the plan included), and a stance hip whose gear slips shows 70–95 (`docs/safety.md`).
     pub const DEFAULT: Self = Self {
         stance_inertia_kgm2: [8.0, 8.0],
         swing_inertia_kgm2: [1.2, 0.35],

@@ -326,8 +326,8 @@ fn a_stance_hip_slipping_under_the_device_limit_is_caught_by_its_gait_s_limit() 
     // where its leg swings unloaded; it shows in the next swing, which
     // stands on it: command -112 N·m, the motor -41, tracking within
     // 0.005 rad, a residual of about 70-80 N·m, under the device's
-    // 100 N·m. The built-in walk holds that hip to its own 70 N·m (its
-    // healthy peak is 30): 0x0404 brakes the hip and the hold sets the
+    // 100 N·m. The built-in walk holds that hip to its own 72 N·m (its
+    // healthy peak, a pilot 2° off the plan included, is 51): 0x0404 brakes the hip and the hold sets the
     // swing foot down. Over the device's limit alone the torso tipped past
     // 60° when the drive saturated.
     let fault = "gear-slip=0.3675953748980325:right-hip@2.481";
