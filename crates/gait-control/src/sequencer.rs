@@ -114,9 +114,9 @@ pub struct Sequencer<'t> {
     /// The selected table (kept at hand: the tick reads it several
     /// times).
     table: Option<GaitTable<'t>>,
-    /// The stance-hip residual limit of the step played or about to be,
-    /// N·m: the selected table's, NaN for none or a re-planned step (read
-    /// once a tick by the supervisor's facts, so worked out at the start).
+    /// The stance-hip residual limit of the step played last, N·m: its
+    /// table's, NaN for none or a re-planned step (read once a tick by the
+    /// supervisor's facts, so worked out when the swing starts).
     stance_hip_residual_nm: f32,
     /// The step a swing plays: that table's, or its re-planned version.
     step: Option<StepTable<'t>>,
@@ -244,8 +244,8 @@ impl<'t> Sequencer<'t> {
         self.gait
     }
 
-    /// The torque-residual limit the selected gait's table sets for the
-    /// stance hip of its swings, N·m (NaN: none, or a re-planned step; the
+    /// The torque-residual limit the table of the present (or last) swing
+    /// sets for its stance hip, N·m (NaN: none, or a re-planned step; the
     /// supervisor's 0x0404,
     /// [`crate::supervisor::ResponseCheck::stance_hip_limit_nm`]).
     #[must_use]

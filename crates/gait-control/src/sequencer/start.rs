@@ -42,7 +42,6 @@ impl<'t> Sequencer<'t> {
                 self.gait = gait;
                 self.slot = slot;
                 self.table = Some(table);
-                self.stance_hip_residual_nm = table.stance_hip_residual_nm();
                 self.stance = stance;
                 self.stop_requested = false;
                 self.begin_blend(start);
