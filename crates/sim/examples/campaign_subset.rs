@@ -1,13 +1,15 @@
 //! Plays the runs of campaign SEED (RUNS runs) whose fault's name starts
-//! with one of the given prefixes, on every core, and prints each device
-//! fall and the tally: for trying a reaction on the kinds it is for.
+//! with one of the given prefixes, on every core, and prints each fall
+//! and stop crossed with the faults the run latched, each missed
+//! detection, and the tally: for trying a reaction on the kinds it is for.
 //! `cargo run --release -p sim --example campaign_subset -- SEED RUNS PREFIX...`
 //! (`EXO_SET_DOWN=SECONDS,METRES` tries another set-down,
 //! `EXO_SET_DOWN_SPEED=RAD_PER_S` another cap on its joints,
 //! `EXO_LANDS_AFTER=WALK,UP,DOWN` other points of each swing from which a
 //! hold lands first, `EXO_PILOT_REACTION=SECONDS,SECONDS` a pilot who
 //! reacts to a hold at another time and speed, `EXO_RESIDUAL=N_M` another
-//! limit of the joints' torque residual (0x0404), `EXO_GAIT=stair-down` one
+//! limit of every joint's torque residual (0x0404; the gaits' own
+//! stance-hip limits overridden), `EXO_GAIT=stair-down` one
 //! gait's runs alone, `EXO_ALL=1` every run played with the phase its fault
 //! struck in, not only the falls), or the runs
 //! listed in a file, one `GAIT FAULT NOISE_SEED` a line (as `fault_trace`
@@ -54,6 +56,17 @@ fn listed(path: &str) -> Result<Vec<sim::campaign::CampaignRun>, String> {
     Ok(runs)
 }
 
+/// The faults a run latched, as `CODE@CHANNEL/SECONDS`.
+fn latched(r: &sim::campaign::RunResult) -> String {
+    let codes: Vec<String> = r
+        .outcome
+        .faults
+        .iter()
+        .map(|f| format!("{:04x}@{:?}/{:.3}", f.code.code(), f.channel, f.detected_s))
+        .collect();
+    codes.join(" ")
+}
+
 fn main() {
     let mut args = std::env::args().skip(1);
     let first = args.next();
@@ -97,6 +110,7 @@ fn main() {
         .and_then(|v| v.parse::<f32>().ok())
     {
         device.supervisor.response.limit_nm = l;
+        device.supervisor.response.stance_hip_min_nm = l;
     }
     // EXO_GAIT=walk|stair-up|stair-down: that gait's runs alone.
     let gait = std::env::var("EXO_GAIT").ok().and_then(|g| gait_named(&g));
@@ -159,16 +173,14 @@ fn main() {
                 },
                 r.named_stop().map_or("device", |c| c.name())
             );
-            let codes: Vec<String> = r
-                .outcome
-                .faults
-                .iter()
-                .map(|f| format!("{:04x}@{:?}/{:.3}", f.code.code(), f.channel, f.detected_s))
-                .collect();
-            println!("  faults {}", codes.join(" "));
+            println!("  faults {}", latched(r));
         }
         if r.missed() {
             missed += 1;
+            println!(
+                "missed {:?} {} {} in {:?}",
+                r.run.gait, r.run.fault, r.run.noise_seed, r.struck_in
+            );
         }
         if every_run && r.outcome.fell.is_none() {
             println!(
@@ -184,6 +196,7 @@ fn main() {
                 "{:?} {} {} {f} [{named}] in {:?}",
                 r.run.gait, r.run.fault, r.run.noise_seed, r.struck_in
             );
+            println!("  faults {}", latched(r));
         }
     }
     println!(
