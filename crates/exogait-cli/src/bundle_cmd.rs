@@ -101,7 +101,7 @@ pub fn run(args: &BundleArgs) -> u8 {
     };
     if args.json {
         match serde_json::to_string_pretty(&answer) {
-            Ok(t) => println!("{t}"),
+            Ok(t) => outln!("{t}"),
             Err(e) => {
                 eprintln!("exogait bundle: {e}");
                 return 2;
@@ -109,7 +109,7 @@ pub fn run(args: &BundleArgs) -> u8 {
         }
         return 0;
     }
-    println!(
+    outln!(
         "{}: bundle v{}, {} bytes, CRC {}, device {}, generator {}",
         args.file.display(),
         answer.format_version,
@@ -118,7 +118,7 @@ pub fn run(args: &BundleArgs) -> u8 {
         answer.device_fingerprint,
         answer.generator_version
     );
-    println!(
+    outln!(
         "patient {}: {:.2} m, {:.1} kg (with the exoskeleton {:.1} kg); thigh {:.3} m, shank {:.3} m, foot {:.3} m",
         answer.patient_hash,
         p.height_m,
@@ -128,11 +128,11 @@ pub fn run(args: &BundleArgs) -> u8 {
         p.segments_m[1],
         p.segments_m[2]
     );
-    println!(
+    outln!(
         "  #  name          kind        step m  rise m  tread m  time s  pace m/s  clearance m  stance hip N·m"
     );
     for (i, g) in answer.gaits.iter().enumerate() {
-        println!(
+        outln!(
             "{:>3}  {:<12}  {:<10}  {:>6.3}  {:>+6.3}  {:>7.3}  {:>6.2}  {:>8.3}  {:>11.3}  {:>14}",
             i + 1,
             g.name,

@@ -482,14 +482,14 @@ pub fn run(args: &CompareArgs) -> u8 {
     };
     if args.json {
         match serde_json::to_string(&answer) {
-            Ok(t) => println!("{t}"),
+            Ok(t) => outln!("{t}"),
             Err(e) => {
                 eprintln!("exogait compare: {e}");
                 return 2;
             }
         }
     } else {
-        print!("{}", table_text(&answer));
+        out!("{}", table_text(&answer));
     }
     if let Some(path) = &args.plot {
         let title = format!(
@@ -501,7 +501,7 @@ pub fn run(args: &CompareArgs) -> u8 {
             return 2;
         }
         if !args.json {
-            println!("plot: {}", path.display());
+            outln!("plot: {}", path.display());
         }
     }
     let clean = |r: &GaitRun| r.faults.is_empty() && r.landed() >= args.steps;

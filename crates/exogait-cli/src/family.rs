@@ -240,14 +240,14 @@ pub fn run(args: &TablesArgs) -> u8 {
     };
     if args.json {
         match serde_json::to_string_pretty(&report) {
-            Ok(t) => println!("{t}"),
+            Ok(t) => outln!("{t}"),
             Err(e) => {
                 eprintln!("exogait tables: {e}");
                 return 2;
             }
         }
     } else {
-        println!(
+        outln!(
             "exogait tables: {} of {} gaits cleared for patient 0x{:08x} ({:.2} m, {:.0} kg) in {:.1} s",
             cleared.len(),
             outcomes.len(),
@@ -258,7 +258,7 @@ pub fn run(args: &TablesArgs) -> u8 {
         );
         for g in &report.gaits {
             if g.cleared {
-                println!(
+                outln!(
                     "  cleared   {:<12} step {:.3} m, rise {:+.3} m, {:.2} s ({:.2} s double support): pace {:.3} m/s, clearance {:.3} m, balance part {:.0} N·s, stance hip's residual {:.0} N·m (limit {})",
                     g.name,
                     g.step_length_m,
@@ -272,7 +272,7 @@ pub fn run(args: &TablesArgs) -> u8 {
                     g.stance_hip_residual_limit_nm.unwrap_or(0),
                 );
             } else {
-                println!(
+                outln!(
                     "  left out  {:<12} {}",
                     g.name,
                     g.reason.as_deref().unwrap_or("")
@@ -307,7 +307,7 @@ pub fn run(args: &TablesArgs) -> u8 {
         return 2;
     }
     if !args.json {
-        println!("bundle: {} ({} bytes)", args.out.display(), buf.len());
+        outln!("bundle: {} ({} bytes)", args.out.display(), buf.len());
     }
     0
 }

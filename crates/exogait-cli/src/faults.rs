@@ -315,7 +315,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
             },
         };
         match serde_json::to_string_pretty(&answer) {
-            Ok(t) => println!("{t}"),
+            Ok(t) => outln!("{t}"),
             Err(e) => {
                 eprintln!("exogait faults: JSON: {e}");
                 return 2;
@@ -323,7 +323,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
         }
     } else {
         if let Some(path) = &args.bundle {
-            println!(
+            outln!(
                 "exogait faults: {} on its fitted device: {} gaits ({})",
                 path.display(),
                 gaits.len(),
@@ -335,11 +335,12 @@ pub fn run(args: &FaultsArgs) -> u8 {
             );
         }
         if !runs.is_empty() {
-            println!(
+            outln!(
                 "exogait faults: {} runs, seed {}, one random fault each, sensor noise ±3/±10 counts",
-                all.runs, args.seed
+                all.runs,
+                args.seed
             );
-            println!(
+            outln!(
                 "{:<24} {:>5} {:>6} {:>8} {:>11} {:>8} {:>7} {:>12} {:>7}",
                 "kind",
                 "runs",
@@ -352,7 +353,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
                 "errors"
             );
             let row = |name: &str, t: &Tally| {
-                println!(
+                outln!(
                     "{:<24} {:>5} {:>6} {:>8} {:>11} {:>8} {:>7} {:>12} {:>7}",
                     name,
                     t.runs,
@@ -369,24 +370,37 @@ pub fn run(args: &FaultsArgs) -> u8 {
                 row(k, t);
             }
             row("all", &all);
-            println!("the same runs per gait:");
+            outln!("the same runs per gait:");
             for (g, t) in &faults_by_gait {
                 row(gaits.name(*g), t);
             }
         }
         if !healthy_runs.is_empty() {
-            println!(
+            outln!(
                 "healthy runs: {} per gait, {} steps, no fault, sensor noise ±3/±10 counts",
-                args.healthy, HEALTHY_STEPS
+                args.healthy,
+                HEALTHY_STEPS
             );
-            println!(
+            outln!(
                 "{:<24} {:>5} {:>6} {:>11} {:>12} {:>6} {:>7}",
-                "gait", "runs", "falls", "past a stop", "false trips", "short", "errors"
+                "gait",
+                "runs",
+                "falls",
+                "past a stop",
+                "false trips",
+                "short",
+                "errors"
             );
             let row = |name: &str, t: &HealthyTally| {
-                println!(
+                outln!(
                     "{:<24} {:>5} {:>6} {:>11} {:>12} {:>6} {:>7}",
-                    name, t.runs, t.falls, t.past_a_stop, t.false_trips, t.short, t.errors
+                    name,
+                    t.runs,
+                    t.falls,
+                    t.past_a_stop,
+                    t.false_trips,
+                    t.short,
+                    t.errors
                 );
             };
             for (g, t) in &by_gait {
@@ -400,7 +414,7 @@ pub fn run(args: &FaultsArgs) -> u8 {
                     .iter()
                     .map(|f| format!("0x{:04x} at {:.3} s", f.code.code(), f.detected_s))
                     .collect();
-                println!(
+                outln!(
                     "  {} noise seed {}: {} landings, faults [{}]{}",
                     gaits.name(r.run.slot),
                     r.run.noise_seed,

@@ -71,6 +71,6 @@ pub fn run(args: &FitArgs) -> u8 {
         eprintln!("exogait fit: {}: {e}", args.out.display());
         return 2;
     }
-    println!("{text}");
+    outln!("{text}");
     0
 }

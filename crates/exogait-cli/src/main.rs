@@ -4,6 +4,10 @@
 //! lines; `optimize` and `cost` call gait-opt. No algorithm lives here. See
 //! `crates/exogait-cli/README.md`.
 
+// First: its macros serve the modules below.
+#[macro_use]
+mod out;
+
 mod bundle_cmd;
 mod bundle_file;
 mod commands;
@@ -170,7 +174,7 @@ fn run_cost(file: &std::path::Path) -> ExitCode {
     match cost::run(file) {
         Ok(answer) => {
             match serde_json::to_string(&answer) {
-                Ok(text) => println!("{text}"),
+                Ok(text) => outln!("{text}"),
                 Err(e) => {
                     eprintln!("exogait: {e}");
                     return ExitCode::from(EXIT_FATAL);
@@ -215,6 +219,8 @@ fn run_lines(command: &Command, model: &BodyModel<f64>) -> ExitCode {
             );
             ExitCode::from(EXIT_LINE_FAILED)
         }
+        // A closed output is the reader's choice (`out`).
+        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => ExitCode::from(EXIT_FATAL),
         Err(e) => {
             eprintln!("exogait: I/O error: {e}");
             ExitCode::from(EXIT_FATAL)

@@ -320,7 +320,7 @@ fn run_clinical(a: &OptimizeArgs, model: Option<BodyModel<f64>>) -> Result<(), F
     std::fs::write(&a.out, text + "\n")
         .map_err(|e| Failure::Usage(format!("--out {}: cannot write: {e}", a.out.display())))?;
     let e = &r.evaluation;
-    println!(
+    outln!(
         "{} (clinical mode): spacing ({}, {}) m, ts {} s, seed {}\n\
          predicted balance impulse {:.1} N·s (J {:.1}, penalties {:.1}); pilot peak {:.1} N·m; \
          joint peaks {:.0}/{:.0}/{:.0}/{:.0} N·m; clearance {:.3} m\n\
@@ -442,7 +442,7 @@ pub fn run(a: &OptimizeArgs, model: Option<BodyModel<f64>>) -> Result<(), Failur
         plot_report(&report, path)
             .map_err(|e| Failure::Usage(format!("--plot {}: {e}", path.display())))?;
     }
-    print!("{}", summary(a, &s, &report));
+    out!("{}", summary(a, &s, &report));
     Ok(())
 }
 

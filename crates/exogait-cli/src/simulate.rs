@@ -382,29 +382,29 @@ pub fn run(args: &SimulateArgs) -> u8 {
             conditions,
         };
         match serde_json::to_string_pretty(&answer) {
-            Ok(text) => println!("{text}"),
+            Ok(text) => outln!("{text}"),
             Err(e) => {
                 eprintln!("exogait simulate: JSON: {e}");
                 return 2;
             }
         }
     } else {
-        println!(
+        outln!(
             "exogait closed loop: {label}, {} step(s), {source}",
             args.steps
         );
         for (f, t) in run.rig.injected() {
-            println!("injected               {f} (at {t:.3} s)");
+            outln!("injected               {f} (at {t:.3} s)");
         }
-        println!("{}", run.summary);
+        outln!("{}", run.summary);
         if let Some(e) = &run.ended_by {
-            println!("simulation stopped     {e}");
+            outln!("simulation stopped     {e}");
         }
     }
     if let Some(path) = &args.plot {
         match sim::plot::plot_run(&run.rig.trace, &run.summary, path) {
             Ok(()) if args.json => eprintln!("plot: {}", path.display()),
-            Ok(()) => println!("plot                     {}", path.display()),
+            Ok(()) => outln!("plot                     {}", path.display()),
             Err(e) => {
                 eprintln!("exogait simulate: {}: {e}", path.display());
                 return 2;

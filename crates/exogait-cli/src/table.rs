@@ -151,7 +151,7 @@ pub fn run(args: &TableArgs) -> u8 {
     }
     let table = GaitTable::parse(&image);
     if let Ok(t) = table {
-        println!(
+        outln!(
             "table {}: {} samples, {:.2} s, {} bytes: {}",
             gait_opt::clinical_report::gait_name(t.kind()),
             t.len(),

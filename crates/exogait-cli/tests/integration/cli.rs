@@ -191,3 +191,21 @@ fn model_from_pilot() {
     assert!((hip[1] - (l1 + l2)).abs() < 1e-12);
     assert!((hip[1] - 0.491 * 1.75).abs() < 1e-12);
 }
+
+/// A reader that has gone (`exogait simulate --json | head -0`) ends the
+/// command with the I/O status 2 and no message, not a panic.
+#[test]
+fn a_closed_stdout_ends_the_command_quietly() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_exogait"))
+        .args(["simulate", "--gait", "walk", "--json"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn exogait");
+    // Closed before the run (a quarter of a second at least) prints.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.is_empty(), "{stderr}");
+}
