@@ -219,7 +219,8 @@ fn run_lines(command: &Command, model: &BodyModel<f64>) -> ExitCode {
             );
             ExitCode::from(EXIT_LINE_FAILED)
         }
-        // A closed output is the reader's choice (`out`).
+        // A closed output is the reader's choice (`out`): no message. The
+        // lines not answered are not answered, so not 0.
         Err(e) if e.kind() == io::ErrorKind::BrokenPipe => ExitCode::from(EXIT_FATAL),
         Err(e) => {
             eprintln!("exogait: I/O error: {e}");

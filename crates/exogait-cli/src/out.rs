@@ -1,14 +1,22 @@
-//! Standard output for every command. `outln!` panics when the reader
-//! has gone (`exogait faults --json | head`); these end the command
-//! quietly instead, as `cat` or `git log` do, with the I/O status 2.
+//! Standard output for every command. `println!` panics when the reader
+//! has gone (`exogait tables … | head`), and the panic lost the work not
+//! yet written (a family's bundle); these let the command finish instead,
+//! its output dropped, with its own exit status.
 
 use std::fmt;
 use std::io::{self, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Standard output has failed once: nothing more is written to it.
+static GONE: AtomicBool = AtomicBool::new(false);
 
 /// Writes `args` (and a newline with `newline`) to stdout. A closed pipe
-/// ends the process at once with status 2 and no message (the reader
-/// chose to stop); any other write error is said on stderr, status 2.
+/// (the reader chose to stop) drops this and every later output quietly;
+/// any other write error is said once on stderr.
 pub fn write(args: fmt::Arguments<'_>, newline: bool) {
+    if GONE.load(Ordering::Relaxed) {
+        return;
+    }
     let mut out = io::stdout().lock();
     let written = out
         .write_fmt(args)
@@ -21,14 +29,14 @@ pub fn write(args: fmt::Arguments<'_>, newline: bool) {
         })
         .and_then(|()| out.flush());
     if let Err(e) = written {
+        GONE.store(true, Ordering::Relaxed);
         if e.kind() != io::ErrorKind::BrokenPipe {
             eprintln!("exogait: writing the output: {e}");
         }
-        std::process::exit(i32::from(crate::EXIT_FATAL));
     }
 }
 
-/// `outln!` to stdout through [`write`].
+/// `println!` to stdout through [`write`].
 macro_rules! outln {
     () => {
         $crate::out::write(format_args!(""), true)

@@ -192,10 +192,10 @@ fn model_from_pilot() {
     assert!((hip[1] - 0.491 * 1.75).abs() < 1e-12);
 }
 
-/// A reader that has gone (`exogait simulate --json | head -0`) ends the
-/// command with the I/O status 2 and no message, not a panic.
+/// A reader that has gone (`exogait simulate --json | head -0`) lets the
+/// command finish with its own status and no message, not a panic.
 #[test]
-fn a_closed_stdout_ends_the_command_quietly() {
+fn a_closed_stdout_lets_the_command_finish_quietly() {
     let mut child = Command::new(env!("CARGO_BIN_EXE_exogait"))
         .args(["simulate", "--gait", "walk", "--json"])
         .stdout(std::process::Stdio::piped())
@@ -206,6 +206,7 @@ fn a_closed_stdout_ends_the_command_quietly() {
     drop(child.stdout.take());
     let out = child.wait_with_output().expect("wait");
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    // The walk lands every step: 0, as with its output read.
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
     assert!(stderr.is_empty(), "{stderr}");
 }
