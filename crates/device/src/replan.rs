@@ -150,6 +150,7 @@ pub fn replan(
         spring_nm_per_rad: cfg.ankle_spring_nm_per_rad as f32,
         spacing_m: spacing(&table, &model, &foot),
         crutch_lever_m: CRUTCH_LEVER_M,
+        aim_m: REPLAN.landing_aim_for(table.kind()),
     };
     let measured = Measured {
         phi1_rad: request.phi1_rad,

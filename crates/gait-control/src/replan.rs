@@ -76,6 +76,10 @@ pub struct ReplanConfig {
     /// The share of the start's offset the pilot is expected to keep to
     /// the landing.
     pub persist: f32,
+    /// Where a re-planned step lands relative to its table's foothold, m
+    /// (x along the step, y up), for the walk, the ascent and the descent
+    /// ([`gait_core::replan::ReplanSetup::aim_m`]).
+    pub landing_aim_m: [[f32; 2]; 3],
 }
 
 impl ReplanConfig {
@@ -88,14 +92,31 @@ impl ReplanConfig {
     /// the start, 0.018–0.024 rad at the landing; kept whole, a
     /// forward-leaning pilot's swing foot ended above the ground and
     /// waited for the ground search; dropped, the steps landed as far off
-    /// as the table's).
+    /// as the table's). The approach is pressed 3 mm under the floor, so
+    /// the foot meets it by the table's end, and the walk and the ascent
+    /// aim 8 mm short and the descent 2 mm long, the offsets that earlier
+    /// touch-down lands with on the simulated device (`docs/replanning.md`;
+    /// to be measured again on the device).
     pub const DEFAULT: Self = Self {
         min_offset_rad: 0.01,
         ankle_tolerance_rad: 0.12,
         latency_ticks: 200,
         ankle_drift_rad: 0.02,
         persist: 0.6,
+        landing_aim_m: [[-0.008, -0.003], [-0.008, -0.003], [0.0, 0.0]],
     };
+
+    /// The landing aim of a step of `kind` ([`ReplanConfig::landing_aim_m`]).
+    #[must_use]
+    pub fn landing_aim_for(&self, kind: gait_core::tables::GaitKind) -> [f32; 2] {
+        use gait_core::tables::GaitKind;
+        let [walk, up, down] = self.landing_aim_m;
+        match kind {
+            GaitKind::Walk => walk,
+            GaitKind::StairUp => up,
+            GaitKind::StairDown => down,
+        }
+    }
 }
 
 /// What came of the re-plan of a step, as the sequencer reports it.

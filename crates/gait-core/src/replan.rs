@@ -74,6 +74,18 @@
 //!   over the table's samples) and returns; the board calls it in the idle
 //!   time of its tick and plays the table if it has not finished in time.
 //!
+//! - **Aim** ([`ReplanSetup::aim_m`]): the candidates' swing ankle
+//!   follows the table's path shifted by the aim's x (faded in over the
+//!   step) and, in its last centimetre above the landing, pressed down to
+//!   the aim's y. The reason is the closed loop, which the open-loop cost
+//!   does not see: aimed exactly at the floor at the table's end, a
+//!   re-planned foot met it 0.13–0.16 s late (the joints lag, the
+//!   pilot's shank leans on) and the ground search held the body on one
+//!   foot meanwhile, at some 13 % more crutch load than the table played
+//!   turned; touching down sooner lands long by an offset the step's
+//!   movement sets (about 8 mm on the walk and the ascent), which the aim's
+//!   x takes back (`docs/replanning.md`).
+//!
 //! The transfer after the landing is not counted: every candidate lands on
 //! the table's foothold with the same stance shank (the table's, less p·δ),
 //! so it adds nearly the same to each. Nor is the drives' I²t
@@ -95,7 +107,9 @@ use crate::scalar::Real;
 /// a 225–229-sample table, estimated from host time; 48 make some 45 M, a
 /// quarter of a second at 168 MHz).
 pub const MAX_EVALS: u16 = 48;
-/// The re-planned landing may be this far from the table's, m.
+/// Largest landing aim ([`ReplanSetup::aim_m`]) either way, m.
+pub const MAX_AIM_M: f64 = 0.03;
+/// The re-planned landing may be this far from the one aimed at, m.
 pub const LANDING_TOLERANCE_M: f64 = 0.001;
 /// A measured start this close to the table's, with a rate this close,
 /// is on the plan: the table is played as it is (rad, rad/s).
@@ -143,6 +157,13 @@ pub struct ReplanSetup<'a, T> {
     /// The pilot's crutch lever, m (turns ankle torque into crutch force;
     /// scales the cost only).
     pub crutch_lever_m: T,
+    /// Where the re-planned swing lands, relative to the table's foothold
+    /// (m): x along the step, y up. A y below zero takes the approach's
+    /// last centimetre that far under the floor, so that the foot meets
+    /// the floor by the table's end although the joints lag; x then moves
+    /// the foothold aimed at by the offset that earlier touch-down lands
+    /// with (module documentation). At most [`MAX_AIM_M`] either way.
+    pub aim_m: [T; 2],
 }
 
 /// The hip and knee drive's torque at the joint: the peak up to a speed,

@@ -2,7 +2,8 @@
 //! the sequencer on the tick the board would have it, the swing starts
 //! exactly the latency after the request, and a pilot who stands leaning
 //! forward on a stair descent has each step land where it is planned, as
-//! does one leaning back on the walk without more crutch load; a late or
+//! does one leaning back on the walk without more crutch load and one
+//! climbing leaning forward with less; a late or
 //! refused answer is logged (0x0606, 0x0607) and the table played.
 
 use exogait_device::DeviceConfig;
@@ -120,10 +121,15 @@ fn a_forward_leaning_pilots_descent_steps_land_where_planned_when_replanned() {
 /// noisy as the device's (±3 and ±10 counts, `compare`'s default seed),
 /// the board re-planning or not.
 fn back_leaning_walk(replan: bool) -> GaitRun {
+    leaning(flash_tables::walk().unwrap(), -2.0, replan)
+}
+
+/// Four steps of `table` by a pilot leaning `deg` (forward positive), the
+/// sensors noisy as in [`back_leaning_walk`], re-planned or not.
+fn leaning(table: gait_core::tables::GaitTable<'static>, deg: f64, replan: bool) -> GaitRun {
     let device = DeviceConfig::exogait().unwrap();
-    let table = flash_tables::walk().unwrap();
     let pilot = PilotConfig {
-        habit_lean_rad: (-2.0f64).to_radians(),
+        habit_lean_rad: deg.to_radians(),
         ..strong_pilot()
     };
     let slot = ReplanSlot::new();
@@ -156,6 +162,30 @@ fn a_back_leaning_walkers_steps_land_where_planned_without_more_crutch_load() {
     let (before, after) = (balance(&plain), balance(&replanned));
     assert!(
         after <= 1.03 * before,
+        "balance {after:.1} N·s a step re-planned against {before:.1} N·s"
+    );
+}
+
+/// A pilot climbing with a 2° forward lean: played turned, the table's
+/// foot meets the upper tread early and some 14 mm long; re-planned, the
+/// approach is aimed under the tread and 8 mm short (`ReplanConfig`'s
+/// `landing_aim_m`), so the foot meets it on time where planned, and the
+/// crutches carry less.
+#[test]
+fn a_forward_leaning_climbers_steps_land_where_planned_with_less_crutch_load() {
+    let table = flash_tables::stair_up().unwrap();
+    let (plain, replanned) = (leaning(table, 2.0, false), leaning(table, 2.0, true));
+    assert!(plain.faults.is_empty() && replanned.faults.is_empty());
+    let (before, after) = (mean_step_error_mm(&plain), mean_step_error_mm(&replanned));
+    assert!(before > 10.0, "the table's step error is {before:.1} mm");
+    assert!(
+        after <= 0.25 * before,
+        "step error {after:.1} mm re-planned against {before:.1} mm"
+    );
+    let balance = |r: &GaitRun| r.mean(|s| s.balance_ns).unwrap();
+    let (before, after) = (balance(&plain), balance(&replanned));
+    assert!(
+        after <= before,
         "balance {after:.1} N·s a step re-planned against {before:.1} N·s"
     );
 }

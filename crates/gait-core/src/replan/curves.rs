@@ -28,6 +28,15 @@ pub(super) const UPPER: [f64; DIM] = [0.8, 1.5, 1.5, 2.0, 2.0, 4.0];
 /// The search's first step along each variable.
 pub(super) const STEP: [f64; DIM] = [0.15, 0.5, 0.5, 0.5, 0.5, 2.0];
 
+/// The height above the table's landing from which the approach is
+/// pressed towards the aim's y, m.
+const APPROACH_M: f64 = 0.01;
+
+/// 3x² − 2x³ for x in [0, 1]: an eased move, at rest at both ends.
+fn smoothstep<T: Real>(x: T) -> T {
+    x * x * (T::lit(3.0) - T::lit(2.0) * x)
+}
+
 /// A degree-5 Bézier of s ∈ [0, 1] through these control values.
 fn curve<T: Real>(values: [T; 6]) -> Bezier<T, 6> {
     let mut points = [[T::zero(); 2]; 6];
@@ -114,6 +123,15 @@ pub(super) struct Plan<'a, T: Real> {
     /// … and its torso less the table's, rad: the first sample is the
     /// posture the body is in.
     pub start_torso: T,
+    /// The landing aimed at less the table's, m ([`super::ReplanSetup::aim_m`]).
+    pub aim_m: [T; 2],
+    /// The table's swing ankle height at its landing (stance foot's
+    /// frame), m: where the approach's last centimetre begins above …
+    pub landing_y_m: T,
+    /// … and from when, s: the last time the table's swing ankle comes
+    /// down through that centimetre (an ascent's swing foot starts below
+    /// the landing, on the lower tread).
+    pub approach_from_s: T,
 }
 
 impl<T: Real> Plan<'_, T> {
@@ -137,9 +155,15 @@ impl<T: Real> Plan<'_, T> {
             let at = u16::try_from(k).unwrap_or(u16::MAX);
             let table = self.table_phi(k).ok_or(Violation::Playback(at))?;
             let t = T::lit(k as f64) * self.period_s;
+            let aimed = self.aim_m != [T::zero(); 2];
             *o = match c.at(t) {
-                None => table,
-                Some((e, shift)) => self.corrected(&table, e, shift).ok_or(Violation::Ik(at))?,
+                None if !aimed => table,
+                None => self
+                    .corrected(&table, [T::zero(); 3], T::zero(), t)
+                    .ok_or(Violation::Ik(at))?,
+                Some((e, shift)) => self
+                    .corrected(&table, e, shift, t)
+                    .ok_or(Violation::Ik(at))?,
             };
         }
         Ok(())
@@ -170,6 +194,36 @@ impl<T: Real> Plan<'_, T> {
         Some((p5, r2))
     }
 
+    /// The aim's share at `t_s`, the table's swing ankle at height `y_m`:
+    /// x eased in over the step (nothing at the start, where the body
+    /// is), y eased in over the approach's last [`APPROACH_M`] above the
+    /// table's landing.
+    fn aimed(&self, y_m: T, t_s: T) -> [T; 2] {
+        let [ax, ay] = self.aim_m;
+        let along = (t_s / self.step_time_s).max(T::zero()).min(T::one());
+        let above = (y_m - self.landing_y_m) / T::lit(APPROACH_M);
+        let down = if t_s >= self.approach_from_s {
+            (T::one() - above).max(T::zero()).min(T::one())
+        } else {
+            T::zero()
+        };
+        [ax * smoothstep(along), ay * smoothstep(down)]
+    }
+
+    /// When the table's swing ankle last comes down to [`APPROACH_M`]
+    /// above its landing height `landing_y_m`, s (the first sample after
+    /// the last one above it). Bounded: one pass over the table.
+    pub fn approach_from(&self, landing_y_m: T) -> T {
+        let mut from = 0;
+        for k in 0..self.table.len() {
+            let Some(phi) = self.table_phi(k) else { break };
+            if swing_ankle(self.model, &self.foot, &phi)[1] - landing_y_m > T::lit(APPROACH_M) {
+                from = k + 1;
+            }
+        }
+        T::lit(from as f64) * self.period_s
+    }
+
     /// Where the start posture ([`Plan::start_phi`]) puts the swing ankle
     /// and the knee choice, less where the table's first does. The
     /// candidates start there and fade back to the table's path with the
@@ -190,12 +244,14 @@ impl<T: Real> Plan<'_, T> {
 
     /// The table's posture with the corrections (φ1, φ3, r2) applied and
     /// the swing ankle where the table has it, in the stance foot's frame,
-    /// shifted by `start_shift` times `shift` (1 at the start, fading).
-    fn corrected(&self, table: &Phi<T>, [e1, e3, er]: [T; 3], shift: T) -> Option<Phi<T>> {
+    /// shifted by `start_shift` times `shift` (1 at the start, fading) and
+    /// towards the aim ([`Plan::aimed`]) at `t_s`.
+    fn corrected(&self, table: &Phi<T>, [e1, e3, er]: [T; 3], shift: T, t_s: T) -> Option<Phi<T>> {
         let [phi1, _, phi3, ..] = *table;
         let (p5, r2) = self.ankle_and_knee(table)?;
         let ([dx, dy], dr) = self.start_shift;
-        let p5 = [p5[0] + shift * dx, p5[1] + shift * dy];
+        let [ax, ay] = self.aimed(p5[1], t_s);
+        let p5 = [p5[0] + shift * dx + ax, p5[1] + shift * dy + ay];
         let phi1 = phi1 + e1;
         let a = self.foot.ankle(phi1).position_m;
         let target = IkTarget {

@@ -20,7 +20,7 @@ use crate::tables::GaitTable;
 use super::cost::{Evaluation, evaluate};
 use super::curves::{DIM, INITIAL, LOWER, Plan, STEP, UPPER};
 use super::{
-    Fallback, MAX_EVALS, MAX_OFFSET_RAD, MAX_RATE_ERROR_RAD_S, Measured, ON_PLAN_RAD,
+    Fallback, MAX_AIM_M, MAX_EVALS, MAX_OFFSET_RAD, MAX_RATE_ERROR_RAD_S, Measured, ON_PLAN_RAD,
     ON_PLAN_RAD_S, Outcome, Progress, ReplanError, ReplanLimits, ReplanSetup,
 };
 
@@ -88,8 +88,10 @@ impl<'a, T: Real> Replanner<'a, T> {
         let setup_ok = [setup.spring_nm_per_rad, setup.crutch_lever_m]
             .iter()
             .chain(&setup.spacing_m)
+            .chain(&setup.aim_m)
             .all(|v| v.finite())
-            && setup.crutch_lever_m > T::zero();
+            && setup.crutch_lever_m > T::zero()
+            && setup.aim_m.iter().all(|a| a.abs() <= T::lit(MAX_AIM_M));
         if !setup_ok {
             return Err(ReplanError::BadSetup);
         }
@@ -123,6 +125,9 @@ impl<'a, T: Real> Replanner<'a, T> {
             start_phi: [T::zero(); LINKS],
             start_shift: ([T::zero(); 2], T::zero()),
             start_torso: T::zero(),
+            aim_m: setup.aim_m,
+            landing_y_m: T::zero(),
+            approach_from_s: T::zero(),
         };
         let rotated = plan.rotated_phi(0).unwrap_or(plan.start_phi);
         plan.start_phi = match measured.posture {
@@ -138,7 +143,13 @@ impl<'a, T: Real> Replanner<'a, T> {
         };
         plan.start_shift = plan.start_shift();
         plan.start_torso = plan.start_phi[2] - lit(first[2]);
-        let planned_landing_m = swing_ankle(setup.model, &setup.foot, &plan.table_phi_last());
+        let [table_x, table_y] = swing_ankle(setup.model, &setup.foot, &plan.table_phi_last());
+        plan.landing_y_m = table_y;
+        if setup.aim_m[1] != T::zero() {
+            plan.approach_from_s = plan.approach_from(table_y);
+        }
+        let [aim_x, aim_y] = setup.aim_m;
+        let planned_landing_m = [table_x + aim_x, table_y + aim_y];
         let mut me = Self {
             plan,
             setup,

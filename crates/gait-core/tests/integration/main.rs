@@ -22,6 +22,7 @@ mod gait_sampling;
 mod ik_properties;
 mod periodic_steps;
 mod replan;
+mod replan_aim;
 mod replan_setup;
 mod table_ik_options;
 mod toe_rocker;

@@ -274,6 +274,7 @@ fn generic_over_the_scalar() {
         spring_nm_per_rad: 30.0,
         spacing_m: [0.275, -0.0935],
         crutch_lever_m: 0.45,
+        aim_m: [0.0, 0.0],
     };
     let l32 = limits();
     let d = l32.drive;

@@ -35,6 +35,7 @@ pub fn setup(m: &BodyModel<f32>, kind: GaitKind) -> ReplanSetup<'_, f32> {
         spring_nm_per_rad: 30.0,
         spacing_m: spacing(kind),
         crutch_lever_m: 0.45,
+        aim_m: [0.0, 0.0],
     }
 }
 
