@@ -92,11 +92,12 @@ impl ReplanConfig {
     /// the start, 0.018–0.024 rad at the landing; kept whole, a
     /// forward-leaning pilot's swing foot ended above the ground and
     /// waited for the ground search; dropped, the steps landed as far off
-    /// as the table's). The approach is pressed 3 mm under the floor, so
-    /// the foot meets it by the table's end, and the walk and the ascent
-    /// aim 8 mm short and the descent 2 mm long, the offsets that earlier
-    /// touch-down lands with on the simulated device (`docs/replanning.md`;
-    /// to be measured again on the device).
+    /// as the table's). On the walk and the ascent the approach is pressed
+    /// 3 mm under the floor, so the foot meets it by the table's end, and
+    /// aimed 8 mm short, the offset that earlier touch-down lands with on
+    /// the simulated device; the descent is not aimed (pressed, a pilot
+    /// leaning back crossed the ankle's stop). `docs/replanning.md`; to be
+    /// measured again on the device.
     pub const DEFAULT: Self = Self {
         min_offset_rad: 0.01,
         ankle_tolerance_rad: 0.12,

@@ -156,15 +156,19 @@ impl<T: Real> Plan<'_, T> {
             let table = self.table_phi(k).ok_or(Violation::Playback(at))?;
             let t = T::lit(k as f64) * self.period_s;
             let aimed = self.aim_m != [T::zero(); 2];
-            *o = match c.at(t) {
-                None if !aimed => table,
-                None => self
-                    .corrected(&table, [T::zero(); 3], T::zero(), t)
-                    .ok_or(Violation::Ik(at))?,
-                Some((e, shift)) => self
-                    .corrected(&table, e, shift, t)
-                    .ok_or(Violation::Ik(at))?,
+            // After the fade with nothing kept, the table's own sample,
+            // unless it is aimed elsewhere.
+            let (e, shift) = match c.at(t) {
+                None if !aimed => {
+                    *o = table;
+                    continue;
+                }
+                None => ([T::zero(); 3], T::zero()),
+                Some(correction) => correction,
             };
+            *o = self
+                .corrected(&table, e, shift, t)
+                .ok_or(Violation::Ik(at))?;
         }
         Ok(())
     }
@@ -198,8 +202,12 @@ impl<T: Real> Plan<'_, T> {
     /// x eased in over the step (nothing at the start, where the body
     /// is), y eased in over the approach's last [`APPROACH_M`] above the
     /// table's landing.
+    #[inline]
     fn aimed(&self, y_m: T, t_s: T) -> [T; 2] {
         let [ax, ay] = self.aim_m;
+        if ax == T::zero() && ay == T::zero() {
+            return [T::zero(); 2];
+        }
         let along = (t_s / self.step_time_s).max(T::zero()).min(T::one());
         let above = (y_m - self.landing_y_m) / T::lit(APPROACH_M);
         let down = if t_s >= self.approach_from_s {
