@@ -3,7 +3,8 @@
 //! exactly the latency after the request, and a pilot who stands leaning
 //! forward on a stair descent has each step land where it is planned, as
 //! does one leaning back on the walk without more crutch load and one
-//! climbing leaning forward with less; a late or
+//! climbing leaning forward with less; one leaning further than the
+//! re-planner takes on straightens to it first and climbs on; a late or
 //! refused answer is logged (0x0606, 0x0607) and the table played.
 
 use exogait_device::DeviceConfig;
@@ -235,4 +236,32 @@ fn a_late_or_refused_answer_plays_the_table_and_the_steps_go_on() {
             err(&plain)
         );
     }
+}
+
+/// A pilot leaning 4° forward on the ascent stands beyond what the
+/// re-planner takes on (`ReplanConfig`'s `ankle_tolerance_rad`): the step
+/// waits until the pilot has straightened to it, not to the table's 3°,
+/// and is re-planned from there. Re-planned from the full lean, the climb
+/// ended in a safe hold (0x0401, 0x0404) after one step; now it goes on,
+/// the pilot waits less than for the table, and the crutches carry no
+/// more than 5 % over it.
+#[test]
+fn a_climber_leaning_4_degrees_forward_waits_less_than_for_the_table_and_climbs_on() {
+    let table = flash_tables::stair_up().unwrap();
+    let (plain, replanned) = (leaning(table, 4.0, false), leaning(table, 4.0, true));
+    assert!(plain.faults.is_empty(), "{:?}", plain.faults);
+    assert!(replanned.faults.is_empty(), "{:?}", replanned.faults);
+    assert_eq!(replanned.landed(), 4);
+    let wait = |r: &GaitRun| r.steps.iter().map(|s| s.waited_s).sum::<f64>() / r.steps.len() as f64;
+    let (before, after) = (wait(&plain), wait(&replanned));
+    assert!(
+        after <= 0.8 * before,
+        "waited {after:.2} s a step re-planned against {before:.2} s"
+    );
+    let balance = |r: &GaitRun| r.mean(|s| s.balance_ns).unwrap();
+    let (before, after) = (balance(&plain), balance(&replanned));
+    assert!(
+        after <= 1.05 * before,
+        "balance {after:.1} N·s a step re-planned against {before:.1} N·s"
+    );
 }
