@@ -84,14 +84,15 @@ pub struct ReplanConfig {
 
 impl ReplanConfig {
     /// Re-planned from 0.01 rad (0.6°) up to 0.07 rad (4.0°) from the
-    /// table's start (re-planned from further, a pilot leaning 4° forward
-    /// started at once and the steps ended in safe holds on the walk and
-    /// the ascent; a pilot beyond it straightens to it first, sooner than
-    /// to the table's 0.05 rad), the answer taken 200 ms after the request
-    /// (some 21 evaluations of a 225-sample table in the idle time of a
-    /// 168 MHz M4F; at 120 ms or less, walkers leaning forward tripped
-    /// 0x0404, and a request made before the pilot is ready, from the
-    /// ankle predicted for then, raised the crutch load), played if the ankle has moved by less than 0.02 rad meanwhile;
+    /// table's start (from 0.08–0.12 rad, a pilot leaning 4° forward
+    /// steps sooner but the walk and the ascent latch safe holds; an
+    /// ankle further off comes within it before the table's 0.05 rad),
+    /// the answer taken 200 ms after the request (some 21 evaluations of
+    /// a 225-sample table in the idle time of a 168 MHz M4F; at 120 ms or
+    /// less, walkers leaning forward trip 0x0404, and a request made
+    /// before the pilot is ready, from the ankle predicted for then,
+    /// raises the crutch load), played if the ankle has moved by less
+    /// than 0.02 rad meanwhile;
     /// 0.6 of the offset expected to be kept to the landing (what the
     /// simulated pilot keeps: leaning back 2° on the walk, 0.031 rad at
     /// the start, 0.018–0.024 rad at the landing; kept whole, a

@@ -9,6 +9,12 @@ use super::*;
 
 const RC: ReplanConfig = ReplanConfig::DEFAULT;
 
+/// The stance ankle's offset from the table's start in these tests:
+/// beyond the table's own tolerance, within the re-planner's.
+const OFF: f32 = 0.06;
+const _: () = assert!(OFF > SequencerConfig::DEFAULT.start_ankle_tolerance_rad);
+const _: () = assert!(OFF < RC.ankle_tolerance_rad);
+
 /// A walk rig with a re-planner on `slot`, asked to start; its posture.
 fn replanning<'t>(img: &'t [u8], slot: &'t ReplanSlot) -> (Rig<'t>, [f32; JOINTS]) {
     let mut rig = Rig::new(img);
@@ -56,13 +62,10 @@ fn a_replanned_step_is_played_exactly_at_the_latency() {
     let img = walk_image();
     let slot = ReplanSlot::new();
     let (mut rig, pose) = replanning(&img, &slot);
-    // 0.06 rad off: beyond the table's tolerance, within the re-planner's.
-    let ankle = START_ANKLE + 0.06;
-    const { assert!(0.06 > SequencerConfig::DEFAULT.start_ankle_tolerance_rad) };
-    const { assert!(0.06 < RC.ankle_tolerance_rad) };
+    let ankle = START_ANKLE + OFF;
     let s = ready_at(pose, ankle);
     let ticket = until_requested(&mut rig, &slot, &s);
-    let answer = shifted(&rig.table, 0.06);
+    let answer = shifted(&rig.table, OFF);
     assert!(slot.publish(ticket, ReplanOutcome::Replanned, &answer));
     // Answered at once, but taken only at the latency.
     for _ in 1..RC.latency_ticks {
@@ -96,7 +99,7 @@ fn a_replanned_step_is_played_exactly_at_the_latency() {
 fn late_declined_or_stale_answers_play_the_table_where_the_ankle_allows() {
     let img = walk_image();
     let within = START_ANKLE + 0.5 * SequencerConfig::DEFAULT.start_ankle_tolerance_rad;
-    let beyond = START_ANKLE + 0.06;
+    let beyond = START_ANKLE + OFF;
     for (case, ankle, answer) in [
         ("late", within, None),
         ("declined", within, Some(ReplanOutcome::Declined)),
@@ -136,7 +139,7 @@ fn late_declined_or_stale_answers_play_the_table_where_the_ankle_allows() {
     let slot = ReplanSlot::new();
     let (mut rig, pose) = replanning(&img, &slot);
     let ticket = until_requested(&mut rig, &slot, &ready_at(pose, beyond));
-    assert!(slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&rig.table, 0.06)));
+    assert!(slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&rig.table, OFF)));
     let moved = ready_at(pose, beyond + 1.5 * RC.ankle_drift_rad);
     for _ in 0..RC.latency_ticks {
         rig.step(&moved);
@@ -158,14 +161,14 @@ fn a_request_is_withdrawn_when_the_pilot_unloads_and_never_made_beyond_reach() {
     assert!(matches!(rig.seq.phase(), Phase::WaitingReady { .. }));
     // Asked for, then the crutches unload: the request is withdrawn, and a
     // re-planner still working on it cannot publish.
-    let s = ready_at(pose, START_ANKLE + 0.06);
+    let s = ready_at(pose, START_ANKLE + OFF);
     rig.step(&s);
     let (_, ticket) = slot.take_request().unwrap();
     let mut unloaded = s;
     unloaded.crutches_n = [0.0; 2];
     rig.step(&unloaded);
     assert!(!slot.still_wanted(ticket));
-    assert!(!slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&rig.table, 0.06)));
+    assert!(!slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&rig.table, OFF)));
 }
 
 #[test]
@@ -251,7 +254,7 @@ fn a_table_s_step_carries_its_stance_hip_limit_and_a_replanned_one_the_device_s(
         let (mut rig, pose, _) = rig.walking();
         let s = ready_at(pose, ankle);
         if let Some(ticket) = (ankle != START_ANKLE).then(|| until_requested(&mut rig, &slot, &s)) {
-            assert!(slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&table, 0.06)));
+            assert!(slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&table, OFF)));
         }
         for _ in 0..=RC.latency_ticks {
             rig.step(&s);
@@ -262,7 +265,7 @@ fn a_table_s_step_carries_its_stance_hip_limit_and_a_replanned_one_the_device_s(
         panic!("no swing");
     };
     assert_eq!(start(START_ANKLE), 70.0);
-    assert!(start(START_ANKLE + 0.06).is_nan());
+    assert!(start(START_ANKLE + OFF).is_nan());
 }
 
 #[test]
@@ -270,14 +273,14 @@ fn a_hold_withdraws_the_request() {
     let img = walk_image();
     let slot = ReplanSlot::new();
     let (mut rig, pose) = replanning(&img, &slot);
-    let s = ready_at(pose, START_ANKLE + 0.06);
+    let s = ready_at(pose, START_ANKLE + OFF);
     let ticket = until_requested(&mut rig, &slot, &s);
     // A safe hold while the re-planner works: the request is withdrawn,
     // its answer is not published, and no step starts from it.
     rig.hold(pose, InSwing::HoldNow);
     rig.step(&s);
     assert!(!slot.still_wanted(ticket));
-    assert!(!slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&rig.table, 0.06)));
+    assert!(!slot.publish(ticket, ReplanOutcome::Replanned, &shifted(&rig.table, OFF)));
     for _ in 0..RC.latency_ticks {
         rig.step(&s);
     }
@@ -314,11 +317,11 @@ fn an_answer_counts_only_for_the_request_it_was_worked_on() {
 #[test]
 fn a_hold_on_a_replanned_step_s_first_tick_sets_the_foot_down_in_that_step_s_frame() {
     // The set-down's frame is the stance shank of the step played: a
-    // re-planned step's first sample (here 0.06 rad off the table's start),
+    // re-planned step's first sample (here `OFF` from the table's start),
     // as if those samples were the table.
     let img = walk_image();
     let table = GaitTable::parse(&img).unwrap();
-    let answer = shifted(&table, 0.06);
+    let answer = shifted(&table, OFF);
     let mut answer_img = vec![0u8; image_len(answer.len())];
     encode(
         GaitKind::Walk,
@@ -328,7 +331,7 @@ fn a_hold_on_a_replanned_step_s_first_tick_sets_the_foot_down_in_that_step_s_fra
         &mut answer_img,
     )
     .unwrap();
-    let ankle = START_ANKLE + 0.06;
+    let ankle = START_ANKLE + OFF;
     // The foot set down from a hold on the swing's first tick, the rig
     // ticked by `to_swing` until then.
     let set_down = |mut rig: Rig<'_>, to_swing: &mut dyn FnMut(&mut Rig<'_>) -> [f32; JOINTS]| {
