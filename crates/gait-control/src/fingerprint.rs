@@ -74,6 +74,9 @@ impl_fingerprint!(SequencerConfig {
     set_down_s,
     set_down_joint_speed_rad_s,
     lands_after,
+    level_deadband_rad,
+    level_max_rad,
+    level_rate_rad_s,
 });
 impl_fingerprint!(ControllerConfig {
     dt_s,
@@ -155,4 +158,6 @@ impl_fingerprint!(ResponseCheck {
     limit_nm,
     stance_hip_min_nm,
     ticks,
+    leaning_ankle_rad,
+    leaning_factor,
 });

@@ -23,6 +23,7 @@
 mod config;
 mod hold;
 mod input;
+mod level;
 mod start;
 mod step;
 mod swing;
@@ -111,6 +112,15 @@ pub struct Sequencer<'t> {
     ankle_plan: [f32; 2],
     /// A safe hold's set-down of the swing foot, when it struck in a swing.
     set_down: Option<SetDown>,
+    /// How far a safe hold has turned the torso back, rad
+    /// ([`Sequencer::level_torso`]).
+    level_rad: f32,
+    /// A joint is braked (the last verdict's): the hold's levelling then
+    /// never turns the torso back past the pitch it had when one first was.
+    any_braked: bool,
+    /// The torso's pitch φ3 on the hold's first tick with a joint braked
+    /// (that could tell), rad.
+    torso_at_brake: f32,
     /// The selected table (kept at hand: the tick reads it several
     /// times).
     table: Option<GaitTable<'t>>,
@@ -161,6 +171,9 @@ impl<'t> Sequencer<'t> {
             swing: SwingState::START,
             ankle_plan: [f32::NAN; 2],
             set_down: None,
+            level_rad: 0.0,
+            any_braked: false,
+            torso_at_brake: f32::NAN,
         };
         s.restart_at(posture);
         s
@@ -189,6 +202,7 @@ impl<'t> Sequencer<'t> {
         self.swing = SwingState::START;
         self.ankle_plan = [f32::NAN; 2];
         self.set_down = None;
+        self.level_rad = 0.0;
     }
 
     /// This sequencer started afresh at `posture` (as [`Sequencer::new`]
@@ -297,6 +311,7 @@ impl<'t> Sequencer<'t> {
     pub fn update<S: Selection>(&mut self, input: &SeqInput<'_, S>) -> Reference {
         let mut events = SeqEvents::default();
         self.obey(input.orders, input.braked);
+        self.any_braked = input.braked.iter().any(|&b| b);
         if let Some((joint, angle)) = input.hold_joint_at {
             self.hold_joint_at(joint, angle);
         }

@@ -21,11 +21,29 @@ pub fn instant_pilot_run(gait: Gait, fault: &str, noise_seed: u64) -> RunResult 
 }
 
 fn run_with_pilot(gait: Gait, fault: &str, noise_seed: u64, pilot: PilotConfig) -> RunResult {
+    campaign_run_on(
+        &DeviceConfig::exogait().unwrap(),
+        gait,
+        fault,
+        noise_seed,
+        pilot,
+    )
+}
+
+/// [`campaign_run`] on `device` with `pilot`: a setting of the device tried
+/// on a run of the campaign.
+pub fn campaign_run_on(
+    device: &DeviceConfig,
+    gait: Gait,
+    fault: &str,
+    noise_seed: u64,
+    pilot: PilotConfig,
+) -> RunResult {
     let run = CampaignRun {
         gait,
         slot: sim::campaign::built_in_slot(gait),
         fault: fault.parse().unwrap(),
         noise_seed,
     };
-    play_with_pilot(&run, &DeviceConfig::exogait().unwrap(), pilot)
+    play_with_pilot(&run, device, pilot)
 }

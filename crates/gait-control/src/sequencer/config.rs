@@ -78,6 +78,20 @@ pub struct SequencerConfig {
     /// whatever the fault, while the stance knee has its drive and encoder
     /// (1 or more: never; `Sequencer::in_swing_now`).
     pub lands_after: [f32; 3],
+    /// In a safe hold, a stance shank measured further forward than the
+    /// hold's plan by more than this turns the torso back by the excess
+    /// ([`Sequencer::level_torso`](super::Sequencer)), rad: a pilot who leans
+    /// takes the shank forward, and with hips and knees held the torso
+    /// pitches with it until the stance hip cannot carry it (194 N·m ×
+    /// sin(pitch) against a 150 N·m drive) …
+    pub level_deadband_rad: f32,
+    /// … by at most this, rad …
+    pub level_max_rad: f32,
+    /// … at most this fast, rad/s: a faster turn of the torso asks the hip
+    /// for the torque that tips it (of the campaigns' leaning runs, more
+    /// fell at 3 rad/s than at 0.7, and at 0.35 too, the torso left
+    /// pitched longer).
+    pub level_rate_rad_s: f32,
 }
 
 impl SequencerConfig {
@@ -92,7 +106,9 @@ impl SequencerConfig {
     /// tolerance, 0.4 s transfer, stance ankle within 0.05 rad (2.9°) of
     /// the table's start, 0.3 s hold ramp, a set-down of up to 20 cm over
     /// 0.8 s (at most 0.375 m/s), its joints at most 2 rad/s; a hold in the
-    /// last 35 % of a stair descent's swing lands the step first.
+    /// last 35 % of a stair descent's swing lands the step first; a hold
+    /// turns the torso back by a stance shank's lean past 0.03 rad, by up
+    /// to 0.35 rad, at 0.7 rad/s.
     pub const DEFAULT: Self = Self {
         crutch_ready_n: 60.0,
         feet_ready_n: 400.0,
@@ -112,5 +128,8 @@ impl SequencerConfig {
         set_down_s: 0.8,
         set_down_joint_speed_rad_s: 2.0,
         lands_after: [1.0, 1.0, 0.65],
+        level_deadband_rad: 0.03,
+        level_max_rad: 0.35,
+        level_rate_rad_s: 0.7,
     };
 }

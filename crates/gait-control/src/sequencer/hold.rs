@@ -106,6 +106,7 @@ impl Sequencer<'_> {
         };
         let mut held = self.blended(frac.min(1.0));
         self.set_down(sensed, t, dt_s, ahead, &mut held);
+        self.level_torso(sensed, dt_s, &mut held);
         // The next tick's set-down, at its time as it will work it out.
         if let (Some(slot), Phase::SafeHold { t_s: now }, Some(sd)) =
             (ahead, self.phase, self.set_down)
@@ -155,6 +156,8 @@ impl Sequencer<'_> {
             return;
         }
         let target = pick_finite(measured, &self.reference);
+        self.level_rad = 0.0;
+        self.torso_at_brake = f32::NAN;
         self.blend_from = self.reference;
         self.blend_to = target;
         self.phase = Phase::SafeHold { t_s: 0.0 };
@@ -283,6 +286,7 @@ impl Sequencer<'_> {
         if !matches!(self.phase, Phase::SafeHold { .. }) || !angle_rad.is_finite() {
             return;
         }
+        let angle_rad = self.before_levelling(joint, angle_rad);
         for posture in [
             &mut self.blend_from,
             &mut self.blend_to,
@@ -312,6 +316,7 @@ impl Sequencer<'_> {
         self.blend_from = target;
         self.blend_to = target;
         self.set_down = None;
+        self.level_rad = 0.0;
         self.phase = Phase::SafeHold {
             t_s: self.cfg.hold_ramp_s.max(0.0),
         };
@@ -325,6 +330,7 @@ impl Sequencer<'_> {
         self.blend_to = self.reference;
         self.blend_from = self.reference;
         self.set_down = None;
+        self.level_rad = 0.0;
         self.phase = Phase::Standing;
     }
 
@@ -339,6 +345,7 @@ impl Sequencer<'_> {
         if !measured.is_finite() {
             return;
         }
+        let measured = self.before_levelling(i, measured);
         if let (Some(f), Some(t)) = (self.blend_from.get_mut(i), self.blend_to.get_mut(i)) {
             *f = measured;
             *t = measured;

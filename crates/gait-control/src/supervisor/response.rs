@@ -44,6 +44,16 @@ pub struct ResponseCheck {
     pub stance_hip_min_nm: f32,
     /// Consecutive ticks over the limit that make the fault.
     pub ticks: u32,
+    /// A hip whose own ankle reads further forward than the ankle's plan
+    /// by more than this, rad …
+    pub leaning_ankle_rad: f32,
+    /// … has its limit multiplied by this: the pilot leaning on the
+    /// crutches drives that shank, and the torso with it, and the hip
+    /// that carries the torso feels a torque no drive gave. Braked for
+    /// it, the hip let the torso fall; a stuck drive's residual (190–1,930
+    /// N·m) still passes the raised limit, and the drive's current
+    /// (0x0405) finds a drive that does not deliver at once.
+    pub leaning_factor: f32,
 }
 
 impl ResponseCheck {
@@ -63,6 +73,8 @@ impl ResponseCheck {
         limit_nm: 100.0,
         stance_hip_min_nm: 70.0,
         ticks: 10,
+        leaning_ankle_rad: 0.05,
+        leaning_factor: 2.0,
     };
 
     /// The limit on the stance hip of a swing whose gait asks for
@@ -89,6 +101,10 @@ impl ResponseCheck {
         all.iter().all(|v| v.is_finite() && *v > 0.0)
             && self.stance_hip_min_nm <= self.limit_nm
             && self.ticks > 0
+            && self.leaning_ankle_rad.is_finite()
+            && self.leaning_ankle_rad >= 0.0
+            && self.leaning_factor.is_finite()
+            && self.leaning_factor >= 1.0
     }
 }
 
@@ -118,6 +134,10 @@ pub(super) struct Observer {
     stance_hip_min_nm: f32,
     /// Ticks over it that make the fault.
     pub(super) ticks: u32,
+    /// A hip's ankle this far ahead of its plan raises its limit, rad …
+    leaning_ankle_rad: f32,
+    /// … by this factor.
+    leaning_factor: f32,
 }
 
 impl Observer {
@@ -133,15 +153,34 @@ impl Observer {
             limit_nm: cfg.limit_nm,
             stance_hip_min_nm: cfg.stance_hip_min_nm,
             ticks: cfg.ticks,
+            leaning_ankle_rad: cfg.leaning_ankle_rad,
+            leaning_factor: cfg.leaning_factor,
         }
     }
 
     /// Each joint's limit this tick: the gait's `gait_nm` for the hip
-    /// that stands while `swing_leg` swings, the device's for the rest.
-    pub(super) fn limits(&self, swing_leg: Option<Side>, gait_nm: f32) -> [f32; super::JOINTS] {
+    /// that stands while `swing_leg` swings, the device's for the rest;
+    /// a hip whose ankle reads `ahead_rad` (left, right: accepted angle
+    /// less its plan, NaN where either is unknown) past
+    /// [`ResponseCheck::leaning_ankle_rad`] has its limit raised by
+    /// [`ResponseCheck::leaning_factor`].
+    pub(super) fn limits(
+        &self,
+        swing_leg: Option<Side>,
+        gait_nm: f32,
+        ahead_rad: [f32; 2],
+    ) -> [f32; super::JOINTS] {
         let mut limits = [self.limit_nm; super::JOINTS];
         if let Some(hip) = swing_leg.and_then(|leg| limits.get_mut(leg.other().hip())) {
             *hip = stance_hip_limit(gait_nm, self.stance_hip_min_nm, self.limit_nm);
+        }
+        for side in [Side::Left, Side::Right] {
+            let ahead = ahead_rad.get(side.ankle()).copied().unwrap_or(f32::NAN);
+            if ahead > self.leaning_ankle_rad {
+                if let Some(hip) = limits.get_mut(side.hip()) {
+                    *hip *= self.leaning_factor;
+                }
+            }
         }
         limits
     }

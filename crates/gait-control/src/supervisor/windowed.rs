@@ -121,10 +121,19 @@ impl WindowedChecks {
     ) {
         let cfg = &self.cfg;
         // 0x0404's limit on each joint this tick (the stance hip of a swing
-        // may have its gait's own).
-        let residual_limit = self
-            .observer
-            .limits(input.swing_leg, input.stance_hip_residual_nm);
+        // may have its gait's own; a leaning pilot's hip a higher one).
+        let ahead = |a: usize| {
+            let plan = input.ankle_plan_rad.get(a).copied().unwrap_or(f32::NAN);
+            frames
+                .get(JOINTS + a)
+                .and_then(|t| t.accepted())
+                .map_or(f32::NAN, |(angle, _, _)| angle - plan)
+        };
+        let residual_limit = self.observer.limits(
+            input.swing_leg,
+            input.stance_hip_residual_nm,
+            [ahead(0), ahead(1)],
+        );
         for i in 0..JOINTS {
             let ch = i as u8;
             let (Some(taken), Some(&reference), Some(&vmax), Some(motor), Some(track)) = (

@@ -338,3 +338,35 @@ fn a_stance_hip_slipping_under_the_device_limit_is_caught_by_its_gait_s_limit() 
     assert_eq!(first.code, FaultCode::MotorResponse, "{fault}: {o:?}");
     assert_eq!(first.channel, Some(2), "{fault}: {o:?}");
 }
+
+/// A stair descent's swing knee lost late in the swing (stuck or its
+/// direction line failed; seeds 1 and 2 of the campaign): braked, the step
+/// lands and the hold keeps the body on the trailing leg's bent knee. The
+/// pilot tips forward and the hold's levelling turns the torso back, but
+/// with a joint braked never behind where it was then: levelled further,
+/// the trailing knee took the torso's load, sank onto its stop and the hip
+/// came down to 0.4 m.
+#[test]
+fn a_hold_with_a_braked_knee_does_not_level_the_torso_onto_the_other_knee() {
+    use crate::common::campaign_run_on;
+    let device = DeviceConfig::exogait().unwrap();
+    for (fault, seed) in [
+        ("dir-fail:right-knee@2.928", 913_374),
+        ("motor-stuck:right-knee@2.931", 360_846),
+        ("motor-stuck:right-knee@2.74", 77_561),
+    ] {
+        let run = campaign_run_on(
+            &device,
+            Gait::StairDown,
+            fault,
+            seed,
+            sim::scenario::strong_pilot(),
+        );
+        assert!(run.outcome.fell.is_none(), "{fault}: {:?}", run.outcome);
+        assert!(
+            run.outcome.worst_limit_margin_rad > 0.0,
+            "{fault}: {:?}",
+            run.outcome
+        );
+    }
+}

@@ -245,3 +245,80 @@ fn a_balancing_pilot_never_leaves_the_crutches_idle_near_the_window() {
         }
     }
 }
+
+/// A pilot who leans while standing or in a weight transfer (seed 1's
+/// campaign runs) takes the stance shank 0.14–0.19 rad forward, and the
+/// torso with it while hips and knees hold: the hold that follows turns
+/// the torso back by the lean (`SequencerConfig::level_deadband_rad`), and
+/// the pilot stays up; without the levelling each of these falls, the
+/// torso past 60° on a stance hip at its drive's torque.
+#[test]
+fn a_hold_levels_the_torso_of_a_pilot_who_leans_and_keeps_him_up() {
+    use crate::common::campaign_run_on;
+    let device = DeviceConfig::exogait().unwrap();
+    let mut unlevelled = device;
+    unlevelled.controller.sequencer.level_max_rad = 0.0;
+    for (gait, fault, seed) in [
+        (
+            Gait::StairDown,
+            "pilot-lean=0.1709088956590995@0.847",
+            527_273,
+        ),
+        (Gait::Walk, "pilot-lean=0.1834888582466021@0.993", 762_989),
+        (
+            Gait::StairUp,
+            "pilot-lean=0.19346292951739208@3.962",
+            222_347,
+        ),
+    ] {
+        let run = campaign_run_on(&device, gait, fault, seed, strong_pilot());
+        assert!(run.outcome.fell.is_none(), "{fault}: {:?}", run.outcome);
+        assert!(
+            !run.outcome.faults.is_empty(),
+            "{fault}: held: {:?}",
+            run.outcome
+        );
+        let run = campaign_run_on(&unlevelled, gait, fault, seed, strong_pilot());
+        assert!(
+            run.outcome.fell.is_some(),
+            "{fault} unlevelled: {:?}",
+            run.outcome
+        );
+    }
+}
+
+/// A pilot who leans in a walk's swing (seed 1's campaign runs): the stance
+/// hip carries the torso alone and feels the lean as a torque its drive did
+/// not give. Braked for it (0x0404 at the gait's 70 N·m), the hip let the
+/// torso fall; with its ankle ahead of the plan its limit is doubled
+/// (`ResponseCheck::leaning_factor`), the drive holds on, and the hold
+/// that comes levels the torso.
+#[test]
+fn a_leaning_pilot_s_stance_hip_is_not_braked_for_the_lean() {
+    use crate::common::campaign_run_on;
+    use gait_control::faults::FaultCode;
+    let device = DeviceConfig::exogait().unwrap();
+    let mut braking = device;
+    braking.supervisor.response.leaning_factor = 1.0;
+    for (fault, seed) in [
+        ("pilot-lean=0.10707749997101226@1.488", 863_411),
+        ("pilot-lean=0.1424855890356891@4.166", 680_097),
+    ] {
+        let run = campaign_run_on(&device, Gait::Walk, fault, seed, strong_pilot());
+        assert!(run.outcome.fell.is_none(), "{fault}: {:?}", run.outcome);
+        let run = campaign_run_on(&braking, Gait::Walk, fault, seed, strong_pilot());
+        assert!(
+            run.outcome.fell.is_some(),
+            "{fault} braked: {:?}",
+            run.outcome
+        );
+        assert!(
+            run.outcome
+                .faults
+                .iter()
+                .any(|f| f.code == FaultCode::MotorResponse),
+            "{fault} braked: {:?}",
+            run.outcome
+        );
+    }
+}

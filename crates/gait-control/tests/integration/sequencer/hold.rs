@@ -442,3 +442,79 @@ fn after_a_restart_the_foot_found_unloaded_is_set_down() {
         }
     }
 }
+
+/// A hold turns the torso back by a leaning stance shank: the stance ankle
+/// read ahead of the hold's plan extends both hips (both feet down) by the
+/// lean past the deadband, at most at the levelling's rate and by its
+/// maximum; the knees keep their hold. A shank back on the plan or behind
+/// it brings the hips back, an ankle that cannot tell leaves them, and a
+/// hip held in place stays where it was measured.
+#[test]
+fn a_hold_turns_the_torso_back_by_a_leaning_stance_shank() {
+    let img = walk_image();
+    let cfg = SequencerConfig::DEFAULT;
+    let mut rig = Rig::new(&img);
+    let (pose, s) = rig.ready();
+    rig.step(&s);
+    rig.hold(pose, InSwing::HoldNow);
+    for _ in 0..400 {
+        assert_eq!(rig.step(&s), pose, "on its plan the shank turns nothing");
+    }
+    let leaning = |lean: f32| {
+        let mut l = s;
+        l.ankles_rad[0] = START_ANKLE + lean;
+        l
+    };
+    let levelled = |r: [f32; JOINTS], by: f32| {
+        for (i, (&got, &held)) in r.iter().zip(&pose).enumerate() {
+            let want = if i % 2 == 0 { held - by } else { held };
+            assert!(
+                (got - want).abs() < 1e-4,
+                "joint {i}: {got} not {want} ({by} back)"
+            );
+        }
+    };
+    // 0.2 rad ahead: 0.17 past the deadband, reached at the rate.
+    let ticks = |s: f32| (s / DT).round() as usize;
+    let mut r = pose;
+    for _ in 0..ticks(0.1) {
+        r = rig.step(&leaning(0.2));
+    }
+    levelled(r, 0.1 * cfg.level_rate_rad_s);
+    for _ in 0..ticks(0.5) {
+        r = rig.step(&leaning(0.2));
+    }
+    levelled(r, 0.2 - cfg.level_deadband_rad);
+    // An ankle that cannot tell leaves the levelling where it is.
+    for _ in 0..ticks(0.5) {
+        r = rig.step(&leaning(f32::NAN));
+    }
+    levelled(r, 0.2 - cfg.level_deadband_rad);
+    // Far ahead: no further than the maximum.
+    for _ in 0..ticks(1.0) {
+        r = rig.step(&leaning(0.6));
+    }
+    levelled(r, cfg.level_max_rad);
+    // A hip held in place stays where it was measured.
+    rig.rehold(0, pose[0] - 0.3);
+    r = rig.step(&leaning(0.6));
+    assert!((r[0] - (pose[0] - 0.3)).abs() < 1e-4, "held at {}", r[0]);
+    // Behind the plan: back to the hold, at the rate.
+    let mut last = r;
+    for _ in 0..ticks(1.0) {
+        r = rig.step(&leaning(-0.2));
+        let moved = (r[2] - last[2]).abs();
+        assert!(
+            moved <= cfg.level_rate_rad_s * DT + 1e-5,
+            "{moved} rad in a tick"
+        );
+        last = r;
+    }
+    assert!(
+        (r[2] - pose[2]).abs() < 1e-4,
+        "right hip {} back at {}",
+        r[2],
+        pose[2]
+    );
+    assert!((r[0] - (pose[0] - 0.3 + cfg.level_max_rad)).abs() < 1e-4);
+}

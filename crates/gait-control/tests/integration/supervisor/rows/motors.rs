@@ -69,6 +69,41 @@ fn a_gait_s_own_limit_catches_a_slipping_stance_hip() {
     assert_eq!(slip(1, 70.0), None);
 }
 
+/// A pilot leaning on the crutches drives the stance shank ahead of its
+/// plan, and the hip carrying the torso feels a torque no drive gave: with
+/// its ankle read more than `leaning_ankle_rad` (0.05 rad) ahead, that hip's
+/// limit is doubled. The slip the gait's 70 N·m catches passes there; a
+/// stuck drive's gap (250 N·m) is still caught, an ankle 0.04 rad ahead or
+/// behind the plan keeps the limit, and the other hip keeps its own.
+#[test]
+fn a_leaning_pilot_s_hip_has_its_residual_limit_raised() {
+    let run = |joint: usize, gap_nm: f32, ahead_rad: f32| {
+        let (_, v) = inject(400, |_, input| {
+            input.swing_leg = Some(gait_control::layout::Side::Right);
+            input.stance_hip_residual_nm = 70.0;
+            input.ankle_plan_rad = [STAND_ANKLES[0] - ahead_rad, f32::NAN];
+            input.motors[joint].commanded_nm = gap_nm;
+            input.motors[joint].applied_nm = gap_nm;
+            input.motors[joint].limit_nm = 300.0;
+            currents_follow(input);
+        });
+        detected_at(&v, FaultCode::MotorResponse)
+    };
+    let on_plan = run(0, 95.0, 0.0);
+    assert!(
+        on_plan.is_some_and(|at| (150..=300).contains(&at)),
+        "{on_plan:?}"
+    );
+    assert_eq!(run(0, 95.0, 0.04), on_plan);
+    assert_eq!(run(0, 95.0, -0.1), on_plan);
+    assert_eq!(run(0, 95.0, 0.1), None, "leaning: 140 N·m");
+    let stuck = run(0, 250.0, 0.1);
+    assert!(stuck.is_some_and(|at| at < 200), "{stuck:?}");
+    // The swing hip (the right: its own ankle has no plan) keeps 100 N·m.
+    let swing_hip = run(2, 130.0, 0.1);
+    assert!(swing_hip.is_some_and(|at| at < 300), "{swing_hip:?}");
+}
+
 /// 0x0404 on a joint while another is already braked: most likely the
 /// braked joint dragged it, so it is held where it is with its drive
 /// (latched and logged as ever, not braked), once; the residual still
